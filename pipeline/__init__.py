@@ -1,0 +1,1 @@
+"""Pipeline: case files, stages, mode selection, diagnose workflow, reports and the CLI."""
