@@ -1,0 +1,1 @@
+"""Finite elements: element stiffness and mass kernels (pure, vectorised over elements)."""
