@@ -1,0 +1,125 @@
+"""Flutter and divergence crossings: detection on a sweep and refinement between two points.
+
+A crossing is a change of the damping g of one tracked root from negative to above a small tolerance
+(DESIGN.md section 3): a root whose |g| never leaves the band |g| <= ``g_tol`` (~1e-6) never crosses,
+so numerically neutral roots (|g| ~ 1e-15) are never reported. A crossing of an oscillatory root is
+``"flutter"``; of a zero-frequency (real) root, ``"divergence"``.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+G_TOL = 1e-6
+
+
+@dataclass(frozen=True)
+class Crossing:
+    """One crossing of g through zero.
+
+    Attributes
+    ----------
+    root : int
+        Root number (1-based).
+    index : int
+        Index of the last sweep point before the crossing.
+    t : float
+        Fraction of the way from point ``index`` to ``index + 1`` (0..1).
+    velocity, density, mach, frequency : float
+        Flight point and frequency (Hz) at the crossing.
+    kind : str
+        ``"flutter"`` or ``"divergence"``.
+    converged : bool
+        Both bracketing points (and the refinement) converged.
+    refined : bool
+        True if located by root-finding on the solver, False if linearly interpolated.
+    """
+
+    root: int
+    index: int
+    t: float
+    velocity: float
+    density: float
+    mach: float
+    frequency: float
+    kind: str
+    converged: bool
+    refined: bool
+
+    def as_dict(self) -> dict:
+        """The summary.json entry (DESIGN.md section 6), plus the convergence flag."""
+        return {"mach": self.mach, "density": self.density, "velocity": self.velocity,
+                "frequency": self.frequency, "root": self.root, "kind": self.kind,
+                "converged": self.converged}
+
+
+def find_brackets(damping: np.ndarray, g_tol: float = G_TOL) -> list[tuple[int, int]]:
+    """Sweep intervals where a root's damping goes from below 0 to above ``g_tol``.
+
+    Parameters
+    ----------
+    damping : ndarray, shape (npts, nroot)
+        Damping g of each tracked root along the sweep.
+    g_tol : float
+        Band of numerically neutral damping.
+
+    Returns
+    -------
+    list of (root_index, point_index)
+        0-based root and the point before each crossing, ordered by point then root.
+    """
+    g = np.asarray(damping, dtype=float)
+    up = (g[:-1] < 0) & (g[1:] > g_tol)
+    i, r = np.nonzero(up)
+    return [(int(rr), int(ii)) for ii, rr in sorted(zip(i, r))]
+
+
+def interpolate_zero(g0: float, g1: float) -> float:
+    """Fraction t in [0, 1] where the line through (0, g0) and (1, g1) is zero."""
+    return float(g0 / (g0 - g1))
+
+
+def illinois(fun: Callable[[float], float], g0: float, g1: float, *, xtol: float = 1e-7,
+             max_iter: int = 40) -> tuple[float, bool]:
+    """Zero of ``fun`` on [0, 1] by the Illinois (modified regula falsi) method.
+
+    Parameters
+    ----------
+    fun : callable
+        t -> g, with fun(0) = g0 < 0 < g1 = fun(1).
+    g0, g1 : float
+        Values at the ends.
+    xtol : float
+        Tolerance on t.
+
+    Returns
+    -------
+    t : float
+    ok : bool
+        Converged within ``max_iter``.
+    """
+    a, b, fa, fb = 0.0, 1.0, g0, g1
+    side = 0
+    t_prev = None
+    scale = max(abs(g0), abs(g1))
+    for _ in range(max_iter):
+        t = (a * fb - b * fa) / (fb - fa)
+        ft = fun(t)
+        if not np.isfinite(ft):
+            return t, False
+        if abs(ft) <= 1e-12 * scale or (t_prev is not None and abs(t - t_prev) < xtol):
+            return t, True
+        t_prev = t
+        if ft * fb > 0:
+            b, fb = t, ft
+            if side == -1:
+                fa *= 0.5
+            side = -1
+        else:
+            a, fa = t, ft
+            if side == 1:
+                fb *= 0.5
+            side = 1
+    return t, False

@@ -1,0 +1,127 @@
+"""Interpolation of generalized aerodynamic forces Q_hh(M, k) at the reduced frequency of a root.
+
+The p-k equation needs Q_hh at each root's own reduced frequency k = omega * b / V (b = REFC / 2).
+The damping term uses Q^I / k (Nastran Aeroelastic Analysis User's Guide, PK method, eq. for the
+aerodynamic damping matrix ``-(1/4) rho cbar V Q^I_hh / k``); Q^I / k is smooth down to k = 0 and is
+interpolated directly, so zero-frequency (rigid-body, divergence) roots are well defined: below the
+smallest tabulated k both Q^R and Q^I / k are held at their values there (Q^I is linear in k at small k).
+"""
+from __future__ import annotations
+
+from typing import Callable
+
+import numpy as np
+import xarray as xr
+from scipy.interpolate import CubicSpline
+
+from structures.errors import InputError
+
+INTERPOLATIONS = ("linear", "cubic")
+_K_EPS = 1e-6  # k used for Q^I/k at k = 0 when Q is given as a callable
+
+
+class GafInterpolator:
+    """Q^R(k) and Q^I(k)/k at one Mach number, for arrays of k.
+
+    Parameters
+    ----------
+    gaf : xarray.Dataset or callable
+        Dataset with ``Q(mach, k, mode_i, mode_j)`` (complex; DESIGN.md section 6), or a callable
+        ``gaf(mach, k) -> Q`` with k of shape (nk,) returning shape (nk, n, n).
+    mach : float
+        Mach number. A Dataset is used at that tabulated Mach, or linearly interpolated between the
+        two tabulated Mach numbers around it.
+    interpolation : {"linear", "cubic"}
+        Interpolation in k (Nastran's PK uses linear interpolation of the tabulated matrices).
+    """
+
+    def __init__(self, gaf: xr.Dataset | Callable, mach: float, interpolation: str = "linear"):
+        if interpolation not in INTERPOLATIONS:
+            raise InputError(f"GafInterpolator: unknown interpolation {interpolation!r}. "
+                             f"Fix: use one of {INTERPOLATIONS}.")
+        self.mach = float(mach)
+        self.callable = None
+        if callable(gaf) and not isinstance(gaf, xr.Dataset):
+            self.callable = gaf
+            self.k_min, self.k_max = 0.0, np.inf
+            self.n = np.asarray(gaf(self.mach, np.array([0.1]))).shape[-1]
+            return
+        Q = _q_at_mach(gaf, self.mach)  # (nk, n, n)
+        k = np.asarray(gaf["k"].values, dtype=float)
+        order = np.argsort(k)
+        k, Q = k[order], Q[order]
+        if np.any(np.diff(k) <= 0) or k[0] <= 0:
+            raise InputError(f"GAF Dataset: reduced frequencies {k.tolist()} must be distinct and > 0 "
+                             "(the damping term divides by k). Fix: drop k = 0 and duplicates from "
+                             "the MKAERO list.")
+        self.k_grid = k
+        self.k_min, self.k_max = float(k[0]), float(k[-1])
+        self.n = Q.shape[-1]
+        self._QR = Q.real
+        self._D = Q.imag / k[:, None, None]
+        self.interpolation = interpolation
+        if interpolation == "cubic":
+            if k.size < 3:
+                raise InputError("GAF Dataset: cubic interpolation in k needs at least 3 k values. "
+                                 "Fix: use interpolation='linear' or add MKAERO k values.")
+            self._sR = CubicSpline(k, self._QR, axis=0)
+            self._sD = CubicSpline(k, self._D, axis=0)
+
+    def __call__(self, k: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Q^R, Q^I/k and an out-of-range flag at reduced frequencies ``k``.
+
+        Parameters
+        ----------
+        k : ndarray, shape (r,)
+            Reduced frequencies k = omega * b / V (>= 0).
+
+        Returns
+        -------
+        QR, D : ndarray, shape (r, n, n)
+            Real part of Q and imaginary part divided by k.
+        outside : ndarray of bool, shape (r,)
+            True where k lies above the tabulated range (not covered by the GAFs). Below the
+            smallest tabulated k, Q^R and Q^I/k are held constant (quasi-steady limit) and not flagged.
+        """
+        k = np.asarray(k, dtype=float)
+        if self.callable is not None:
+            kk = np.maximum(k, _K_EPS)
+            Q = np.asarray(self.callable(self.mach, kk), dtype=complex)
+            return Q.real, Q.imag / kk[:, None, None], np.zeros(k.shape, dtype=bool)
+        tol = 1e-9
+        outside = k > self.k_max * (1 + tol)
+        kc = np.clip(k, self.k_min, self.k_max)
+        if self.interpolation == "cubic":
+            return self._sR(kc), self._sD(kc), outside
+        i = np.clip(np.searchsorted(self.k_grid, kc) - 1, 0, self.k_grid.size - 2)
+        t = ((kc - self.k_grid[i]) / (self.k_grid[i + 1] - self.k_grid[i]))[:, None, None]
+        QR = (1 - t) * self._QR[i] + t * self._QR[i + 1]
+        D = (1 - t) * self._D[i] + t * self._D[i + 1]
+        return QR, D, outside
+
+
+def _q_at_mach(gaf: xr.Dataset, mach: float) -> np.ndarray:
+    """Q(k, i, j) of a GAF Dataset at ``mach`` (exact or linear between tabulated Mach numbers)."""
+    if "Q" not in gaf:
+        raise InputError("GAF Dataset has no variable 'Q'. Fix: pass the Dataset written by aero.gaf "
+                         "(Q(mach, k, mode_i, mode_j)).")
+    Q = gaf["Q"].transpose("mach", "k", "mode_i", "mode_j")
+    values = np.asarray(Q.values)
+    if not np.all(np.isfinite(values)):
+        bad = np.argwhere(~np.isfinite(values))[0]
+        raise InputError(f"GAF Dataset: Q_hh contains NaN/inf (first at mach={float(Q.mach[bad[0]])}, "
+                         f"k={float(Q.k[bad[1]])}, mode_i={int(Q.mode_i[bad[2]])}, "
+                         f"mode_j={int(Q.mode_j[bad[3]])}). Fix: recompute the GAFs for that "
+                         "Mach/k (check the spline and the AIC solve).")
+    machs = np.asarray(Q["mach"].values, dtype=float)
+    j = np.flatnonzero(np.isclose(machs, mach, rtol=0, atol=1e-6))
+    if j.size:
+        return values[j[0]].astype(complex)
+    if not machs.min() < mach < machs.max():
+        raise InputError(f"GAF Dataset: Mach {mach} is outside the tabulated Mach numbers "
+                         f"{sorted(machs.tolist())}. Fix: add the Mach number to MKAERO1/MKAERO2.")
+    order = np.argsort(machs)
+    m = machs[order]
+    i = np.searchsorted(m, mach) - 1
+    t = (mach - m[i]) / (m[i + 1] - m[i])
+    return ((1 - t) * values[order[i]] + t * values[order[i + 1]]).astype(complex)

@@ -1,0 +1,379 @@
+"""The p-k flutter method (Nastran PK / PKNL) with continuation and Rayleigh-quotient correction.
+
+For each flight point (V, rho, M) and each root, the p-k equation (MSC Nastran Aeroelastic Analysis
+User's Guide, PK method, eq. 3-xx; Hassig, J. Aircraft 8(11), 1971)
+
+    [ M_hh p^2 + (B_hh - rho cbar V Q^I_hh(k) / (4 k)) p + (K_hh - rho V^2 Q^R_hh(k) / 2) ] u = 0,
+
+is solved with the root's own reduced frequency k = omega b / V (b = cbar / 2), p = omega (gamma + i)
+and g = 2 gamma. Instead of a full eigen-decomposition per root per iteration, every root is followed
+from the previous flight point and corrected by two-sided Rayleigh-quotient iteration on the
+quadratic pencil with k updated at every step (Ruhe, SIAM J. Numer. Anal. 10(4), 1973, nonlinear
+Rayleigh functional / inverse iteration), batched over the roots. A step whose roots collide or whose
+eigenvectors lose correlation with the previous point (MAC below ``mac_min``) is bisected, so roots
+are tracked by continuity and eigenvector correlation, never by sorting.
+
+Zero-frequency roots (rigid-body, divergence) are kept; their damping is Nastran's
+g = p cbar / (V ln 2) (as printed in the F06 for KFREQ = 0 roots).
+"""
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass
+
+import numpy as np
+import xarray as xr
+
+from flutter.crossings import G_TOL, Crossing, find_brackets, illinois, interpolate_zero
+from flutter.gafinterp import GafInterpolator
+from flutter.results import vg_dataset, attach_crossings
+from flutter.system import ModalSystem
+from structures.errors import InputError
+
+LN2 = np.log(2.0)
+
+
+@dataclass
+class RootState:
+    """Eigen-state of all roots at one flight point (internal, mutable working state)."""
+
+    p: np.ndarray          # (R,) complex, Im >= 0
+    u: np.ndarray          # (R, n) right eigenvectors (unit 2-norm)
+    w: np.ndarray          # (R, n) left eigenvectors (unit 2-norm)
+    converged: np.ndarray  # (R,) bool
+    outside: np.ndarray    # (R,) bool, k outside the tabulated range
+
+
+class PKSolver:
+    """Fast p-k solver for one modal system and one GAF set.
+
+    Parameters
+    ----------
+    system : ModalSystem
+        Modal mass, stiffness, damping and structural damping.
+    gaf : xarray.Dataset or callable
+        GAFs ``Q(mach, k, mode_i, mode_j)`` (attrs ``refc``) or ``gaf(mach, k) -> (nk, n, n)``.
+    refc : float, optional
+        Reference chord (b = refc / 2); defaults to ``gaf.attrs["refc"]``.
+    interpolation : {"linear", "cubic"}
+        Interpolation of Q in k.
+    tol : float
+        Relative convergence tolerance on p.
+    max_iter : int
+        Iterations per root and flight point before the point is flagged not converged.
+    mac_min : float
+        Minimum eigenvector correlation between consecutive points before the step is bisected.
+    max_depth : int
+        Maximum number of step bisections.
+    """
+
+    def __init__(self, system: ModalSystem, gaf, *, refc: float | None = None,
+                 interpolation: str = "linear", tol: float = 1e-9, max_iter: int = 60,
+                 mac_min: float = 0.7, max_depth: int = 10):
+        self.system = system
+        self.gaf = gaf
+        if refc is None:
+            attrs = getattr(gaf, "attrs", {})
+            if "refc" not in attrs:
+                raise InputError("p-k: the GAFs carry no 'refc' attribute. Fix: pass refc= (the AERO "
+                                 "card's REFC) or use the Dataset written by aero.gaf.")
+            refc = float(attrs["refc"])
+        if not refc > 0:
+            raise InputError(f"p-k: refc={refc} must be > 0. Fix: use the AERO card's REFC.")
+        self.b = 0.5 * float(refc)
+        self.interpolation = interpolation
+        self.tol, self.max_iter, self.mac_min, self.max_depth = tol, max_iter, mac_min, max_depth
+        self._interp: dict[float, GafInterpolator] = {}
+        omega, self.phi = system.in_vacuo()
+        self.omega0 = omega
+        self.scale = 1e-3 * max(float(omega.max()), 1e-12)
+        sd = system.structural
+        self._hyst = (not sd.is_zero) and sd.kind == "hysteretic"
+        B = system.damping.copy()
+        if (not sd.is_zero) and sd.kind == "viscous":
+            B = B + system.viscous_structural()
+        self.B = B
+        n = system.n
+        if GafInterpolator(gaf, self._any_mach(gaf), interpolation).n != n:
+            raise InputError(f"p-k: the GAFs have a different number of modes than the system ({n}). "
+                             "Fix: compute Q_hh with the same modes as M_hh and K_hh.")
+
+    @staticmethod
+    def _any_mach(gaf) -> float:
+        if hasattr(gaf, "coords") and "mach" in gaf.coords:
+            return float(np.atleast_1d(gaf["mach"].values)[0])
+        return 0.0
+
+    def interpolator(self, mach: float) -> GafInterpolator:
+        """The (cached) GAF interpolator at Mach ``mach``."""
+        key = round(float(mach), 9)
+        if key not in self._interp:
+            self._interp[key] = GafInterpolator(self.gaf, mach, self.interpolation)
+        return self._interp[key]
+
+    # ----------------------------------------------------------------------------- matrices
+    def pencil(self, k: np.ndarray, V: float, rho: float, mach: float):
+        """Damping and stiffness of the p-k pencil at each root's k.
+
+        Parameters
+        ----------
+        k : ndarray, shape (R,)
+            Reduced frequencies (k = omega b / V).
+        V, rho, mach : float
+            Flight point.
+
+        Returns
+        -------
+        C, Kt : ndarray, shape (R, n, n)
+            C = B_hh + B_s - rho b V Q^I/(2k) and Kt = K_hh - q Q^R (Nastran PK equation; b = cbar/2).
+        outside : ndarray of bool, shape (R,)
+        """
+        QR, D, outside = self.interpolator(mach)(k)
+        C = self.B[None] - (0.5 * rho * self.b * V) * D  # rho cbar V Q^I / (4k), Nastran PK
+        if self._hyst:
+            omega = k * V / self.b
+            g = self.system.structural.at(omega / (2 * np.pi))
+            coef = np.where(omega > 1e-12, g / np.maximum(omega, 1e-300), 0.0)
+            C = C + coef[:, None, None] * self.system.stiffness[None]  # i g K -> (g/omega) K p
+        Kt = self.system.stiffness[None] - (0.5 * rho * V * V) * QR
+        return C, Kt, outside
+
+    # ----------------------------------------------------------------------------- kernels
+    def correct(self, state: RootState, V: float, rho: float, mach: float) -> RootState:
+        """Converge every root at (V, rho, M) from ``state`` by two-sided Rayleigh-quotient iteration.
+
+        The k of each root follows its current eigenvalue at every step, so the fixed point is the
+        matched p-k root (k = b Im(p) / V).
+        """
+        M = self.system.mass
+        p, u, w = state.p.copy(), state.u.copy(), state.w.copy()
+        R = p.size
+        done = np.zeros(R, dtype=bool)
+        outside = np.zeros(R, dtype=bool)
+        eye = np.eye(M.shape[0])
+        for it in range(self.max_iter):
+            act = ~done
+            k = self.b * np.abs(p[act].imag) / V
+            C, Kt, out = self.pencil(k, V, rho, mach)
+            outside[act] = out
+            ua, wa, pa = u[act], w[act].conj(), p[act]
+            a2 = np.einsum("ri,ij,rj->r", wa, M, ua)
+            a1 = np.einsum("ri,rij,rj->r", wa, C, ua)
+            a0 = np.einsum("ri,rij,rj->r", wa, Kt, ua)
+            disc = np.sqrt(a1 * a1 - 4 * a2 * a0 + 0j)
+            r1, r2 = (-a1 + disc) / (2 * a2), (-a1 - disc) / (2 * a2)
+            pn = np.where(np.abs(r1 - pa) <= np.abs(r2 - pa), r1, r2)
+            T = M[None] * (pn * pn)[:, None, None] + C * pn[:, None, None] + Kt
+            Tp = 2 * M[None] * pn[:, None, None] + C
+            small = 1e-14 * (np.abs(T).max(axis=(1, 2)) + 1e-300)
+            Ts = T + small[:, None, None] * eye
+            un = np.linalg.solve(Ts, np.einsum("rij,rj->ri", Tp, ua)[..., None])[..., 0]
+            wn = np.linalg.solve(np.conj(np.swapaxes(Ts, 1, 2)),
+                                 np.einsum("rji,rj->ri", Tp.conj(), w[act])[..., None])[..., 0]
+            un /= np.linalg.norm(un, axis=1, keepdims=True)
+            wn /= np.linalg.norm(wn, axis=1, keepdims=True)
+            flip = pn.imag < 0
+            pn = np.where(flip, pn.conj(), pn)
+            un[flip] = un[flip].conj()
+            wn[flip] = wn[flip].conj()
+            dp = np.abs(pn - pa)
+            idx = np.flatnonzero(act)
+            p[idx], u[idx], w[idx] = pn, un, wn
+            conv = dp <= self.tol * np.maximum(np.abs(pn), self.scale)
+            if it > 0:
+                done[idx[conv]] = True
+            if done.all():
+                break
+        return RootState(p, u, w, done, outside)
+
+    def start(self, V: float, rho: float, mach: float) -> RootState:
+        """Roots at the first flight point, followed up from in-vacuo modes at a tiny speed."""
+        n = self.system.n
+        phi = self.phi / np.linalg.norm(self.phi, axis=0)
+        p = 1j * self.omega0.astype(complex)
+        state = RootState(p, phi.T.astype(complex), phi.T.astype(complex),
+                          np.ones(n, dtype=bool), np.zeros(n, dtype=bool))
+        return self.advance(state, (1e-4 * V, rho, mach), (V, rho, mach))
+
+    def advance(self, state: RootState, frm: tuple, to: tuple, depth: int = 0) -> RootState:
+        """Continue all roots from flight point ``frm`` to ``to`` (V, rho, M), bisecting bad steps."""
+        new = self.correct(state, *to)
+        if depth < self.max_depth and not self._step_ok(state, new, strict=depth < 3):
+            mid = tuple(0.5 * (a + b) for a, b in zip(frm, to))
+            half = self.advance(state, frm, mid, depth + 1)
+            return self.advance(half, mid, to, depth + 1)
+        return new
+
+    def _step_ok(self, old: RootState, new: RootState, strict: bool) -> bool:
+        """Accept a step: eigenvectors correlate (MAC), roots distinct, (near the top) converged."""
+        mac = np.abs(np.einsum("ri,ri->r", old.u.conj(), new.u)) ** 2
+        if np.any(mac < self.mac_min) or (strict and not np.all(new.converged | ~old.converged)):
+            return False
+        # distinct roots: two roots on the same eigenpair means one jumped
+        dp = np.abs(new.p[:, None] - new.p[None, :])
+        close = dp <= 1e-6 * np.maximum(np.abs(new.p)[:, None], self.scale)
+        np.fill_diagonal(close, False)
+        if close.any():
+            cross = np.abs(new.u.conj() @ new.u.T) ** 2
+            if np.any(close & (cross > 0.99)):
+                return False
+        return True
+
+    # ----------------------------------------------------------------------------- outputs
+    def damping(self, p: np.ndarray, V: np.ndarray) -> np.ndarray:
+        """Damping g = 2 Re(p)/Im(p) (p = omega(gamma + i)); g = p cbar/(V ln 2) for real roots."""
+        p = np.asarray(p)
+        real = np.abs(p.imag) <= 1e-9 * np.maximum(np.abs(p), self.scale)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            g = np.where(real, p.real * 2 * self.b / (np.asarray(V) * LN2),
+                         2.0 * p.real / np.where(real, 1.0, p.imag))
+        return g
+
+
+def check_sweep(velocity: np.ndarray, density: np.ndarray, mach: np.ndarray, sweep: str):
+    """Validate a sweep of flight points; the swept variable must increase strictly."""
+    for name, v in (("velocity", velocity), ("density", density)):
+        if not np.all(np.isfinite(v)) or np.any(v <= 0):
+            raise InputError(f"p-k: every {name} must be finite and > 0 (got {v.tolist()}). "
+                             "Fix: check the FLFACT list.")
+    if np.any(mach < 0) or not np.all(np.isfinite(mach)):
+        raise InputError("p-k: Mach numbers must be finite and >= 0. Fix: check the FLFACT list.")
+    swept = {"velocity": velocity, "density": density}[sweep]
+    bad = np.flatnonzero(np.diff(swept) <= 0)
+    if bad.size:
+        i = int(bad[0])
+        raise InputError(f"p-k: the {sweep} list is not strictly increasing at points {i + 1} and "
+                         f"{i + 2} ({swept[i]} then {swept[i + 1]}). Fix: sort the FLFACT {sweep} "
+                         "values in increasing order and remove duplicates (for a density sweep "
+                         "use sweep='density').")
+
+
+def sweep_states(solver: PKSolver, velocity, density, mach) -> list[RootState]:
+    """Roots at every flight point of a sweep, continued point to point.
+
+    Parameters
+    ----------
+    solver : PKSolver
+    velocity, density, mach : ndarray, shape (npts,)
+
+    Returns
+    -------
+    list of RootState, one per point.
+    """
+    pts = list(zip(velocity, density, mach))
+    states = [solver.start(*pts[0])]
+    for i in range(1, len(pts)):
+        states.append(solver.advance(states[-1], pts[i - 1], pts[i]))
+    return states
+
+
+def warn_out_of_range(states: list[RootState], solver: PKSolver, velocity, mach) -> None:
+    """One warning per root whose k leaves the tabulated GAF range (those points are not converged)."""
+    for r in range(solver.system.n):
+        hits = [i for i, s in enumerate(states) if s.outside[r]]
+        if hits:
+            i = hits[0]
+            k = solver.b * abs(states[i].p[r].imag) / velocity[i]
+            interp = solver.interpolator(mach[i])
+            warnings.warn(
+                f"p-k: root {r + 1} needs k={k:.4g} at V={velocity[i]:.6g} (Mach {mach[i]:g}), outside "
+                f"the tabulated k range [{interp.k_min:g}, {interp.k_max:g}] at {len(hits)} point(s); "
+                "those points are marked not converged. Fix: extend the MKAERO1 k list.",
+                RuntimeWarning, stacklevel=3)
+
+
+def _refine(solver: PKSolver, states: list[RootState], pts: list[tuple], r: int, i: int,
+            g0: float, g1: float) -> tuple[float, RootState, bool]:
+    """Locate the zero of root r's damping between points i and i+1 by Illinois root-finding."""
+    cache = {}
+
+    def point(t):
+        return tuple(a + t * (b - a) for a, b in zip(pts[i], pts[i + 1]))
+
+    def fun(t):
+        s = solver.advance(states[i], pts[i], point(t))
+        cache[t] = s
+        return float(solver.damping(s.p[r:r + 1], point(t)[0])[0])
+
+    t, ok = illinois(fun, g0, g1)
+    s = cache.get(t) or solver.advance(states[i], pts[i], point(t))
+    return t, s, ok and bool(s.converged[r]) and not bool(s.outside[r])
+
+
+def pk_solve(system: ModalSystem, gaf, velocity, *, density, mach, sweep: str = "velocity",
+             refc: float | None = None, interpolation: str = "linear", refine: bool = True,
+             g_tol: float = G_TOL, **options) -> xr.Dataset:
+    """p-k flutter solution along a sweep of flight points (Nastran PK, or PKNL with a density sweep).
+
+    Parameters
+    ----------
+    system : ModalSystem
+        M_hh, K_hh, B_hh and structural damping.
+    gaf : xarray.Dataset or callable
+        ``Q(mach, k, mode_i, mode_j)`` with attrs ``refc`` (DESIGN.md section 6), or
+        ``gaf(mach, k) -> Q`` of shape (nk, n, n).
+    velocity : array_like, shape (npts,) or scalar
+        True airspeeds (model units). Strictly increasing for a velocity sweep.
+    density, mach : array_like, shape (npts,) or scalar
+        Density and Mach number per point (broadcast). Density strictly increasing for
+        ``sweep="density"`` (PKNL).
+    sweep : {"velocity", "density"}
+        Swept variable: it becomes the first dimension of the result.
+    refc : float, optional
+        Reference chord; default ``gaf.attrs["refc"]``.
+    interpolation : {"linear", "cubic"}
+        Interpolation of Q in k.
+    refine : bool
+        Locate crossings by root-finding on the solver (else linear interpolation of g).
+    g_tol : float
+        Neutral-damping band for crossings.
+    **options
+        ``tol``, ``max_iter``, ``mac_min``, ``max_depth`` of :class:`PKSolver`.
+
+    Returns
+    -------
+    xarray.Dataset
+        dims (sweep, root, mode): ``damping``, ``frequency`` [Hz], ``k``, ``eigenvalue``,
+        ``eigenvector``, ``converged`` (False where not converged or k outside the GAF table);
+        crossings on dim ``crossing`` (``crossing_velocity``, ``crossing_frequency``, ...).
+    """
+    if sweep not in ("velocity", "density"):
+        raise InputError(f"p-k: unknown sweep {sweep!r}. Fix: use 'velocity' or 'density'.")
+    V, rho, M = np.broadcast_arrays(np.atleast_1d(np.asarray(velocity, dtype=float)),
+                                    np.atleast_1d(np.asarray(density, dtype=float)),
+                                    np.atleast_1d(np.asarray(mach, dtype=float)))
+    V, rho, M = V.copy(), rho.copy(), M.copy()
+    check_sweep(V, rho, M, sweep)
+    solver = PKSolver(system, gaf, refc=refc, interpolation=interpolation, **options)
+    for m in np.unique(M):
+        solver.interpolator(m)
+    states = sweep_states(solver, V, rho, M)
+    warn_out_of_range(states, solver, V, M)
+    p = np.array([s.p for s in states])
+    u = np.array([s.u for s in states])
+    conv = np.array([s.converged & ~s.outside for s in states])
+    g = solver.damping(p, V[:, None])
+    pts = list(zip(V, rho, M))
+    crossings = []
+    for r, i in find_brackets(g, g_tol):
+        if refine:
+            t, s, ok = _refine(solver, states, pts, r, i, g[i, r], g[i + 1, r])
+            pr = s.p[r]
+        else:
+            t = interpolate_zero(g[i, r], g[i + 1, r])
+            pr = p[i, r] + t * (p[i + 1, r] - p[i, r])
+            ok = True
+        Vc, rc, Mc = (a + t * (b - a) for a, b in zip(pts[i], pts[i + 1]))
+        real = abs(pr.imag) <= 1e-9 * max(abs(pr), solver.scale)
+        crossings.append(Crossing(root=r + 1, index=i, t=float(t), velocity=float(Vc),
+                                  density=float(rc), mach=float(Mc),
+                                  frequency=0.0 if real else float(abs(pr.imag) / (2 * np.pi)),
+                                  kind="divergence" if real else "flutter",
+                                  converged=bool(ok and conv[i, r] and conv[i + 1, r]),
+                                  refined=refine))
+    ds = vg_dataset(p, u, g, conv, V, rho, M, b=solver.b, modes=system.modes, sweep=sweep,
+                    method="PKNL" if sweep == "density" else "PK",
+                    attrs={"interpolation": interpolation, "g_tol": g_tol,
+                           "structural_damping": system.structural.kind
+                           if not system.structural.is_zero else "none"})
+    return attach_crossings(ds, crossings)
