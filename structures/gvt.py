@@ -1,0 +1,458 @@
+"""Ground-vibration-test (GVT) modes as a first-class input: UFF 15/55 and netCDF.
+
+The GVT Dataset follows the modes layout of DESIGN.md section 6:
+
+- dims ``mode`` (the test's own mode numbers, e.g. 7, 8, 9, 11, ...) and ``dof``;
+- ``frequency(mode)`` [Hz], ``damping(mode)`` (modal viscous damping ratio zeta, fraction of
+  critical; g = 2*zeta), ``shape(mode, dof)`` (real, any scaling), optional ``name(mode)``
+  (e.g. ``"SW1B"``) and ``modal_mass(mode)`` as the file gives it;
+- coordinates ``grid(dof)`` (the model's grid ids) and ``component(dof)`` (1..6, translations and
+  rotations in the model's BASIC frame), plus ``x(dof)``, ``y(dof)``, ``z(dof)`` when the file
+  carries node coordinates (UFF 15 or 2411);
+- attrs ``source`` (file name), ``reader`` (``pyuff`` / ``tolerant`` / ``netcdf`` / ``arrays``),
+  ``units``.
+
+A measured DOF is a (grid, component) pair. A UFF 55 record always carries 3 (or 6) values per node
+even when a single-axis sensor measured one of them; by UFF convention (note 15 of the dataset
+description) unused values are written as 0. :func:`read_uff` therefore drops, by default, every
+(grid, component) that is exactly zero in every mode, so that SEREP never fits to zeros that were
+never measured.
+
+Reading uses pyuff first. Vendor files that pyuff's fixed-width parser rejects (Fortran ``D``
+exponents, free-format columns, trailing blanks, CRLF) are read by a tolerant token-stream parser
+of the same record layout; ``attrs["reader"]`` says which one was used. UFF 55 stores values as
+E13.5, so a UFF round trip keeps 5-6 significant digits; the netCDF form is exact.
+
+Measured mass properties (weight, CG, inertias) are not part of a UFF file: they come from the case
+file.
+"""
+from __future__ import annotations
+
+import os
+import re
+import tempfile
+from pathlib import Path
+
+import numpy as np
+import pyuff
+import xarray as xr
+
+from structures.errors import InputError
+from structures.netcdf import read_dataset, write_dataset
+
+_UFF_SUFFIXES = (".unv", ".uff", ".uf")
+# A real number as Fortran writes it, possibly run together with its neighbour ("1.0E+00-2.0E+00")
+# and possibly with a D exponent ("1.0D+00").
+_NUMBER = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eEdD][-+]?\d+)?")
+
+
+def make_gvt_dataset(frequency, shape, grid, component, *, mode=None, damping=None, name=None,
+                     modal_mass=None, xyz=None, source: str = "", reader: str = "arrays",
+                     units: str = "") -> xr.Dataset:
+    """Build and validate a GVT Dataset from arrays.
+
+    Parameters
+    ----------
+    frequency : array_like, shape (n_mode,)
+        Measured natural frequencies [Hz].
+    shape : array_like, shape (n_mode, n_dof)
+        Measured mode shapes (real, any scaling).
+    grid, component : array_like of int, shape (n_dof,)
+        The model grid id and component (1..6, basic frame) of every measured DOF.
+    mode : array_like of int, shape (n_mode,), optional
+        Test mode numbers; default 1..n_mode.
+    damping : array_like, shape (n_mode,), optional
+        Modal viscous damping ratio zeta; default 0.
+    name : sequence of str, shape (n_mode,), optional
+        Mode names such as ``"SW1B"``.
+    modal_mass : array_like, shape (n_mode,), optional
+        Modal mass as the test report gives it (informative only).
+    xyz : array_like, shape (n_dof, 3), optional
+        Basic position of each DOF's grid.
+    source, reader, units : str
+        Provenance attributes.
+
+    Returns
+    -------
+    xarray.Dataset
+        The validated GVT Dataset, DOFs sorted by (grid, component), modes by mode number.
+    """
+    frequency = np.asarray(frequency, dtype=float)
+    n_mode = frequency.shape[0] if frequency.ndim == 1 else -1
+    mode = np.arange(1, n_mode + 1) if mode is None else np.asarray(mode)
+    data_vars = {
+        "frequency": (("mode",), frequency, {"units": "Hz"}),
+        "shape": (("mode", "dof"), np.asarray(shape, dtype=float), {"units": units or "model units"}),
+        "damping": (("mode",), np.zeros(n_mode) if damping is None else np.asarray(damping, float),
+                    {"units": "1", "long_name": "modal viscous damping ratio zeta (g = 2*zeta)"}),
+    }
+    if name is not None:
+        data_vars["name"] = (("mode",), np.asarray([str(s) for s in name], dtype=object))
+    if modal_mass is not None:
+        data_vars["modal_mass"] = (("mode",), np.asarray(modal_mass, dtype=float))
+    coords = {"mode": mode, "grid": ("dof", np.asarray(grid)), "component": ("dof", np.asarray(component))}
+    if xyz is not None:
+        xyz = np.asarray(xyz, dtype=float)
+        coords.update({"x": ("dof", xyz[:, 0]), "y": ("dof", xyz[:, 1]), "z": ("dof", xyz[:, 2])})
+    try:
+        ds = xr.Dataset(data_vars, coords=coords)
+    except ValueError as exc:
+        raise InputError(f"GVT data from {source or 'arrays'}: inconsistent array sizes ({exc}). Fix: "
+                         "give frequency (n_mode,), shape (n_mode, n_dof), grid and component (n_dof,).")
+    ds.attrs.update({"source": str(source), "reader": reader, "units": units,
+                     "frame": "basic", "damping_convention": "zeta (fraction of critical); g = 2*zeta"})
+    validate_gvt(ds)
+    return ds.sortby("mode").isel(dof=np.lexsort((ds["component"].values, ds["grid"].values)))
+
+
+def validate_gvt(ds: xr.Dataset) -> None:
+    """Check a GVT Dataset and raise :class:`InputError` naming the offending mode or DOF.
+
+    Checks: required variables and dims, integer grid ids and components 1..6, no duplicate
+    mode numbers, no duplicate (grid, component), finite non-negative frequencies, finite shapes
+    and damping, and no mode with an all-zero shape.
+    """
+    where = f"GVT file {ds.attrs.get('source') or '(arrays)'}"
+    for var, dims in (("frequency", ("mode",)), ("shape", ("mode", "dof")), ("damping", ("mode",))):
+        if var not in ds or ds[var].dims != dims:
+            raise InputError(f"{where}: variable {var}{dims} is missing. Fix: build it with "
+                             "make_gvt_dataset or read it with load_gvt.")
+    for coord in ("mode", "grid", "component"):
+        if coord not in ds.coords:
+            raise InputError(f"{where}: coordinate {coord!r} is missing. Fix: name every DOF by "
+                             "(grid, component).")
+    modes = ds["mode"].values
+    uniq, counts = np.unique(modes, return_counts=True)
+    if np.any(counts > 1):
+        raise InputError(f"{where}: duplicate mode numbers {uniq[counts > 1].tolist()}. Fix: give "
+                         "every test mode its own number.")
+    grid, comp = ds["grid"].values, ds["component"].values
+    if not (np.issubdtype(grid.dtype, np.integer) and np.issubdtype(comp.dtype, np.integer)):
+        raise InputError(f"{where}: grid and component must be integers. Fix: use the model's grid ids.")
+    bad = (comp < 1) | (comp > 6)
+    if np.any(bad):
+        raise InputError(f"{where}: components {np.unique(comp[bad]).tolist()} are not in 1..6 "
+                         f"(grids {np.unique(grid[bad]).tolist()}). Fix: use 1-3 translations, 4-6 rotations.")
+    key = grid.astype(np.int64) * 10 + comp
+    uk, kc = np.unique(key, return_counts=True)
+    if np.any(kc > 1):
+        dup = [(int(k // 10), int(k % 10)) for k in uk[kc > 1]]
+        raise InputError(f"{where}: duplicate measured DOFs (grid, component) {dup}. Fix: keep one "
+                         "value per DOF (average repeated roving-sensor measurements first).")
+    freq = ds["frequency"].values
+    if not np.all(np.isfinite(freq)) or np.any(freq < 0):
+        raise InputError(f"{where}: frequencies of modes {modes[~(np.isfinite(freq) & (freq >= 0))].tolist()} "
+                         "are not finite and >= 0. Fix: correct the frequency records.")
+    if not np.all(np.isfinite(ds["damping"].values)):
+        raise InputError(f"{where}: damping of modes "
+                         f"{modes[~np.isfinite(ds['damping'].values)].tolist()} is not finite.")
+    shape = ds["shape"].values
+    finite = np.isfinite(shape)
+    if not np.all(finite):
+        m_idx, d_idx = np.nonzero(~finite)
+        bad_dofs = sorted({(int(modes[m]), int(grid[d]), int(comp[d])) for m, d in zip(m_idx, d_idx)})
+        raise InputError(f"{where}: NaN/inf in the shape at (mode, grid, component) {bad_dofs[:10]}"
+                         f"{' ...' if len(bad_dofs) > 10 else ''}. Fix: drop the DOF from every mode "
+                         "(a DOF must be measured in all modes) or re-export the shapes.")
+    zero = ~np.any(shape != 0.0, axis=1)
+    if np.any(zero):
+        raise InputError(f"{where}: modes {modes[zero].tolist()} have an all-zero shape. Fix: remove "
+                         "them or re-export their shapes.")
+
+
+def check_dofs_in_model(gvt: xr.Dataset, model_grids) -> None:
+    """Raise :class:`InputError` naming every GVT node that is not a grid of the model.
+
+    Parameters
+    ----------
+    gvt : xarray.Dataset
+        GVT Dataset.
+    model_grids : array_like of int, shape (n_grid,)
+        The model's grid ids.
+    """
+    nodes = np.unique(gvt["grid"].values)
+    missing = nodes[~np.isin(nodes, np.asarray(model_grids))]
+    if missing.size:
+        raise InputError(f"GVT file {gvt.attrs.get('source') or '(arrays)'}: nodes {missing.tolist()} "
+                         "are not grids of the model. Fix: renumber the test nodes to the model's grid "
+                         "ids (node numbers must be the model's GRID ids) or add those grids.")
+
+
+# ---------------------------------------------------------------------------------------- UFF read
+def read_uff(path: str | os.PathLike, *, drop_unmeasured: bool = True, units: str = "") -> xr.Dataset:
+    """Read normal modes (UFF 55) and node positions (UFF 15 / 2411) into a GVT Dataset.
+
+    Parameters
+    ----------
+    path : path-like
+        Universal file (``.unv``/``.uff``).
+    drop_unmeasured : bool
+        Drop (grid, component) pairs that are exactly zero in every mode (UFF writes unused
+        values as 0).
+    units : str
+        Unit label stored in attrs.
+
+    Returns
+    -------
+    xarray.Dataset
+        GVT Dataset; mode names come from ID line 4 of each UFF 55 record when it is not
+        ``NONE``/blank.
+    """
+    path = Path(path)
+    if not path.exists():
+        raise InputError(f"GVT file {path}: no such file. Fix: check the path.")
+    try:
+        sets = pyuff.UFF(str(path)).read_sets()
+        sets = [sets] if isinstance(sets, dict) else list(sets)
+        nodes, records = _from_pyuff(sets)
+        reader = "pyuff"
+    except (Exception,) as exc:  # pyuff raises bare Exception on any format deviation
+        if isinstance(exc, InputError):
+            raise
+        nodes, records = _parse_tolerant(path)
+        reader = "tolerant"
+    return _assemble(path, nodes, records, drop_unmeasured=drop_unmeasured, reader=reader, units=units)
+
+
+def _from_pyuff(sets) -> tuple[dict, list]:
+    """Nodes {id: (xyz, def_cs, disp_cs)} and mode records from pyuff dictionaries."""
+    nodes, records = {}, []
+    for s in sets:
+        kind = s.get("type")
+        if kind in (15, 2411):
+            for i, nid in enumerate(np.asarray(s["node_nums"])):
+                cs = (s.get("def_cs", [0] * (i + 1))[i], s.get("disp_cs", [0] * (i + 1))[i])
+                nodes[_as_int(nid)] = (np.array([s["x"][i], s["y"][i], s["z"][i]], float), *cs)
+        elif kind == 55:
+            ndv = int(s["n_data_per_node"])
+            node_nums = np.asarray(s["node_nums"])
+            vals = np.column_stack([np.asarray(s[f"r{j}"]) for j in range(1, ndv + 1)])
+            if vals.shape[0] != node_nums.shape[0]:
+                raise ValueError("pyuff returned inconsistent node and value counts")
+            if int(s["analysis_type"]) == 2:
+                eig = None
+                freq, mmass, zeta = float(s["freq"]), float(s.get("modal_m", 0.0)), float(s.get("modal_damp_vis", 0.0))
+            elif int(s["analysis_type"]) in (3, 7):
+                eig, freq, mmass, zeta = complex(s["eig"]), None, 0.0, None
+            else:
+                raise InputError(f"UFF 55 mode {s.get('mode_n')}: analysis type {s['analysis_type']} is not "
+                                 "normal or complex modes. Fix: export the test modes (analysis type 2).")
+            records.append(dict(mode=int(s["mode_n"]), freq=freq, eig=eig, modal_mass=mmass, zeta=zeta,
+                                name=str(s.get("id4", "")), nodes=node_nums.astype(np.int64),
+                                values=vals, ndv=ndv))
+    return nodes, records
+
+
+def _as_int(value) -> int:
+    iv = int(round(float(value)))
+    if iv != float(value):
+        raise InputError(f"UFF file: label {value} is not an integer. Fix: node and mode labels must "
+                         "be integers.")
+    return iv
+
+
+def _numbers(text: str) -> list[float]:
+    return [float(t.replace("D", "E").replace("d", "e")) for t in _NUMBER.findall(text)]
+
+
+def _parse_tolerant(path: Path) -> tuple[dict, list]:
+    """Token-stream parser of UFF 15/2411/55 tolerant of D exponents, CRLF, blanks, free format."""
+    lines = [ln.rstrip() for ln in path.read_bytes().decode("latin-1").splitlines()]
+    nodes, records = {}, []
+    i, n = 0, len(lines)
+    while i < n:
+        if lines[i].strip() != "-1":
+            i += 1
+            continue
+        j = i + 1
+        while j < n and lines[j].strip() != "-1":
+            j += 1
+        block = lines[i + 1:j]
+        i = j + 1
+        if not block or not block[0].split():
+            continue
+        head = block[0].split()[0]
+        if not head.isdigit():
+            raise InputError(f"GVT file {path}: dataset header {block[0]!r} is not a plain ASCII dataset "
+                             "number (binary UFF?). Fix: export ASCII universal files.")
+        kind = int(head)
+        if kind in (15, 2411):
+            vals = _numbers("\n".join(block[1:]))
+            if len(vals) % 7:
+                raise InputError(f"GVT file {path}: dataset {kind} has {len(vals)} numbers, not 7 per node. "
+                                 "Fix: check the node records.")
+            for rec in np.reshape(vals, (-1, 7)):
+                nodes[_as_int(rec[0])] = (rec[4:7].astype(float), _as_int(rec[1]), _as_int(rec[2]))
+        elif kind == 55:
+            records.append(_parse_55(block[1:], path))
+    return nodes, records
+
+
+def _parse_55(body: list[str], path: Path) -> dict:
+    if len(body) < 6:
+        raise InputError(f"GVT file {path}: a dataset 55 is truncated. Fix: re-export the file.")
+    name = body[3].strip()
+    tok = _numbers("\n".join(body[5:]))
+    _model, analysis, data_ch, _spec, data_type, ndv = (_as_int(t) for t in tok[:6])
+    nint, nreal = _as_int(tok[6]), _as_int(tok[7])
+    ints = [_as_int(t) for t in tok[8:8 + nint]]
+    reals = tok[8 + nint:8 + nint + nreal]
+    rest = np.asarray(tok[8 + nint + nreal:])
+    mode = ints[1] if len(ints) > 1 else None
+    where = f"GVT file {path}, dataset 55 mode {mode}"
+    if analysis not in (2, 3, 7) or mode is None:
+        raise InputError(f"{where}: analysis type {analysis} is not normal (2) or complex (3) modes. "
+                         "Fix: export the test mode shapes.")
+    if data_ch not in (2, 3) or ndv not in (3, 6):
+        raise InputError(f"{where}: data characteristic {data_ch} with {ndv} values per node is not a "
+                         "3 or 6 DOF vector. Fix: export displacement vectors (data characteristic 2 or 3).")
+    width = ndv * (2 if data_type == 5 else 1)
+    if rest.size % (width + 1):
+        raise InputError(f"{where}: {rest.size} numbers do not make whole node records of 1 + {width}. "
+                         "Fix: check the node/value records.")
+    rec = rest.reshape(-1, width + 1)
+    values = rec[:, 1:] if data_type != 5 else rec[:, 1::2] + 1j * rec[:, 2::2]
+    out = dict(mode=mode, name=name, nodes=np.array([_as_int(v) for v in rec[:, 0]], dtype=np.int64),
+               values=values, ndv=ndv, modal_mass=0.0, freq=None, eig=None, zeta=None)
+    if analysis == 2:
+        out.update(freq=reals[0], modal_mass=reals[1] if nreal > 1 else 0.0,
+                   zeta=reals[2] if nreal > 2 else 0.0)
+    else:
+        out.update(eig=complex(reals[0], reals[1]))
+    return out
+
+
+def _realise(record: dict) -> tuple[float, float, np.ndarray]:
+    """Frequency [Hz], zeta and a real shape from a real or complex UFF 55 record.
+
+    Complex modes (analysis type 3): lambda = sigma + i*omega_d, f = |lambda|/(2*pi),
+    zeta = -sigma/|lambda|; the shape is rotated by the phase that makes it most nearly real
+    (theta = arg(sum psi^2)/2) and its real part kept.
+    """
+    values = record["values"]
+    if record["eig"] is None:
+        return float(record["freq"]), float(record["zeta"]), np.real(values).astype(float)
+    lam = record["eig"]
+    theta = 0.5 * np.angle(np.sum(values.astype(complex) ** 2))
+    return abs(lam) / (2 * np.pi), -lam.real / abs(lam), np.real(values * np.exp(-1j * theta))
+
+
+def _assemble(path: Path, nodes: dict, records: list, *, drop_unmeasured: bool, reader: str,
+              units: str) -> xr.Dataset:
+    if not records:
+        raise InputError(f"GVT file {path}: no dataset 55 (mode shapes) found. Fix: export the modes as "
+                         "universal dataset 55.")
+    ndvs = {r["ndv"] for r in records}
+    if len(ndvs) > 1:
+        raise InputError(f"GVT file {path}: modes mix 3 and 6 values per node. Fix: export all modes "
+                         "with the same data characteristic.")
+    ndv = ndvs.pop()
+    bad_cs = sorted(nid for nid, (_, dcs, ucs) in nodes.items() if dcs != 0 or ucs != 0)
+    if bad_cs:
+        raise InputError(f"GVT file {path}: nodes {bad_cs[:20]} use a non-global definition or "
+                         "displacement coordinate system. Fix: export nodes and shapes in the global "
+                         "frame, which must be the model's basic frame.")
+    all_nodes = np.unique(np.concatenate([r["nodes"] for r in records]))
+    shape = np.zeros((len(records), all_nodes.size, ndv))
+    freq, zeta = np.empty(len(records)), np.empty(len(records))
+    for k, r in enumerate(records):
+        u, cnt = np.unique(r["nodes"], return_counts=True)
+        if np.any(cnt > 1):
+            raise InputError(f"GVT file {path}, mode {r['mode']}: nodes {u[cnt > 1].tolist()} appear twice. "
+                             "Fix: one record per node.")
+        freq[k], zeta[k], vals = _realise(r)
+        shape[k, np.searchsorted(all_nodes, r["nodes"])] = vals  # nodes absent from a record are 0 (UFF note 9)
+    grid = np.repeat(all_nodes, ndv)
+    comp = np.tile(np.arange(1, ndv + 1), all_nodes.size)
+    shape = shape.reshape(len(records), -1)
+    keep = np.any(shape != 0.0, axis=0) if drop_unmeasured else np.ones(grid.size, bool)
+    xyz = None
+    if nodes:
+        missing = [int(g) for g in all_nodes if int(g) not in nodes]
+        if missing:
+            raise InputError(f"GVT file {path}: nodes {missing[:20]} have shapes but no coordinates in the "
+                             "dataset 15/2411. Fix: export all measured nodes.")
+        xyz = np.array([nodes[int(g)][0] for g in grid[keep]]).reshape(-1, 3)
+    names = [r["name"] for r in records]
+    has_names = any(s and s.upper() != "NONE" for s in names)
+    return make_gvt_dataset(freq, shape[:, keep], grid[keep], comp[keep],
+                            mode=[r["mode"] for r in records], damping=zeta,
+                            name=[("" if s.upper() == "NONE" else s) for s in names] if has_names else None,
+                            modal_mass=[r["modal_mass"] for r in records], xyz=xyz, source=str(path),
+                            reader=reader, units=units)
+
+
+# --------------------------------------------------------------------------------------- UFF write
+def write_uff(ds: xr.Dataset, path: str | os.PathLike, *, title: str = "GVT modes") -> Path:
+    """Write a GVT Dataset as UFF 15 (when it has coordinates) + one UFF 55 per mode, with pyuff.
+
+    Nodes get 3 values (6 when any rotation is present); DOFs not in the Dataset are written as 0
+    (UFF note 15), which :func:`read_uff` drops again. The mode name goes to ID line 4. Written
+    atomically (temp file + rename).
+    """
+    validate_gvt(ds)
+    path = Path(path)
+    grid, comp = ds["grid"].values, ds["component"].values
+    nodes = np.unique(grid)
+    ndv = 6 if np.any(comp > 3) else 3
+    full = np.zeros((ds.sizes["mode"], nodes.size, ndv))
+    full[:, np.searchsorted(nodes, grid), comp - 1] = ds["shape"].values
+    sets = []
+    if "x" in ds.coords:
+        first = np.unique(grid, return_index=True)[1]
+        sets.append(pyuff.prepare_15(node_nums=nodes.astype(int), x=ds["x"].values[first].astype(float),
+                                     y=ds["y"].values[first].astype(float), z=ds["z"].values[first].astype(float)))
+        sets[-1].update(def_cs=np.zeros(nodes.size, int), disp_cs=np.zeros(nodes.size, int),
+                        color=np.zeros(nodes.size, int))
+    names = ds["name"].values if "name" in ds else [""] * ds.sizes["mode"]
+    mmass = ds["modal_mass"].values if "modal_mass" in ds else np.zeros(ds.sizes["mode"])
+    for k, mode in enumerate(ds["mode"].values):
+        rec = dict(type=55, id1=title, id2=f"GVT mode {int(mode)}", id3="NONE", id4=str(names[k]) or "NONE",
+                   id5=f"Mode {int(mode)} Frequency {float(ds['frequency'].values[k]):.5e}",
+                   model_type=1, analysis_type=2, data_ch=3 if ndv == 6 else 2, spec_data_type=8,
+                   data_type=2, n_data_per_node=ndv, load_case=1, mode_n=int(mode),
+                   freq=float(ds["frequency"].values[k]), modal_m=float(mmass[k]),
+                   modal_damp_vis=float(ds["damping"].values[k]), modal_damp_his=0.0,
+                   node_nums=nodes.astype(int))
+        rec.update({f"r{j + 1}": full[k, :, j] for j in range(ndv)})
+        sets.append(rec)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    os.close(fd)
+    os.remove(tmp)
+    try:
+        pyuff.UFF(tmp).write_sets(sets, mode="overwrite")
+        os.replace(tmp, path)
+    finally:
+        if os.path.exists(tmp):
+            os.remove(tmp)
+    return path
+
+
+# ------------------------------------------------------------------------------------------ netCDF
+def write_gvt(ds: xr.Dataset, path: str | os.PathLike) -> Path:
+    """Write a GVT Dataset to netCDF4 atomically (the exact form of the same Dataset)."""
+    validate_gvt(ds)
+    return write_dataset(ds, path)
+
+
+def read_gvt(path: str | os.PathLike) -> xr.Dataset:
+    """Read a GVT Dataset written by :func:`write_gvt` and validate it."""
+    ds = read_dataset(path)
+    if "name" in ds:
+        ds["name"] = ds["name"].astype(object)
+    ds.attrs["source"] = str(path)
+    validate_gvt(ds)
+    return ds
+
+
+def load_gvt(path: str | os.PathLike, **kwargs) -> xr.Dataset:
+    """Read a GVT file by suffix: ``.unv``/``.uff``/``.uf`` with :func:`read_uff`, ``.nc`` with
+    :func:`read_gvt`."""
+    suffix = Path(path).suffix.lower()
+    if suffix in _UFF_SUFFIXES:
+        return read_uff(path, **kwargs)
+    if suffix == ".nc":
+        return read_gvt(path)
+    raise InputError(f"GVT file {path}: unknown suffix {suffix!r}. Fix: use one of "
+                     f"{list(_UFF_SUFFIXES) + ['.nc']}.")

@@ -1,0 +1,286 @@
+"""Tests of structures.correlation: MAC, SEREP (paper eqs. 11-14, 20, 23), correlation Dataset.
+
+The analysis model is a free-free 3D beam frame built here with numpy (fuselage, wing, tail, lumped
+engine and gear masses; 41 grids, 246 DOFs), so every reference is computed independently: the full
+mass matrix M is known, and SEREP results are compared with the exact Phi^T M Phi products.
+"""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import scipy.linalg
+import xarray as xr
+
+from structures.acceptance import MIL_STD_1540C, NASA_STD_5002
+from structures.correlation import (CorrelationSettings, correlate, cross_orthogonality, expand_test_shapes,
+                                    mac, orthogonality, serep_coordinates, serep_expand, serep_mass)
+from structures.errors import InputError
+from structures.gvt import make_gvt_dataset
+
+
+# ------------------------------------------------------------------------------- synthetic model
+def _beam_k(xa, xb, E, G, A, Iy, Iz, J):
+    """12x12 Euler-Bernoulli 3D beam stiffness in the basic frame (Przemieniecki)."""
+    d = xb - xa
+    L = np.linalg.norm(d)
+    ex = d / L
+    ref = np.array([0.0, 0.0, 1.0]) if abs(ex[2]) < 0.9 else np.array([1.0, 0.0, 0.0])
+    ey = np.cross(ref, ex)
+    ey /= np.linalg.norm(ey)
+    ez = np.cross(ex, ey)
+    k = np.zeros((12, 12))
+    for (i, j), v in {(0, 0): E * A / L, (3, 3): G * J / L}.items():
+        k[np.ix_([i, i + 6], [j, j + 6])] += v * np.array([[1, -1], [-1, 1]])
+    bz = E * Iz / L**3 * np.array([[12, 6 * L, -12, 6 * L], [6 * L, 4 * L**2, -6 * L, 2 * L**2],
+                                    [-12, -6 * L, 12, -6 * L], [6 * L, 2 * L**2, -6 * L, 4 * L**2]])
+    by = E * Iy / L**3 * np.array([[12, -6 * L, -12, -6 * L], [-6 * L, 4 * L**2, 6 * L, 2 * L**2],
+                                    [-12, 6 * L, 12, 6 * L], [-6 * L, 2 * L**2, 6 * L, 4 * L**2]])
+    k[np.ix_([1, 5, 7, 11], [1, 5, 7, 11])] += bz
+    k[np.ix_([2, 4, 8, 10], [2, 4, 8, 10])] += by
+    R = np.vstack([ex, ey, ez])
+    T = scipy.linalg.block_diag(R, R, R, R)
+    return T.T @ k @ T, L
+
+
+def frame_model(wing_bending=1.0, wing_torsion=1.0, gear_mass=1.0):
+    """Free-free aircraft-like beam frame: K, M, grid ids (n,), xyz (n, 3).
+
+    Fuselage along x; wing and horizontal tail along +-y with stiff chordwise ribs carrying
+    leading/trailing-edge grids (so that torsion shows in translations); engine and gear masses.
+    """
+    xyz, elems = [], []
+
+    def node(p):
+        xyz.append(np.asarray(p, dtype=float))
+        return len(xyz) - 1
+
+    fus_p = dict(A=5e-3, Iy=4e-5, Iz=4e-5, J=8e-5)
+    wing_p = dict(A=3e-3, Iy=1.2e-6 * wing_bending, Iz=2e-5, J=2.4e-6 * wing_torsion)
+    tail_p = dict(A=1e-3, Iy=3e-7, Iz=3e-6, J=5e-7)
+    rib_p = dict(A=1e-3, Iy=2e-5, Iz=2e-5, J=2e-5)
+    fus = [node((x, 0.0, 0.0)) for x in np.linspace(0.0, 10.0, 11)]
+    elems += [(a, b, fus_p) for a, b in zip(fus[:-1], fus[1:])]
+    surfaces = {"wing": (fus[4], 4.0, 0.0, np.linspace(1.0, 12.0, 12), wing_p, 0.6),
+                "tail": (fus[10], 10.0, 0.5, np.array([1.0, 2.0, 3.0]), tail_p, 0.3)}
+    edge_nodes, axis_nodes = {"wing": [], "tail": []}, {"wing": [], "tail": []}
+    for key, (root, x0, z0, span, prop, half_chord) in surfaces.items():
+        for side in (1.0, -1.0):
+            prev = root
+            for y in span:
+                axis = node((x0, side * y, z0))
+                le, te = node((x0 - half_chord, side * y, z0)), node((x0 + half_chord, side * y, z0))
+                elems += [(prev, axis, prop), (le, axis, rib_p), (axis, te, rib_p)]
+                axis_nodes[key].append(axis)
+                edge_nodes[key] += [le, te]
+                prev = axis
+    xyz = np.array(xyz)
+    n = xyz.shape[0]
+    K, M = np.zeros((6 * n, 6 * n)), np.zeros((6 * n, 6 * n))
+    E, G, rho = 70e9, 27e9, 2700.0
+    for a, b, p in elems:
+        ke, L = _beam_k(xyz[a], xyz[b], E, G, **p)
+        idx = np.r_[6 * a:6 * a + 6, 6 * b:6 * b + 6]
+        K[np.ix_(idx, idx)] += ke
+        m = rho * p["A"] * L / 2 + 2.0 * L / 2          # structure + nonstructural mass per node
+        ex = (xyz[b] - xyz[a]) / L
+        rot = m * L**2 / 12 * (np.eye(3) - np.outer(ex, ex)) + m * (p["Iy"] + p["Iz"]) / p["A"] * np.outer(ex, ex)
+        for nd in (a, b):
+            M[6 * nd + np.arange(3), 6 * nd + np.arange(3)] += m
+            M[np.ix_(6 * nd + np.arange(3, 6), 6 * nd + np.arange(3, 6))] += rot
+    lumped = [(axis_nodes["wing"][4], 60.0), (axis_nodes["wing"][16], 60.0), (fus[2], 25.0 * gear_mass),
+              (axis_nodes["wing"][1], 15.0 * gear_mass), (axis_nodes["wing"][13], 15.0 * gear_mass)]
+    for nd, mass in lumped:                               # engines, nose gear, main gears
+        M[6 * nd + np.arange(3), 6 * nd + np.arange(3)] += mass
+    grids = (np.arange(n) + 1) * 10
+    frame_model.sensor_grids = {"fuselage": grids[fus], "wing_axis": grids[axis_nodes["wing"]],
+                                "tail_axis": grids[axis_nodes["tail"]],
+                                "edges": grids[edge_nodes["wing"] + edge_nodes["tail"]]}
+    return K, M, grids, xyz
+
+
+def modes_dataset(K, M, grids, xyz, nmodes):
+    """Mass-normalised modes Dataset in the layout of DESIGN.md section 6."""
+    lam, phi = scipy.linalg.eigh(K, M, subset_by_index=[0, nmodes - 1])
+    n = grids.size
+    return xr.Dataset(
+        {"frequency": (("mode",), np.sqrt(np.abs(lam)) / (2 * np.pi), {"units": "Hz"}),
+         "shape": (("mode", "dof"), phi.T), "generalized_mass": (("mode",), np.ones(nmodes))},
+        coords={"mode": np.arange(1, nmodes + 1), "grid": ("dof", np.repeat(grids, 6)),
+                "component": ("dof", np.tile(np.arange(1, 7), n)), "x": ("dof", np.repeat(xyz[:, 0], 6)),
+                "y": ("dof", np.repeat(xyz[:, 1], 6)), "z": ("dof", np.repeat(xyz[:, 2], 6))},
+        attrs={"source": "test frame", "deck": "frame", "units": "SI"})
+
+
+def gvt_from(modes, modes_sel, dof_sel, *, rng=None, f_noise=0.0, s_noise=0.0, scale=None):
+    """A 'measured' GVT Dataset from chosen modes and DOFs, with optional noise and scaling."""
+    sub = modes.sel(mode=modes_sel).isel(dof=dof_sel)
+    shape = sub["shape"].values.copy()
+    freq = sub["frequency"].values.copy()
+    if rng is not None:
+        freq = freq * (1 + f_noise * rng.standard_normal(freq.size))
+        rms = np.sqrt(np.mean(shape**2, axis=1, keepdims=True))
+        shape = shape + s_noise * rms * rng.standard_normal(shape.shape)
+    if scale is not None:
+        shape = shape * np.asarray(scale)[:, None]
+    return make_gvt_dataset(freq, shape, sub["grid"].values, sub["component"].values, mode=modes_sel,
+                            damping=np.full(freq.size, 0.01), source="synthetic")
+
+
+def sensors_120(modes):
+    """120 measured DOFs: z at the 60 edge grids, x/y/z at the 11 fuselage grids, x at the 24 wing-axis
+    grids and y at 3 tail-axis grids."""
+    comp, grid = modes["component"].values, modes["grid"].values
+    sg = frame_model.sensor_grids
+    pick = ((np.isin(grid, sg["edges"]) & (comp == 3)) | (np.isin(grid, sg["fuselage"]) & (comp <= 3))
+            | (np.isin(grid, sg["wing_axis"]) & (comp == 1)) | (np.isin(grid, sg["tail_axis"][:3]) & (comp == 2)))
+    idx = np.nonzero(pick)[0]
+    assert idx.size == 120
+    return idx
+
+
+@pytest.fixture(scope="module")
+def base():
+    K, M, grids, xyz = frame_model()
+    return K, M, modes_dataset(K, M, grids, xyz, 30)
+
+
+FLEX = list(range(7, 21))  # the 14 lowest flexible modes act as the test modes
+
+
+# ------------------------------------------------------------------------------------ kernels
+def test_mac_analytic_values():
+    a = np.array([[1.0, 0.0], [0.0, 1.0], [0.0, 0.0]])
+    b = np.array([[1.0, 1.0], [1.0, 0.0], [0.0, 0.0]])
+    np.testing.assert_allclose(mac(a, b), [[0.5, 1.0], [0.5, 0.0]], atol=1e-15)
+    np.testing.assert_allclose(mac(a, -3.0 * b), mac(a, b), atol=1e-15)
+
+
+def test_serep_mass_reproduces_modal_orthogonality(base):
+    """Phi^T M_A Phi = I for the SEREP modes (eqs. 12-13), and M_A is symmetric PSD of rank m."""
+    _, _, modes = base
+    phi = modes["shape"].values[:12].T
+    m_a = serep_mass(phi)
+    np.testing.assert_allclose(phi.T @ m_a @ phi, np.eye(12), atol=1e-10)
+    np.testing.assert_allclose(m_a, m_a.T, atol=1e-12 * np.abs(m_a).max())
+    assert np.linalg.matrix_rank(m_a) == 12
+
+
+def test_serep_all_dofs_measured_reproduces_modes_exactly(base):
+    _, _, modes = base
+    phi = modes["shape"].values.T
+    expanded = serep_expand(phi, np.arange(phi.shape[0]), phi[:, 6:20])
+    np.testing.assert_allclose(expanded, phi[:, 6:20], atol=1e-12 * np.abs(phi).max())
+
+
+def test_serep_sensor_subset_returns_own_modes(base):
+    _, _, modes = base
+    gvt = gvt_from(modes, FLEX, sensors_120(modes))
+    expanded = expand_test_shapes(modes, gvt)
+    ref = modes.sel(mode=FLEX)["shape"].values
+    assert np.abs(expanded["shape"].values - ref).max() <= 1e-10 * np.abs(ref).max()
+
+
+def test_self_correlation_is_identity(base):
+    _, _, modes = base
+    gvt = gvt_from(modes, FLEX, sensors_120(modes), scale=np.linspace(0.5, 3.0, len(FLEX)))
+    corr = correlate(modes, gvt)
+    np.testing.assert_allclose(corr["orthogonality"].values, np.eye(len(FLEX)), atol=1e-10)
+    s = corr["cross_orthogonality"].sel(fe_mode=FLEX).values
+    np.testing.assert_allclose(s, np.eye(len(FLEX)), atol=1e-10)
+    others = corr["cross_orthogonality"].drop_sel(fe_mode=FLEX).values
+    assert np.abs(others).max() < 1e-10
+    np.testing.assert_array_equal(corr["paired_fe_mode"].values, FLEX)
+    np.testing.assert_allclose(corr["frequency_error"].values, 0.0, atol=1e-10)
+    np.testing.assert_allclose(corr["paired_mac"].values, 1.0, atol=1e-12)
+    assert corr["pass_all"].values.all()
+    # the raw generalised mass is the square of the scale applied to the unit-mass shapes
+    np.testing.assert_allclose(corr["test_generalized_mass"].values, np.linspace(0.5, 3.0, len(FLEX))**2,
+                               rtol=1e-10)
+
+
+def test_normalisation_of_eq20_against_explicit_serep_mass(base):
+    """Normalised S_ij = Phi_GAset_i^T M_A Phi_j / sqrt(M_ii (Phi_j^T M_A Phi_j)), formed explicitly."""
+    K, M, _ = base
+    Kp, Mp, grids, xyz = frame_model(wing_bending=1.1, gear_mass=1.3)
+    modes = modes_dataset(K, M, grids, xyz, 24)
+    test = modes_dataset(Kp, Mp, grids, xyz, 24)
+    sens = sensors_120(modes)
+    gvt = gvt_from(test, FLEX, sens, scale=np.linspace(-2.0, 5.0, len(FLEX)))
+    corr = correlate(modes, gvt)
+    phi_a = modes["shape"].values.T
+    m_a = serep_mass(phi_a)                                       # eqs. 12-13, n_AD x n_AD
+    phi_ga = serep_expand(phi_a, sens, gvt["shape"].values.T)     # eq. 14
+    m_bar = phi_ga.T @ m_a @ phi_ga                               # eq. 11
+    s_bar = phi_ga.T @ m_a @ phi_a                                # eq. 20
+    d = np.sqrt(np.diag(m_bar))
+    np.testing.assert_allclose(corr["orthogonality"].values, m_bar / np.outer(d, d), atol=1e-9)
+    dn = np.sqrt(np.diag(phi_a.T @ m_a @ phi_a))
+    np.testing.assert_allclose(corr["cross_orthogonality"].values, s_bar / np.outer(d, dn), atol=1e-9)
+    # the A-set choice changes nothing in M and S (Phi_g Phi_Aset = I)
+    corr_t = correlate(modes, gvt, CorrelationSettings(a_set="translational"))
+    np.testing.assert_allclose(corr_t["cross_orthogonality"].values, corr["cross_orthogonality"].values,
+                               atol=1e-9)
+    np.testing.assert_allclose(corr_t["orthogonality"].values, corr["orthogonality"].values, atol=1e-9)
+    # the kernels used on their own agree too
+    q = serep_coordinates(phi_a[sens], gvt["shape"].values.T)
+    np.testing.assert_allclose(orthogonality(q)[0], corr["orthogonality"].values, atol=1e-12)
+    np.testing.assert_allclose(cross_orthogonality(q, np.eye(24)), corr["cross_orthogonality"].values, atol=1e-12)
+
+
+def test_sign_flip_changes_neither_pairing_nor_mac(base):
+    _, _, modes = base
+    sens = sensors_120(modes)
+    flips = np.where(np.arange(len(FLEX)) % 3 == 0, -1.0, 1.0)
+    ref = correlate(modes, gvt_from(modes, FLEX, sens))
+    flipped = correlate(modes, gvt_from(modes, FLEX, sens, scale=flips))
+    np.testing.assert_array_equal(flipped["paired_fe_mode"].values, ref["paired_fe_mode"].values)
+    np.testing.assert_allclose(flipped["mac"].values, ref["mac"].values, atol=1e-12)
+    s = flipped["cross_orthogonality"].sel(fe_mode=FLEX).values
+    np.testing.assert_allclose(np.diag(s), flips, atol=1e-10)   # the sign is kept in S
+
+
+def test_swapped_close_modes_are_paired_and_flagged(base):
+    """Close test modes 16/17 (4.55/4.57 Hz) given each other's shapes, as in the paper's 12/13
+    interchange."""
+    _, _, modes = base
+    sens = sensors_120(modes)
+    gvt = gvt_from(modes, FLEX, sens)
+    shape = gvt["shape"].values.copy()
+    i, j = FLEX.index(16), FLEX.index(17)
+    shape[[i, j]] = shape[[j, i]]
+    swapped = gvt.copy(data={**{k: v.values for k, v in gvt.data_vars.items()}, "shape": shape})
+    for pair_by in ("mac", "cross_orthogonality"):
+        corr = correlate(modes, swapped, CorrelationSettings(pair_by=pair_by))
+        expect = np.array(FLEX)
+        expect[[i, j]] = [17, 16]
+        np.testing.assert_array_equal(corr["paired_fe_mode"].values, expect)
+        assert corr["interchanged"].sel(test_mode=[16, 17]).values.all()
+        assert not corr["interchanged"].drop_sel(test_mode=[16, 17]).values.any()
+        assert corr.attrs["interchanges"] == "16<->17"
+
+
+# ---------------------------------------------------------------------------------- bad input
+def test_fewer_measured_dofs_than_serep_modes_raises(base):
+    _, _, modes = base
+    gvt = gvt_from(modes, FLEX, sensors_120(modes)[:20])
+    with pytest.raises(InputError, match=r"20 DOFs but 30 modes"):
+        correlate(modes, gvt)
+
+
+def test_rank_deficient_sensor_set_raises(base):
+    _, _, modes = base
+    only_x_on_fuselage = np.nonzero((modes["component"].values == 1) & (modes["grid"].values <= 110))[0]
+    gvt = gvt_from(modes, [7, 8], only_x_on_fuselage)
+    with pytest.raises(InputError, match="rank-deficient"):
+        correlate(modes, gvt, CorrelationSettings(serep_modes=tuple(range(1, 10))))
+
+
+def test_unknown_node_raises_naming_it(base):
+    _, _, modes = base
+    gvt = gvt_from(modes, FLEX, sensors_120(modes))
+    grid = gvt["grid"].values.copy()
+    grid[grid == 20] = 99999
+    bad = make_gvt_dataset(gvt["frequency"].values, gvt["shape"].values, grid, gvt["component"].values,
+                           mode=FLEX, source="bad.unv")
+    with pytest.raises(InputError, match=r"bad.unv: nodes \[99999\] are not grids of the model"):
+        correlate(modes, bad)
