@@ -1,0 +1,152 @@
+"""Normal modes: K phi = lambda M phi for the lowest modes, by shift-invert Lanczos.
+
+The shift sigma is negative (default -(2 pi 0.1 Hz)^2), so K - sigma M is positive definite even for
+free-free models, whose rigid-body modes come out near 0 Hz. The factorisation uses SuperLU with a
+symmetric ordering; small systems use a dense solver on the same shifted pencil. Modes are
+mass-normalised (Phi^T M Phi = I) and returned as the modes Dataset (basic-frame shapes).
+
+Mechanisms are reported, not hidden: a direction with neither stiffness nor mass makes the shifted
+matrix singular, and a zero-frequency mode that is not a rigid-body motion of the structure is a
+mechanism; both raise :class:`SolverError` naming the grids that move most.
+"""
+from __future__ import annotations
+
+import numpy as np
+import scipy.linalg as sla
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+import xarray as xr
+
+from structures.assembly import AssembledSystem, assemble
+from structures.errors import SolverError, card_message
+from structures.frames import rigid_offset
+from structures.model import FEModel
+from structures.modes import modes_dataset
+
+DEFAULT_SHIFT = -(2.0 * np.pi * 0.1) ** 2
+DENSE_LIMIT = 600
+
+
+def _factor(a: sp.csc_matrix, filename: str):
+    try:
+        lu = spla.splu(a, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
+                       options={"SymmetricMode": True})
+    except RuntimeError as exc:
+        raise SolverError(card_message(
+            f"the shifted stiffness K - sigma M is singular ({exc}): some degree of freedom has "
+            "neither stiffness nor mass (a massless mechanism).", filename=filename,
+            fix="connect or constrain the free grids (SPC), or give them mass.")) from None
+    diag = lu.U.diagonal()
+    if np.any(diag == 0) or np.any(~np.isfinite(diag)):
+        raise SolverError(card_message("the shifted stiffness K - sigma M is singular: a massless "
+                                       "mechanism.", filename=filename,
+                                       fix="connect or constrain the free grids (SPC)."))
+    return lu
+
+
+def solve_eigen(k: sp.spmatrix, m: sp.spmatrix, nmodes: int, *, shift: float = DEFAULT_SHIFT,
+                filename: str = "") -> tuple[np.ndarray, np.ndarray]:
+    """Lowest ``nmodes`` eigenpairs of (K, M).
+
+    Parameters
+    ----------
+    k, m : sparse (n, n) symmetric; M positive semi-definite.
+    nmodes : int
+    shift : float, negative shift sigma (rad/s)^2.
+
+    Returns
+    -------
+    lam : (nmodes,) eigenvalues (rad/s)^2, ascending.
+    phi : (n, nmodes) mass-normalised eigenvectors.
+    """
+    n = k.shape[0]
+    nmodes = min(nmodes, n)
+    shifted = (k - shift * m).tocsc()
+    if n <= DENSE_LIMIT:
+        try:
+            mu, vec = sla.eigh(m.toarray(), shifted.toarray())
+        except np.linalg.LinAlgError:
+            raise SolverError(card_message(
+                "the shifted stiffness K - sigma M is not positive definite: a massless mechanism "
+                "or negative stiffness.", filename=filename,
+                fix="connect or constrain the free grids (SPC), or check spring values.")) from None
+        order = np.argsort(-mu)[:nmodes]
+        mu, vec = mu[order], vec[:, order]
+        if np.any(mu <= 0):
+            raise SolverError(card_message(
+                f"only {int(np.sum(mu > 0))} degrees of freedom carry mass; {nmodes} modes were "
+                "asked for.", filename=filename, fix="ask for fewer modes or add mass."))
+        lam = shift + 1.0 / mu
+    else:
+        lu = _factor(shifted, filename)
+        op = spla.LinearOperator((n, n), matvec=lu.solve, dtype=float)
+        ncv = min(n, max(2 * nmodes + 1, nmodes + 20))
+        try:
+            lam, vec = spla.eigsh(k, k=nmodes, M=m, sigma=shift, which="LM", OPinv=op, ncv=ncv,
+                                  tol=1e-12)
+        except spla.ArpackNoConvergence as exc:
+            raise SolverError(card_message(f"the eigensolver did not converge ({exc}).",
+                                           filename=filename,
+                                           fix="ask for fewer modes or check the model.")) from None
+        order = np.argsort(lam)
+        lam, vec = lam[order], vec[:, order]
+    gm = np.einsum("ij,ij->j", vec, m @ vec)
+    return lam, vec / np.sqrt(gm)
+
+
+def rigid_body_basis(model: FEModel, system: AssembledSystem) -> np.ndarray:
+    """Rigid-body motions (about the basic origin) of all g-set DOFs in CD frames: (ng, 6)."""
+    grids = model.grids
+    d_basic = rigid_offset(grids.xyz).reshape(-1, 6)
+    return system.rotation.T @ d_basic
+
+
+def _check_mechanisms(model, system, lam, phi, scale):
+    zero = np.abs(lam) <= 1e-10 * scale
+    if not np.any(zero):
+        return
+    rb = rigid_body_basis(model, system)
+    q, _ = np.linalg.qr(rb)
+    for j in np.flatnonzero(zero):
+        u = system.T @ phi[:, j]
+        resid = u - q @ (q.T @ u)
+        if np.linalg.norm(resid) > 1e-4 * np.linalg.norm(u):
+            moving = np.argsort(-np.abs(resid).reshape(-1, 6).max(axis=1))[:5]
+            raise SolverError(card_message(
+                f"mode {j + 1} has zero frequency but is not a rigid-body motion: the model has a "
+                f"mechanism (grids moving most: {model.grids.ids[moving].tolist()}).",
+                filename=model.filename,
+                fix="add the missing stiffness or constraints at those grids (SPC, elements)."))
+
+
+def compute_modes(model: FEModel, nmodes: int | None = None, *, mass: str = "deck",
+                  shift: float = DEFAULT_SHIFT, system: AssembledSystem | None = None) -> xr.Dataset:
+    """Lowest normal modes of a model as the modes Dataset.
+
+    Parameters
+    ----------
+    model : FEModel
+    nmodes : int, default the deck's EIGRL/EIGR ND, else 20.
+    mass : {'deck', 'consistent', 'lumped'}
+    shift : float, negative spectral shift (rad/s)^2.
+    system : AssembledSystem, optional, reuse an existing assembly.
+
+    Returns
+    -------
+    xarray.Dataset with ``frequency(mode)`` [Hz], ``shape(mode, dof)`` (basic frame),
+    ``generalized_mass(mode)`` and the dof coordinates; ``attrs['nmodes_requested']``.
+    """
+    if system is None:
+        system = assemble(model, mass)
+    n = nmodes or model.eigrl_nd or 20
+    lam, phi = solve_eigen(system.K, system.M, n, shift=shift, filename=model.filename)
+    dk = system.K.diagonal()
+    dm = system.M.diagonal()
+    ratio = dk[dm > 0] / dm[dm > 0]
+    scale = float(np.median(ratio)) if ratio.size else 1.0
+    _check_mechanisms(model, system, lam, phi, scale)
+    freq = np.sqrt(np.clip(lam, 0.0, None)) / (2.0 * np.pi)
+    shapes = (system.rotation @ (system.T @ phi)).T
+    return modes_dataset(freq, shapes, model.grids.ids, model.grids.xyz, source="our solver",
+                         deck=model.filename, units=model.units,
+                         extra_attrs={"mass_formulation": mass, "eigenvalue_shift": shift})
