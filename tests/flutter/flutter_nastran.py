@@ -1,0 +1,91 @@
+"""Readers of Nastran validation output used by the flutter tests (F06 tables, OP4 QHH)."""
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import numpy as np
+import xarray as xr
+
+DATA = Path(__file__).resolve().parents[1] / "data"
+
+_NUM = r"[-+]?\d*\.?\d+(?:[Ee][-+]?\d+)?"
+
+
+def f06_modes_used(f06: Path) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Generalized mass, stiffness and cycles of the 'ACTUAL MODES USED' real-eigenvalue table."""
+    text = f06.read_text(errors="replace")
+    start = text.index("(ACTUAL MODES USED")
+    rows = []
+    for line in text[start:].splitlines()[1:]:
+        parts = line.split()
+        if len(parts) == 7 and parts[0].isdigit():
+            rows.append([float(x) for x in parts])
+        elif rows:
+            break
+    a = np.array(rows)
+    return a[:, 5], a[:, 6], a[:, 4]
+
+
+def f06_flutter_summaries(f06: Path) -> list[dict]:
+    """Every FLUTTER SUMMARY table: point, mach, density ratio and rows (k, 1/k, V, g, f, Re, Im)."""
+    text = f06.read_text(errors="replace")
+    out = []
+    for block in text.split("FLUTTER  SUMMARY")[1:]:
+        head = re.search(r"POINT =\s*(\d+)\s+MACH NUMBER =\s*(" + _NUM + r")\s+DENSITY RATIO =\s*("
+                         + _NUM + ")", block)
+        rows = []
+        for line in block.splitlines()[5:]:
+            parts = line.split()
+            if len(parts) == 7:
+                try:
+                    rows.append([float(x) for x in parts])
+                    continue
+                except ValueError:
+                    pass
+            if rows:
+                break
+        out.append({"point": int(head.group(1)), "mach": float(head.group(2)),
+                    "density_ratio": float(head.group(3)), "rows": np.array(rows)})
+    return out
+
+
+def first_crossing(rows: np.ndarray, g_tol: float = 1e-6) -> tuple[float, float] | None:
+    """Linear interpolation of an F06 table's first g crossing (velocity, frequency)."""
+    g, V, f = rows[:, 3], rows[:, 2], rows[:, 4]
+    for i in range(len(g) - 1):
+        if g[i] < 0 and g[i + 1] > g_tol:
+            t = g[i] / (g[i] - g[i + 1])
+            return V[i] + t * (V[i + 1] - V[i]), f[i] + t * (f[i + 1] - f[i])
+    return None
+
+
+def bah_qhh_dataset() -> xr.Dataset:
+    """Nastran's QHH of bah_plane_qhh as a GAF Dataset Q(mach, k, mode_i, mode_j).
+
+    OUTPUT4 QHH stacks one n x n matrix per (Mach, k) in MKAERO1 order: for each MKAERO1 card, for
+    each of its Mach numbers, for each of its k values (checked in the tests: at the smallest k the
+    imaginary parts vanish like k, and the two Mach blocks differ only slightly).
+    """
+    from pyNastran.bdf.bdf import read_bdf
+    from pyNastran.op4.op4 import read_op4
+
+    folder = DATA / "bah_plane"
+    mats = read_op4(str(folder / "bah_plane_qhh.op4"), debug=False)["QHH"].data
+    bdf = read_bdf(str(folder / "bah_plane_qhh.bdf"), debug=None)
+    table = {}
+    i = 0
+    for mk in bdf.mkaeros:
+        for m in mk.machs:
+            for k in mk.reduced_freqs:
+                table[(float(m), float(k))] = np.asarray(mats[i], dtype=complex)
+                i += 1
+    assert i == len(mats)
+    machs = sorted({m for m, _ in table})
+    ks = sorted({k for _, k in table})
+    arr = np.array([[table[(m, k)] for k in ks] for m in machs])
+    n = arr.shape[-1]
+    return xr.Dataset({"Q": (("mach", "k", "mode_i", "mode_j"), arr)},
+                      coords={"mach": machs, "k": ks, "mode_i": np.arange(1, n + 1),
+                              "mode_j": np.arange(1, n + 1)},
+                      attrs={"refc": float(bdf.aero.cref), "rhoref": float(bdf.aero.rho_ref)})
