@@ -65,15 +65,17 @@ def test_divergence_speed_analytic(sweep):
 def test_zero_speed_limit_in_vacuo(kind):
     """V -> 0 with vanishing air (rho -> 0): in-vacuo frequencies and g -> -g_s (stable by g_s).
 
-    Exactly, the damped root is p = omega0 (-g_s/2 + i sqrt(1 - g_s^2/4)) (to O(g_s^4) for the
-    hysteretic form), so f = f0 sqrt(1 - g_s^2/4) and g = -g_s / sqrt(1 - g_s^2/4)."""
+    Exactly: viscous b = g_s omega0 gives p = omega0 (-g_s/2 + i sqrt(1 - g_s^2/4)); the hysteretic
+    form (g_s/omega) K at the root's omega gives omega^2 = omega0^2 (1 + sqrt(1 - g_s^2)) / 2 and
+    Re p = -g_s omega0^2 / (2 omega)."""
     gs = 0.03
     sys_ = section(StructuralDamping(g=gs, kind=kind))
     ds = pk_solve(sys_, gaf, [1e-4, 2e-4], density=1e-9, mach=0.0, refc=2 * B)
     omega, _ = sys_.in_vacuo()
-    c = np.sqrt(1 - gs ** 2 / 4)
+    c = np.sqrt(1 - gs ** 2 / 4) if kind == "viscous" else np.sqrt((1 + np.sqrt(1 - gs ** 2)) / 2)
+    g_exact = -gs / c if kind == "viscous" else -gs / c ** 2
     np.testing.assert_allclose(ds.frequency.isel(velocity=0).values * 2 * np.pi, omega * c, rtol=1e-6)
-    np.testing.assert_allclose(ds.damping.isel(velocity=0).values, -gs / c, rtol=1e-6)
+    np.testing.assert_allclose(ds.damping.isel(velocity=0).values, g_exact, rtol=1e-6)
     undamped = pk_solve(section(), gaf, [1e-4], density=1e-9, mach=0.0, refc=2 * B)
     assert np.abs(undamped.damping.values).max() < 1e-8
 
