@@ -1,0 +1,40 @@
+"""The ``pipeline`` command: parses arguments and calls the library, nothing else.
+
+Each subcommand lives in its own module exposing ``add_parser(subparsers)`` and ``run(args)``.
+"""
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+
+from structures.errors import PipelineError
+
+#: Subcommand modules, in the order ``pipeline --help`` lists them.
+COMMANDS = ("pipeline.cmd_run", "pipeline.cmd_modes")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="pipeline",
+        description="GVT-validated FE model tuning, doublet-lattice aerodynamics and p-k flutter.")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    for name in COMMANDS:
+        importlib.import_module(name).add_parser(sub)
+    return parser
+
+
+def main(argv=None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if args.command is None:
+        args = parser.parse_args(["run", *(argv or [])])
+    try:
+        return int(args.func(args) or 0)
+    except PipelineError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,51 @@
+"""The run's HTML report: one self-contained page built from the stage results (no computation)."""
+from __future__ import annotations
+
+import html
+from pathlib import Path
+
+import numpy as np
+
+_STYLE = """body{font-family:sans-serif;margin:2em;max-width:70em}
+table{border-collapse:collapse;margin:0.5em 0 1.5em}td,th{border:1px solid #bbb;padding:2px 8px;
+text-align:right}th{background:#eee}h2{border-bottom:1px solid #999}"""
+
+
+def _table(header, rows) -> str:
+    head = "".join(f"<th>{html.escape(str(h))}</th>" for h in header)
+    body = "".join("<tr>" + "".join(f"<td>{html.escape(str(c))}</td>" for c in row) + "</tr>"
+                   for row in rows)
+    return f"<table><tr>{head}</tr>{body}</table>"
+
+
+def _modes_section(name, result) -> str:
+    modes = result["modes"]
+    rows = [(int(m), f"{f:.5g}") for m, f in zip(modes["mode"].values, modes["frequency"].values)]
+    mp = result["mass_properties"]
+    cg = mp["cg"].values
+    inertia = mp["inertia"].values
+    mass_rows = [("mass", f"{float(mp['mass']):.6g}"), ("x_cg", f"{cg[0]:.6g}"),
+                 ("y_cg", f"{cg[1]:.6g}"), ("z_cg", f"{cg[2]:.6g}"),
+                 ("Ixx", f"{inertia[0, 0]:.6g}"), ("Iyy", f"{inertia[1, 1]:.6g}"),
+                 ("Izz", f"{inertia[2, 2]:.6g}"), ("Ixy", f"{-inertia[0, 1]:.6g}"),
+                 ("Iyz", f"{-inertia[1, 2]:.6g}"), ("Izx", f"{-inertia[2, 0]:.6g}")]
+    return (f"<h2>Configuration {html.escape(name)}</h2>"
+            f"<p>Deck: {html.escape(str(modes.attrs.get('deck', '')))}; modes from "
+            f"{html.escape(str(modes.attrs.get('source', '')))}.</p>"
+            "<h3>Natural frequencies</h3>" + _table(("mode", "frequency [Hz]"), rows) +
+            "<h3>Mass properties (about the CG, basic axes)</h3>" +
+            _table(("quantity", "value"), mass_rows))
+
+
+def write_report(case, results: dict, out_dir) -> Path:
+    """Write ``report.html`` into ``out_dir`` and return its path."""
+    out = Path(out_dir) / "report.html"
+    sections = "".join(_modes_section(name, res) for name, res in results.items())
+    page = (f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>{html.escape(case.name)}"
+            f"</title><style>{_STYLE}</style></head><body><h1>Case {html.escape(case.name)}</h1>"
+            f"<p>Units: {html.escape(case.units)}. Configurations: "
+            f"{len(case.configurations)}.</p>{sections}</body></html>")
+    tmp = out.with_suffix(".html.tmp")
+    tmp.write_text(page)
+    tmp.replace(out)
+    return out
