@@ -201,15 +201,20 @@ def read_uff(path: str | os.PathLike, *, drop_unmeasured: bool = True, units: st
     path = Path(path)
     if not path.exists():
         raise InputError(f"GVT file {path}: no such file. Fix: check the path.")
+    blocks = _split_blocks(path)
+    n_modes = sum(1 for kind, _ in blocks if kind == 55)
     try:
         sets = pyuff.UFF(str(path)).read_sets()
         sets = [sets] if isinstance(sets, dict) else list(sets)
         nodes, records = _from_pyuff(sets)
         reader = "pyuff"
-    except (Exception,) as exc:  # pyuff raises bare Exception on any format deviation
-        if isinstance(exc, InputError):
-            raise
-        nodes, records = _parse_tolerant(path)
+    except InputError:
+        raise
+    except Exception:  # pyuff raises bare Exception on any deviation from the fixed-width layout
+        records = []
+    if len(records) != n_modes or not records:
+        # pyuff failed or silently missed blocks (delimiters with trailing blanks, ...): tolerant reader
+        nodes, records = _parse_tolerant(path, blocks)
         reader = "tolerant"
     return _assemble(path, nodes, records, drop_unmeasured=drop_unmeasured, reader=reader, units=units)
 
@@ -255,11 +260,10 @@ def _numbers(text: str) -> list[float]:
     return [float(t.replace("D", "E").replace("d", "e")) for t in _NUMBER.findall(text)]
 
 
-def _parse_tolerant(path: Path) -> tuple[dict, list]:
-    """Token-stream parser of UFF 15/2411/55 tolerant of D exponents, CRLF, blanks, free format."""
+def _split_blocks(path: Path) -> list[tuple[int, list[str]]]:
+    """(dataset number, body lines) of every ASCII dataset between ``-1`` delimiter lines."""
     lines = [ln.rstrip() for ln in path.read_bytes().decode("latin-1").splitlines()]
-    nodes, records = {}, []
-    i, n = 0, len(lines)
+    blocks, i, n = [], 0, len(lines)
     while i < n:
         if lines[i].strip() != "-1":
             i += 1
@@ -275,16 +279,23 @@ def _parse_tolerant(path: Path) -> tuple[dict, list]:
         if not head.isdigit():
             raise InputError(f"GVT file {path}: dataset header {block[0]!r} is not a plain ASCII dataset "
                              "number (binary UFF?). Fix: export ASCII universal files.")
-        kind = int(head)
+        blocks.append((int(head), block[1:]))
+    return blocks
+
+
+def _parse_tolerant(path: Path, blocks) -> tuple[dict, list]:
+    """Token-stream parser of UFF 15/2411/55 tolerant of D exponents, CRLF, blanks, free format."""
+    nodes, records = {}, []
+    for kind, body in blocks:
         if kind in (15, 2411):
-            vals = _numbers("\n".join(block[1:]))
+            vals = _numbers("\n".join(body))
             if len(vals) % 7:
                 raise InputError(f"GVT file {path}: dataset {kind} has {len(vals)} numbers, not 7 per node. "
                                  "Fix: check the node records.")
             for rec in np.reshape(vals, (-1, 7)):
                 nodes[_as_int(rec[0])] = (rec[4:7].astype(float), _as_int(rec[1]), _as_int(rec[2]))
         elif kind == 55:
-            records.append(_parse_55(block[1:], path))
+            records.append(_parse_55(body, path))
     return nodes, records
 
 
