@@ -27,20 +27,29 @@ DEFAULT_SHIFT = -(2.0 * np.pi * 0.1) ** 2
 DENSE_LIMIT = 600
 
 
+PIVOT_RATIO = 1e-11
+
+
+def _massless_mechanism(filename: str) -> SolverError:
+    return SolverError(card_message(
+        "the shifted stiffness K - sigma M is singular: some motion has neither stiffness nor "
+        "mass (a massless mechanism, e.g. a free rotation of grids without rotary inertia).",
+        filename=filename,
+        fix="constrain it (SPC), connect the free grids, or give that motion mass (CONM2 inertia, "
+            "CBEAM instead of CBAR)."))
+
+
 def _factor(a: sp.csc_matrix, filename: str):
+    """Sparse LU of the shifted matrix; tiny pivots (relative to the diagonal) mean singular."""
     try:
         lu = spla.splu(a, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
                        options={"SymmetricMode": True})
-    except RuntimeError as exc:
-        raise SolverError(card_message(
-            f"the shifted stiffness K - sigma M is singular ({exc}): some degree of freedom has "
-            "neither stiffness nor mass (a massless mechanism).", filename=filename,
-            fix="connect or constrain the free grids (SPC), or give them mass.")) from None
-    diag = lu.U.diagonal()
-    if np.any(diag == 0) or np.any(~np.isfinite(diag)):
-        raise SolverError(card_message("the shifted stiffness K - sigma M is singular: a massless "
-                                       "mechanism.", filename=filename,
-                                       fix="connect or constrain the free grids (SPC)."))
+    except RuntimeError:
+        raise _massless_mechanism(filename) from None
+    pivots = np.abs(lu.U.diagonal())
+    diag = np.abs(a.diagonal())[lu.perm_c]
+    if not np.all(np.isfinite(pivots)) or np.any(pivots <= PIVOT_RATIO * diag):
+        raise _massless_mechanism(filename)
     return lu
 
 
@@ -63,13 +72,14 @@ def solve_eigen(k: sp.spmatrix, m: sp.spmatrix, nmodes: int, *, shift: float = D
     nmodes = min(nmodes, n)
     shifted = (k - shift * m).tocsc()
     if n <= DENSE_LIMIT:
+        dense = shifted.toarray()
         try:
-            mu, vec = sla.eigh(m.toarray(), shifted.toarray())
+            chol = sla.cholesky(dense, lower=True)
         except np.linalg.LinAlgError:
-            raise SolverError(card_message(
-                "the shifted stiffness K - sigma M is not positive definite: a massless mechanism "
-                "or negative stiffness.", filename=filename,
-                fix="connect or constrain the free grids (SPC), or check spring values.")) from None
+            raise _massless_mechanism(filename) from None
+        if np.any(np.diag(chol) ** 2 <= PIVOT_RATIO * np.diag(dense)):
+            raise _massless_mechanism(filename)
+        mu, vec = sla.eigh(m.toarray(), dense)
         order = np.argsort(-mu)[:nmodes]
         mu, vec = mu[order], vec[:, order]
         if np.any(mu <= 0):

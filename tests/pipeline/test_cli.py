@@ -1,0 +1,56 @@
+"""The ``pipeline`` command: modes, run (shipped example, resume) and case-file validation."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from pipeline.case import read_case
+from pipeline.cli import main
+from structures.errors import InputError
+from structures.modes import read_modes
+from structures.netcdf import read_dataset
+
+DATA = Path(__file__).resolve().parents[1] / "data"
+
+
+def test_modes_command_prints_table_and_writes_contract(tmp_path, capsys):
+    out = tmp_path / "modes.nc"
+    assert main(["modes", str(DATA / "pt145" / "pt145.bdf"), "--nmodes", "4", "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "39.9615" in text and "mass" in text and "x_cg" in text
+    ds = read_modes(out)
+    assert list(ds["mode"].values) == [1, 2, 3, 4]
+    assert ds["frequency"].attrs["units"] == "Hz"
+    assert ds["shape"].dims == ("mode", "dof")
+    assert set(np.unique(ds["component"].values)) == set(range(1, 7))
+    assert ds.attrs["source"] == "our solver"
+
+
+def test_run_shipped_example_then_resume(tmp_path, capsys):
+    out = tmp_path / "run"
+    assert main(["run", "--out", str(out)]) == 0
+    assert (out / "report.html").exists() and (out / "baseline" / "modes.nc").exists()
+    first = capsys.readouterr().out
+    assert "reading" in first
+    assert main(["run", "--out", str(out)]) == 0
+    assert "up to date, skipped" in capsys.readouterr().out
+    (out / "baseline" / "modes.nc").unlink()  # an interrupted stage is redone
+    assert main(["run", "--out", str(out)]) == 0
+    assert "reading" in capsys.readouterr().out
+    freq = read_modes(out / "baseline" / "modes.nc")["frequency"].values
+    assert freq[2] == pytest.approx(2.454016, rel=1e-5)
+    mass = read_dataset(out / "baseline" / "mass_properties.nc")
+    assert float(mass["mass"]) == pytest.approx(18947.36, rel=1e-12)
+
+
+def test_case_file_unknown_key_lists_valid_ones(tmp_path):
+    (tmp_path / "m.bdf").write_text((DATA / "pt145" / "pt145.bdf").read_text())
+    case = tmp_path / "case.toml"
+    case.write_text('name = "x"\n[[configurations]]\nname = "a"\ndeck = "m.bdf"\nnmode = 3\n')
+    with pytest.raises(InputError, match=r"unknown keys \['nmode'\]; valid: .*'nmodes'"):
+        read_case(case)
+    case.write_text('name = "x"\nunits = "imperial"\n[[configurations]]\nname = "a"\ndeck = "m.bdf"\n')
+    with pytest.raises(InputError, match="valid: si, english_in, english_ft"):
+        read_case(case)

@@ -1,0 +1,72 @@
+"""Mass properties against hand calculations (offset CONM2s with inertia, CMASS2)."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from structures.bdf import read_model
+from structures.massprops import mass_properties
+
+DATA = Path(__file__).resolve().parents[1] / "data"
+
+DECK = """GRID,1,,0.,0.,0.
+GRID,2,,2.,0.,0.
+GRID,3,,2.,1.,0.
+CELAS2,10,1.e6,1,3,2,3
+CELAS2,11,1.e6,2,3,3,3
+CONM2,1,1,,10.,0.5,0.2,0.1
+,1.,0.,2.,0.,0.,3.
+CONM2,2,2,,4.,0.,0.,-1.
+CONM2,3,3,,6.,-0.5,0.5,0.
+,0.5,0.1,0.8,0.2,0.3,0.9
+ENDDATA
+"""
+
+
+def _hand(masses):
+    """Total mass, CG and inertia about the CG from (m, position, inertia tensor) triples."""
+    total = sum(m for m, _, _ in masses)
+    cg = sum(m * np.asarray(r) for m, r, _ in masses) / total
+    inertia = np.zeros((3, 3))
+    for m, r, i_cg in masses:
+        d = np.asarray(r) - cg
+        inertia += i_cg + m * (np.dot(d, d) * np.eye(3) - np.outer(d, d))
+    return total, cg, inertia
+
+
+def test_offset_conm2_mass_properties_match_hand_calculation(tmp_path):
+    path = tmp_path / "masses.bdf"
+    path.write_text(DECK)
+    props = mass_properties(read_model(path))
+    # CONM2 inertia tensor: [[I11, -I21, -I31], [-I21, I22, -I32], [-I31, -I32, I33]] (QRG CONM2).
+    i1 = np.array([[1.0, 0.0, 0.0], [0.0, 2.0, 0.0], [0.0, 0.0, 3.0]])
+    i3 = np.array([[0.5, -0.1, -0.2], [-0.1, 0.8, -0.3], [-0.2, -0.3, 0.9]])
+    mass, cg, inertia = _hand([(10.0, (0.5, 0.2, 0.1), i1), (4.0, (2.0, 0.0, -1.0), np.zeros((3, 3))),
+                               (6.0, (1.5, 1.5, 0.0), i3)])
+    assert props.mass == pytest.approx(mass, rel=1e-14)
+    np.testing.assert_allclose(props.cg, cg, rtol=1e-13, atol=1e-14)
+    np.testing.assert_allclose(props.inertia, inertia, rtol=1e-13, atol=1e-13)
+    assert props.product_of_inertia["Ixy"] == pytest.approx(-inertia[0, 1])
+
+
+def test_wtmass_scales_mass_and_weight_is_recovered(tmp_path):
+    path = tmp_path / "wt.bdf"
+    path.write_text("PARAM,WTMASS,0.00259\n" + DECK)
+    props = mass_properties(read_model(path))
+    assert props.mass == pytest.approx(20.0 * 0.00259, rel=1e-14)
+    assert props.weight == pytest.approx(20.0, rel=1e-14)
+
+
+def test_bah_total_mass_equals_sum_of_conm2():
+    props = mass_properties(read_model(DATA / "bah_plane" / "bah_plane.bdf"))
+    wing = 2 * (1364.8 + 2305.2 + 949.2 + 768.4 + 153.68)
+    assert props.mass == pytest.approx(7864.8 + wing, rel=1e-14)
+    # Symmetric fore/aft masses at x = +/-: CG x from the CONM2 positions (GRID 7..16).
+    xs = {7: 1.126, 8: 2.751, 9: .7034, 10: .6725, 11: .5060, 12: -.7709, 13: -2.053, 14: -.8050,
+          15: -.7740, 16: -.7091}
+    ms = {7: 1364.8, 8: 2305.2, 9: 949.2, 10: 768.4, 11: 153.68}
+    ms.update({k + 5: v for k, v in ms.items()})
+    x_cg = sum(ms[g] * xs[g] for g in xs) / props.mass
+    assert props.cg[0] == pytest.approx(x_cg, rel=1e-12)
