@@ -17,6 +17,9 @@ along the sending box's normal (:mod:`aero.panels`), so D's steady diagonal is n
 """
 from __future__ import annotations
 
+import os
+from concurrent.futures import ThreadPoolExecutor
+
 import numpy as np
 
 from aero import dlm_kernel as dk
@@ -43,55 +46,61 @@ def _senders(mesh: BoxMesh, samples: np.ndarray) -> dict:
             "xq": mid[:, 0, None] + e[:, None] * samples[None, :] * tanl[:, None]}
 
 
-def _increment_block(colloc, nrm, snd, mach, wv, method):
-    """Unsteady increment for receivers (r, 3) against all senders: complex (nk, r, n)."""
+def _increment_block(xr, yz, nrm, snd, mach, wv, method):
+    """Unsteady increment for r receivers of one strip against all n senders.
+
+    xr : (r,) receiver x; yz : (2,) their common y, z; nrm : (3,) their common normal.
+    Returns complex (nk, r, n).
+    """
     sig = dk.SAMPLES[method]
     nq = sig.size
-    e = snd["e"]
-    d = colloc[:, None, :] - snd["mid"][None]                    # (r, n, 3) receiver - midpoint
-    x0 = d[..., 0]
-    yh = np.einsum("rni,ni->rn", d, snd["ye"]) / e               # ybar / e in the sending frame
-    zh = np.einsum("rni,ni->rn", d, snd["n"]) / e                # zbar / e
-    t1 = nrm @ snd["n"].T                                        # T1 = n_r . n_s (A&R eq. 8)
-    r, n = x0.shape
-    w1, w2 = dk.span_weights(yh.ravel(), zh.ravel(), method)
-    w1 = w1.reshape(r, n, nq)
-    x0q = x0[..., None] - (e * snd["tanl"])[None, :, None] * sig
-    r1q = e[None, :, None] * np.sqrt((yh[..., None] - sig) ** 2 + zh[..., None] ** 2)
-    geo = dk.kernel_geometry(x0q.ravel(), r1q.ravel(), mach)
-    # cos/sin(omega x0/V) as separable products of receiver and sender terms (x0 = x_r - x_q)
-    ar, aq = wv[:, None] * colloc[None, :, 0], wv[:, None, None] * snd["xq"][None]
-    cr, sr = np.cos(ar)[:, :, None, None], np.sin(ar)[:, :, None, None]
-    cq, sq = np.cos(aq)[:, None], np.sin(aq)[:, None]
-    nk = wv.size
-    cosx = (cr * cq + sr * sq).reshape(nk, -1)
-    sinx = (sr * cq - cr * sq).reshape(nk, -1)
-    re, im = dk.incremental_k1(geo, wv, cosx, sinx)
-    c1 = (snd["chord"] / (8.0 * np.pi * e))[None, :] * t1        # A&R eq. 16 with 1/e of weights
-    om = w1 * c1[..., None]
-    out = (np.einsum("krnq,rnq->krn", re.reshape(nk, r, n, nq), om)
-           + 1j * np.einsum("krnq,rnq->krn", im.reshape(nk, r, n, nq), om))
-    nonplanar = np.abs(zh) > dk.NEAR_PLANAR
-    if np.any(nonplanar):
-        ir, js = np.nonzero(nonplanar)
-        pts = (np.ravel_multi_index((ir, js), (r, n)) * nq)[:, None] + np.arange(nq)
-        pts = pts.ravel()
-        geo2 = {key: (val[:, pts] if key in ("ea", "eap") else val[pts])
-                for key, val in geo.items()}
-        ex = cosx[:, pts] - 1j * sinx[:, pts]
-        dk2 = dk.incremental_k2(geo2, mach, wv, ex).reshape(nk, ir.size, nq)
+    e, n = snd["e"], snd["e"].size
+    dyz = yz[None, :] - snd["mid"][:, 1:]                        # (n, 2) y-z offset to midpoint
+    yh = np.einsum("ni,ni->n", dyz, snd["ye"][:, 1:]) / e        # ybar / e, sending frame
+    zh = np.einsum("ni,ni->n", dyz, snd["n"][:, 1:]) / e         # zbar / e
+    t1 = snd["n"] @ nrm                                          # T1 = n_r . n_s (A&R eq. 8)
+    w1, w2 = dk.span_weights(yh, zh, method)                     # (n, nq)
+    r1q = (e[:, None] * np.sqrt((yh[:, None] - sig) ** 2 + zh[:, None] ** 2)).ravel()
+    x0q = xr[:, None] - snd["xq"].reshape(1, -1)                 # (r, n*nq), x0 = x_r - x_q
+    geo = dk.kernel_geometry(x0q, r1q, mach)
+    # cos/sin(omega x0/V) as separable products of receiver and sender terms
+    cr, sr = dk.sincos(wv[:, None] * xr[None, :])
+    cq, sq = dk.sincos(wv[:, None] * snd["xq"].reshape(1, -1))
+    cr, sr, cq, sq = cr[:, :, None], sr[:, :, None], cq[:, None, :], sq[:, None, :]
+    cosx = cr * cq + sr * sq
+    sinx = sr * cq - cr * sq
+    re, im = dk.incremental_k1(geo, wv, cosx, sinx)              # (nk, r, n*nq)
+    nk, r = wv.size, xr.size
+    om = w1 * ((snd["chord"] / (8.0 * np.pi * e)) * t1)[:, None]     # A&R eq. 16, 1/e weights
+    out = (np.einsum("krnq,nq->krn", re.reshape(nk, r, n, nq), om)
+           + 1j * np.einsum("krnq,nq->krn", im.reshape(nk, r, n, nq), om))
+    js = np.nonzero(np.abs(zh) > dk.NEAR_PLANAR)[0]
+    if js.size:
+        pts = (js[:, None] * nq + np.arange(nq)).ravel()
+        geo2 = {key: (val[..., pts] if np.ndim(val) else val) for key, val in geo.items()}
+        ex = cosx[..., pts] - 1j * sinx[..., pts]
+        dk2 = dk.incremental_k2(geo2, mach, wv, ex).reshape(nk, r, js.size, nq)
         es = e[js]
-        dnr = np.einsum("pi,pi->p", d[ir, js], nrm[ir])              # d . n_r at the midpoint
-        yn = np.einsum("pi,pi->p", snd["ye"][js], nrm[ir])           # y_e(sender) . n_r
-        t2 = (zh[ir, js] * es)[:, None] * (dnr[:, None] - es[:, None] * sig * yn[:, None])
-        c2 = snd["chord"][js] / (8.0 * np.pi * es ** 3)              # A&R eq. 16, 1/e^3 weights
-        w2p = w2.reshape(r, n, nq)[ir, js] * (t2 * c2[:, None])
-        out[:, ir, js] += np.einsum("kpq,pq->kp", dk2, w2p)
+        dnr = dyz[js] @ nrm[1:]                                  # d . n_r at the midpoint
+        yn = snd["ye"][js] @ nrm                                 # y_e(sender) . n_r
+        t2 = (zh[js] * es)[:, None] * (dnr[:, None] - es[:, None] * sig * yn[:, None])
+        c2 = snd["chord"][js] / (8.0 * np.pi * es ** 3)          # A&R eq. 16, 1/e^3 weights
+        out[..., js] += np.einsum("krpq,pq->krp", dk2, w2[js] * t2 * c2[:, None])
     return out
 
 
+def _strips(mesh: BoxMesh):
+    """Groups of receiving boxes sharing collocation y, z and normal (one strip of a panel)."""
+    key = np.concatenate([mesh.collocation[:, 1:], mesh.normal[:, 1:]], axis=1)
+    _, inverse = np.unique(key, axis=0, return_inverse=True)
+    order = np.argsort(inverse.ravel(), kind="stable")
+    bounds = np.flatnonzero(np.diff(inverse.ravel()[order])) + 1
+    return np.split(order, bounds)
+
+
 def dlm_aic(mesh: BoxMesh, mach: float, k, *, refc: float, method: str = "quartic",
-            symxz: int = 0, chunk_size: int | None = None) -> np.ndarray:
+            symxz: int = 0, chunk_size: int | None = None,
+            workers: int | None = None) -> np.ndarray:
     """Doublet-lattice normalwash matrices D(M, k) for several reduced frequencies at once.
 
     Parameters
@@ -111,6 +120,9 @@ def dlm_aic(mesh: BoxMesh, mach: float, k, *, refc: float, method: str = "quarti
     chunk_size : int, optional
         Receiving boxes per block. Peak temporaries scale as chunk_size * n * 5 * nk * ~200 B;
         the default keeps them near 100 MB whatever n and nk.
+    workers : int, optional
+        Threads over blocks of receiving boxes (default: the number of CPUs); each thread
+        holds one block's temporaries.
 
     Returns
     -------
@@ -147,11 +159,21 @@ def dlm_aic(mesh: BoxMesh, mach: float, k, *, refc: float, method: str = "quarti
         senders.append((-float(s), _senders(mirror_xz(mesh), dk.SAMPLES[method])))
     out = np.empty((nk, n, n), dtype=complex)
     out[:] = steady_aic(mesh, m, symxz=s)[None]
-    for i0 in range(0, n, rows):
-        sl = slice(i0, min(n, i0 + rows))
-        for factor, snd in senders:
-            out[:, sl] += factor * _increment_block(mesh.collocation[sl], mesh.normal[sl], snd,
-                                                    m, wv, method)
+    blocks = [g[i0:i0 + rows] for g in _strips(mesh) for i0 in range(0, g.size, rows)]
+
+    def run(idx):
+        xr = mesh.collocation[idx, 0]
+        yz, nrm = mesh.collocation[idx[0], 1:], mesh.normal[idx[0]]
+        for factor, snd in senders:                              # rows of blocks are disjoint
+            out[:, idx] += factor * _increment_block(xr, yz, nrm, snd, m, wv, method)
+
+    nthreads = min(len(blocks), os.cpu_count() or 1) if workers is None else int(workers)
+    if nthreads > 1:                                             # numpy releases the GIL
+        with ThreadPoolExecutor(max_workers=nthreads) as pool:
+            list(pool.map(run, blocks))
+    else:
+        for idx in blocks:
+            run(idx)
     return out
 
 

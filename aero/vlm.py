@@ -52,40 +52,15 @@ def check_symxz(symxz: int) -> int:
     return int(symxz)
 
 
-def _leg(p: np.ndarray, q: np.ndarray) -> np.ndarray:
-    """Velocity per unit circulation of a semi-infinite vortex from q along +x (Katz & Plotkin
-    eq. 10.117 with one end at infinity): v = (x_hat x r)/|x_hat x r|^2 (1 + r_x/|r|) / (4 pi).
-
-    p : (m, 1, 3) receivers; q : (1, s, 3) start points. Returns (m, s, 3).
-    """
-    r = p - q
-    h2 = r[..., 1] ** 2 + r[..., 2] ** 2
-    rn = np.sqrt(h2 + r[..., 0] ** 2)
-    ok = h2 > 1e-20 * rn ** 2                                  # p on the leg's line: no velocity
-    with np.errstate(divide="ignore", invalid="ignore"):
-        f = np.where(ok, (1.0 + r[..., 0] / rn) / (_FOUR_PI * h2), 0.0)
-    return np.stack([np.zeros_like(f), -r[..., 2] * f, r[..., 1] * f], axis=-1)
-
-
-def _bound(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Velocity per unit circulation of the finite vortex a -> b (Katz & Plotkin eq. 10.115):
-    v = (r1 x r2)/|r1 x r2|^2 * r0 . (r1/|r1| - r2/|r2|) / (4 pi)."""
-    r1, r2 = p - a, p - b
-    r0 = b - a
-    c = np.cross(r1, r2)
-    c2 = np.einsum("...i,...i->...", c, c)
-    n1 = np.sqrt(np.einsum("...i,...i->...", r1, r1))
-    n2 = np.sqrt(np.einsum("...i,...i->...", r2, r2))
-    ok = c2 > 1e-20 * (n1 * n2) ** 2                           # p on the vortex line: none
-    with np.errstate(divide="ignore", invalid="ignore"):
-        proj = np.einsum("...i,...i->...", r0, r1 / n1[..., None] - r2 / n2[..., None])
-        f = np.where(ok, proj / (_FOUR_PI * c2), 0.0)
-    return c * f[..., None]
-
-
 def horseshoe_normalwash(colloc: np.ndarray, normal: np.ndarray, a: np.ndarray, b: np.ndarray,
                          chord: np.ndarray, beta: float) -> np.ndarray:
     """w/V at receivers per unit dCp on horseshoe-vortex senders (one block, no chunking).
+
+    Bound vortex a -> b (Katz & Plotkin eq. 10.115):
+    v = (r1 x r2)/|r1 x r2|^2 * r0 . (r1/|r1| - r2/|r2|) / (4 pi), r1 = p - a, r2 = p - b, r0 = b - a;
+    semi-infinite legs along +x from a point q (eq. 10.115 with one end at infinity):
+    v = (x_hat x r)/|x_hat x r|^2 (1 + r_x/|r|) / (4 pi), r = p - q, for b -> infinity and
+    minus that for a -> infinity. A receiver on a vortex line gets no velocity from it.
 
     Parameters
     ----------
@@ -103,11 +78,28 @@ def horseshoe_normalwash(colloc: np.ndarray, normal: np.ndarray, a: np.ndarray, 
     -------
     (m, s) float
     """
-    stretch = np.array([1.0 / beta, 1.0, 1.0])
-    p = (colloc * stretch)[:, None, :]
-    qa, qb = (a * stretch)[None], (b * stretch)[None]
-    v = _bound(p, qa, qb) + _leg(p, qb) - _leg(p, qa)          # legs: infinity -> a, b -> infinity
-    return np.einsum("msi,mi->ms", v, normal) * (0.5 * chord)[None, :]
+    px, py, pz = (colloc[:, i, None] for i in range(3))
+    nx, ny, nz = (normal[:, i, None] for i in range(3))
+    px = px / beta
+    ax, ay, az = a[None, :, 0] / beta, a[None, :, 1], a[None, :, 2]
+    bx, by, bz = b[None, :, 0] / beta, b[None, :, 1], b[None, :, 2]
+    r1x, r1y, r1z = px - ax, py - ay, pz - az
+    r2x, r2y, r2z = px - bx, py - by, pz - bz
+    h1 = r1y * r1y + r1z * r1z
+    h2 = r2y * r2y + r2z * r2z
+    n1 = np.sqrt(h1 + r1x * r1x)
+    n2 = np.sqrt(h2 + r2x * r2x)
+    cx = r1y * r2z - r1z * r2y
+    cy = r1z * r2x - r1x * r2z
+    cz = r1x * r2y - r1y * r2x
+    c2 = cx * cx + cy * cy + cz * cz
+    r0x, r0y, r0z = bx - ax, by - ay, bz - az
+    with np.errstate(divide="ignore", invalid="ignore"):
+        proj = (r0x * r1x + r0y * r1y + r0z * r1z) / n1 - (r0x * r2x + r0y * r2y + r0z * r2z) / n2
+        w = np.where(c2 > 1e-20 * (n1 * n2) ** 2, proj / c2, 0.0) * (nx * cx + ny * cy + nz * cz)
+        w += np.where(h2 > 1e-20 * n2 * n2, (1.0 + r2x / n2) / h2, 0.0) * (nz * r2y - ny * r2z)
+        w -= np.where(h1 > 1e-20 * n1 * n1, (1.0 + r1x / n1) / h1, 0.0) * (nz * r1y - ny * r1z)
+    return w * (0.5 / _FOUR_PI * chord)[None, :]
 
 
 def steady_aic(mesh: BoxMesh, mach: float, *, symxz: int = 0) -> np.ndarray:
