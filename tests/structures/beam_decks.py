@@ -11,7 +11,8 @@ LENGTH, AREA, INERTIA = 10.0, 0.01, 1.0e-5
 
 def beam_deck(path: Path, *, nel: int = 40, support: str = "cantilever", plane_only: bool = False,
               cd: int = 0, cp: int = 0, coords: str = "", extra: str = "", nmodes: int = 10,
-              i2: float = INERTIA, rotation=None, element: str = "CBAR") -> Path:
+              i2: float = INERTIA, rotation=None, element: str = "CBAR",
+              vector_in_basic: bool = False) -> Path:
     """A uniform CBAR (or CBEAM) beam along x (or along ``rotation @ x``), COUPMASS consistent mass.
 
     CBEAM (PBEAM with K1 = K2 = 0: no shear flexibility) carries the section's torsional inertia,
@@ -19,6 +20,7 @@ def beam_deck(path: Path, *, nel: int = 40, support: str = "cantilever", plane_o
 
     support: 'cantilever' (grid 1 clamped) or 'free'. ``plane_only`` keeps only the x-z bending
     DOFs (PS=1246). ``cd``/``cp`` name coordinate systems defined in ``coords``.
+    ``vector_in_basic`` writes OFFT = BGG (orientation vector in basic, not in GA's CD frame).
     """
     rot = np.eye(3) if rotation is None else np.asarray(rotation, float)
     lines = ["SOL 103", "CEND", "METHOD = 1"]
@@ -35,10 +37,11 @@ def beam_deck(path: Path, *, nel: int = 40, support: str = "cantilever", plane_o
             x = _to_frame(x, coords, cp)
         lines.append(f"GRID,{i + 1},{cp or ''},{x[0]!r},{x[1]!r},{x[2]!r},{cd or ''},{ps}")
     v = rot @ np.array([0.0, 1.0, 0.0])
-    if cd:
+    if cd and not vector_in_basic:
         v = _frame(coords, cd)[0] @ v  # CBAR X1-X3 are in GA's displacement frame (QRG)
+    offt = ",BGG" if vector_in_basic else ""
     for i in range(nel):
-        lines.append(f"{element},{i + 1},1,{i + 1},{i + 2},{v[0]!r},{v[1]!r},{v[2]!r}")
+        lines.append(f"{element},{i + 1},1,{i + 1},{i + 2},{v[0]!r},{v[1]!r},{v[2]!r}{offt}")
     if support == "cantilever":
         lines.append("SPC1,1,123456,1")
     lines += [coords, extra, "ENDDATA"]
@@ -65,10 +68,10 @@ def _to_frame(x, coords, cid):
     return rows @ (x - origin)
 
 
-def cord2r(cid: int, origin, z_point, xz_point) -> str:
-    """A CORD2R card in free field (single line, 9 values)."""
+def cord2r(cid: int, origin, z_point, xz_point, kind: str = "R") -> str:
+    """A CORD2R (or CORD2C/CORD2S with ``kind``) card in free field with one continuation."""
     first = ",".join(repr(float(v)) for v in [*origin, *z_point])
-    return f"CORD2R,{cid},,{first}\n," + ",".join(repr(float(v)) for v in xz_point)
+    return f"CORD2{kind},{cid},,{first}\n," + ",".join(repr(float(v)) for v in xz_point)
 
 
 def bending_frequencies(beta_l, i_val=INERTIA):

@@ -125,3 +125,18 @@ def test_free_free_cbar_without_rotary_inertia_is_a_massless_mechanism(tmp_path)
     model = read_model(beam_deck(tmp_path / "free_cbar.bdf", support="free", nmodes=8))
     with pytest.raises(SolverError, match="massless mechanism"):
         compute_modes(model, 8)
+
+
+@pytest.mark.parametrize("kind", ["C", "S"])
+def test_cylindrical_and_spherical_displacement_frames_change_nothing(tmp_path, kind):
+    """CD frames whose axes vary from grid to grid (CORD2C / CORD2S off the beam axis)."""
+    coords = cord2r(9, (3.0, -2.0, 1.0), (3.5, -1.0, 2.0), (4.0, -2.0, 0.0), kind=kind)
+    ref = compute_modes(read_model(beam_deck(tmp_path / "a.bdf", nmodes=6, i2=4 * INERTIA)), 6)
+    model = read_model(beam_deck(tmp_path / "b.bdf", nmodes=6, i2=4 * INERTIA, coords=coords,
+                                 cd=9, vector_in_basic=True))
+    assert len(np.unique(np.round(model.grids.cd_axes, 8), axis=0)) == len(model.grids)
+    modes = compute_modes(model, 6)
+    np.testing.assert_allclose(modes["frequency"], ref["frequency"], rtol=1e-9)
+    a, b = ref["shape"].values, modes["shape"].values
+    mac = (a @ b.T) ** 2 / np.outer((a * a).sum(1), (b * b).sum(1))
+    assert np.all(np.diag(mac) > 1 - 1e-8)
