@@ -238,6 +238,15 @@ def frequency_error(f_fe, f_test) -> np.ndarray:
         return 100.0 * (np.asarray(f_fe, dtype=float) - f_test) / f_test   # eq. 18
 
 
+def default_nmodes(gvt: xr.Dataset, n_rigid: int = 6) -> int:
+    """Analysis modes to compute for pairing and SEREP: 2 x test modes + rigid modes, at most n_MD.
+
+    Twice the test modes leaves the pairing room for interchanged and unmeasured modes; SEREP
+    needs m <= n_MD.
+    """
+    return int(min(2 * gvt.sizes["mode"] + n_rigid, gvt.sizes["dof"]))
+
+
 # ------------------------------------------------------------------------------------ Dataset level
 def measured_dof_index(fe_modes: xr.Dataset, gvt: xr.Dataset) -> np.ndarray:
     """Position along ``fe_modes.dof`` of every GVT DOF; raises naming unknown grids/components.

@@ -425,3 +425,23 @@ def test_perturbed_model_with_noise(perturbed):
     assert not corr["pass_cross_orthogonality_off_diagonal"].values[:, clear].any()
     if kind == "numpy":
         assert clear[[FLEX.index(16), FLEX.index(17)]].all()
+
+
+# -------------------------------------------------------------------------------------- figures
+def test_figures_show_the_dataset_values(base, tmp_path):
+    from structures.correlation_plots import (plot_cross_orthogonality, plot_frequency_comparison, plot_mac,
+                                              save_correlation_figures)
+    _, _, modes = base
+    gvt = gvt_from(modes, FLEX, sensors_120(modes))
+    gvt["name"] = ("mode", np.array([f"M{m}" for m in FLEX], dtype=object))
+    corr = correlate(modes, gvt)
+    ax = plot_mac(corr).axes[0]
+    np.testing.assert_allclose(ax.images[0].get_array(), corr["mac"].sel(fe_mode=FLEX).values)
+    assert [t.get_text() for t in ax.get_yticklabels()] == [f"{m} M{m}" for m in FLEX]
+    ax = plot_cross_orthogonality(corr).axes[0]
+    assert ax.images[0].get_clim() == (-1.0, 1.0)
+    bars = plot_frequency_comparison(corr).axes[0].patches
+    heights = np.array([b.get_height() for b in bars])
+    np.testing.assert_allclose(heights, np.r_[corr["test_frequency"].values, corr["paired_fe_frequency"].values])
+    paths = save_correlation_figures(corr, tmp_path)
+    assert all(p.stat().st_size > 10_000 for p in paths)
