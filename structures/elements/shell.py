@@ -80,29 +80,58 @@ def _btcb(Bl: np.ndarray, C: np.ndarray, Br: np.ndarray) -> np.ndarray:
     return np.swapaxes(Bl, 1, 2) @ (C @ Br)
 
 
-def _node_transform(R: np.ndarray, h: np.ndarray) -> np.ndarray:
-    """Per-node 6x6 map from basic grid DOFs to local element-node DOFs, (ne, nn, 6, 6).
+def _warp_offsets(K: np.ndarray, h: np.ndarray) -> np.ndarray:
+    """K of element nodes offset by -h along the local z axis from their grids, (ne, 6nn, 6nn).
 
-    Local translations/rotations are R @ basic; a node offset by -h along the local z axis from its
-    grid (mean plane of a warped quad) moves by u - h*ry, v + h*rx (rigid link).
+    Rigid link (local axes): u_node = u - h*ry, v_node = v + h*rx, i.e. q_node = W q_grid with W
+    the identity plus these two terms; returns W^T K W.
     """
-    ne, nn = h.shape
-    G = np.zeros((ne, nn, 6, 6))
-    G[:, :, :3, :3] = R[:, None]
-    G[:, :, 3:, 3:] = R[:, None]
-    O = np.zeros((ne, nn, 3, 3))
-    O[:, :, 0, 1] = -h
-    O[:, :, 1, 0] = h
-    G[:, :, :3, 3:] = O @ R[:, None]
-    return G
+    Kw = K.copy()
+    nn = h.shape[1]
+    for j in range(nn):                         # columns: K W
+        Kw[:, :, 6 * j + 4] -= h[:, j, None] * Kw[:, :, 6 * j]
+        Kw[:, :, 6 * j + 3] += h[:, j, None] * Kw[:, :, 6 * j + 1]
+    for j in range(nn):                         # rows: W^T (K W)
+        Kw[:, 6 * j + 4, :] -= h[:, j, None] * Kw[:, 6 * j, :]
+        Kw[:, 6 * j + 3, :] += h[:, j, None] * Kw[:, 6 * j + 1, :]
+    return Kw
 
 
-def _to_basic(K_local: np.ndarray, G: np.ndarray) -> np.ndarray:
-    """K_basic = G^T K_local G with G block diagonal per node; (ne, 6nn, 6nn)."""
-    ne, nn = G.shape[:2]
-    Kab = K_local.reshape(ne, nn, 6, nn, 6).transpose(0, 1, 3, 2, 4)     # (ne, a, b, 6, 6)
-    Kb = np.swapaxes(G, 2, 3)[:, :, None] @ Kab @ G[:, None, :]
-    return Kb.transpose(0, 1, 3, 2, 4).reshape(ne, 6 * nn, 6 * nn)
+def _to_basic(K_local: np.ndarray, R: np.ndarray) -> np.ndarray:
+    """K_basic = T^T K_local T with T = blockdiag(R, R, ...) (3x3 blocks, rows of R = local axes)."""
+    ne, n = K_local.shape[:2]
+    nb = n // 3
+    T = np.zeros((ne, nb, 3, nb, 3))
+    for a in range(nb):
+        T[:, a, :, a, :] = R
+    T = T.reshape(ne, n, n)
+    return np.swapaxes(T, 1, 2) @ K_local @ T
+
+
+def _jacobian(dN: np.ndarray, xy: np.ndarray):
+    """J (ne,2,2) = dN (2,nn) @ xy (ne,nn,2), its determinant and inverse (explicit 2x2)."""
+    J = np.einsum("ai,eik->eak", dN, xy)
+    det = J[:, 0, 0] * J[:, 1, 1] - J[:, 0, 1] * J[:, 1, 0]
+    inv = np.empty_like(J)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        inv[:, 0, 0], inv[:, 1, 1] = J[:, 1, 1] / det, J[:, 0, 0] / det
+        inv[:, 0, 1], inv[:, 1, 0] = -J[:, 0, 1] / det, -J[:, 1, 0] / det
+    return J, det, inv
+
+
+def _condense(K: np.ndarray, n_keep: int) -> np.ndarray:
+    """Static condensation of the trailing internal DOFs: K_cc - K_ci K_ii^-1 K_ic.
+
+    K_ii is symmetric positive definite (or exactly zero for a membrane-free section, then the
+    coupling K_ci is zero too and nothing is condensed); batched Gauss elimination without pivoting.
+    """
+    Kc = K.copy()
+    for i in range(n_keep, K.shape[1]):
+        pivot = Kc[:, i, i]
+        safe = np.where(pivot > 0, pivot, 1.0)
+        factor = np.where(pivot > 0, 1.0, 0.0)[:, None] * Kc[:, :, i] / safe[:, None]
+        Kc -= factor[:, :, None] * Kc[:, i, None, :]
+    return Kc[:, :n_keep, :n_keep]
 
 
 def _translational_mass(Mt: np.ndarray) -> np.ndarray:
@@ -193,21 +222,17 @@ def quad4_matrices(xyz: np.ndarray, section: ShellSection, theta: np.ndarray,
     ne = xyz.shape[0]
     R, xy, h = _quad_frame(xyz)
     A, B, D, S = _material_to_element(section, theta)
-    J0 = np.einsum("ai,eik->eak", _quad_shape(0.0, 0.0)[1], xy)
-    det0 = np.linalg.det(J0)
-    inv0 = np.linalg.inv(J0)
+    _, det0, inv0 = _jacobian(_quad_shape(0.0, 0.0)[1], xy)
     tying = {0: [(0.0, -1.0), (0.0, 1.0)], 1: [(-1.0, 0.0), (1.0, 0.0)]}   # MITC4 points B, D / A, C
     rows = {d: [_covariant_shear_row(xy, *p, d) for p in pts] for d, pts in tying.items()}
     gauss = []
     for xi, eta in _GAUSS_2X2:
         N, dN = _quad_shape(xi, eta)
-        J = np.einsum("ai,eik->eak", dN, xy)
-        det = np.linalg.det(J)
+        _, det, inv = _jacobian(dN, xy)
         if np.any(det <= 0):
             bad = int(np.flatnonzero(det <= 0)[0])
             raise InputError(f"CQUAD4 number {bad} (0-based in this batch) has a non-positive Jacobian "
                              "(concave or badly distorted quad). Fix: reorder G1..G4 or remesh.")
-        inv = np.linalg.inv(J)
         dNx = inv @ dN                                                    # (ne, 2, 4)
         dP = np.array([[-2 * xi, 0.0], [0.0, -2 * eta]])                  # bubbles 1-xi^2, 1-eta^2
         dPx = (inv0 @ dP) * (det0 / det)[:, None, None]                   # Taylor's correction
@@ -241,16 +266,13 @@ def quad4_matrices(xyz: np.ndarray, section: ShellSection, theta: np.ndarray,
     CBg = np.concatenate([det[:, None, None] * (C @ np.concatenate([Bm, Bb, Bs], axis=1))
                           for _, det, Bm, Bb, Bs in gauss], axis=1)
     K = np.swapaxes(Bg, 1, 2) @ CBg              # sum over Gauss points of B^T C B det J
-    Kii = K[:, 24:, 24:].copy()
-    no_membrane = np.abs(Kii).max(axis=(1, 2)) == 0
-    Kii[no_membrane] = np.eye(4)
-    Kc = K[:, :24, :24] - K[:, :24, 24:] @ np.linalg.solve(Kii, K[:, 24:, :24])
+    Kc = _condense(K, 24)
     b_omega = np.zeros((ne, 24))
     dNc = inv0 @ _quad_shape(0.0, 0.0)[1]
     b_omega[:, 1:24:6] = 0.5 * dNc[:, 0]
     b_omega[:, 0:24:6] = -0.5 * dNc[:, 1]
     Kc += _drill_stiffness(b_omega, _drill_k(A, D, area), 4)
-    Kb = _to_basic(Kc, _node_transform(R, h))
+    Kb = _to_basic(_warp_offsets(Kc, h) if np.any(h) else Kc, R)
     m = section.mass_per_area
     if lumped:
         Mt = (m * area / 4.0)[:, None, None] * np.eye(4)
@@ -358,7 +380,7 @@ def tria3_matrices(xyz: np.ndarray, section: ShellSection, theta: np.ndarray,
     b_omega[:, 1::6] = 0.5 * dL[:, 0]
     b_omega[:, 0::6] = -0.5 * dL[:, 1]
     K += _drill_stiffness(b_omega, _drill_k(A, D, area), 3)
-    Kb = _to_basic(K, _node_transform(R, np.zeros((ne, 3))))
+    Kb = _to_basic(K, R)
     m = section.mass_per_area * area
     if lumped:
         Mt = (m / 3.0)[:, None, None] * np.eye(3)
