@@ -112,7 +112,8 @@ def _matrix(values, row_labels, col_labels, fmt) -> str:
     width = max([len(str(c)) for c in col_labels] + [len(c) for row in cells for c in row]) + 1
     label = max(len(str(r)) for r in row_labels) + 1
     lines = [" " * label + "".join(f"{str(c):>{width}}" for c in col_labels)]
-    lines += [f"{str(r):<{label}}" + "".join(f"{c:>{width}}" for c in row) for r, row in zip(row_labels, cells)]
+    lines += [f"{str(r):<{label}}" + "".join(f"{c:>{width}}" for c in row)
+              for r, row in zip(row_labels, cells)]
     return "\n".join(lines)
 
 
@@ -133,7 +134,8 @@ def correlation_tables(corr) -> str:
             verdicts.append("PASS" if not failed else f"FAIL({failed})")
         klass = "primary" if bool(corr["primary"].values[k]) else "secondary"
         lines.append(f"{label:>12} {corr['test_frequency'].values[k]:10.4g} {int(paired[k]):8d} "
-                     f"{corr['paired_fe_frequency'].values[k]:10.4g} {corr['frequency_error'].values[k]:8.1f} "
+                     f"{corr['paired_fe_frequency'].values[k]:10.4g} "
+                     f"{corr['frequency_error'].values[k]:8.1f} "
                      f"{corr['paired_mac'].values[k]:5.2f} "
                      f"{abs(corr['paired_cross_orthogonality'].values[k]):6.3f} {klass:>9} "
                      + " ".join(f"{v:>14}" for v in verdicts))

@@ -363,6 +363,11 @@ def correlate(fe_modes: xr.Dataset, gvt: xr.Dataset, settings: CorrelationSettin
     phi_fe = fe_modes["shape"].values.T                                    # Phi_A (all dofs x n_fe)
     phi_gm = gvt["shape"].values.T                                         # Phi~_GM (n_MD x n)
     q = serep_coordinates(basis[index], phi_gm, max_condition=settings.max_condition)
+    lost = np.sum(q ** 2, axis=0) <= 1e-24 * np.sum(phi_gm ** 2, axis=0)
+    if np.any(lost):
+        raise InputError(f"GVT file {gvt.attrs.get('source') or '(arrays)'}: test modes "
+                         f"{gvt['mode'].values[lost].tolist()} have no component in the span of the SEREP "
+                         "modes at the measured DOFs. Fix: compute more analysis modes or check the shapes.")
     g = serep_pseudo_inverse(basis[a_mask], max_condition=settings.max_condition) @ phi_fe[a_mask]
     ortho, gmass = orthogonality(q)
     cross = cross_orthogonality(q, g)
@@ -377,7 +382,8 @@ def correlate(fe_modes: xr.Dataset, gvt: xr.Dataset, settings: CorrelationSettin
         {"mac": (tf, mac_m, {"long_name": "MAC on the measured DOFs (eq. 23)"}),
          "orthogonality": (("test_mode", "test_mode_2"), ortho,
                            {"long_name": "test-mode mass orthogonality, diagonal normalised to 1 (eq. 11)"}),
-         "cross_orthogonality": (tf, cross, {"long_name": "cross-orthogonality, unit generalised masses (eq. 20)"}),
+         "cross_orthogonality": (tf, cross,
+                                 {"long_name": "cross-orthogonality, unit generalised masses (eq. 20)"}),
          "frequency_error": (t, frequency_error(f_fe[pairing.fe_index], f_test),
                              {"units": "%", "long_name": "100 (f_FE - f_GVT) / f_GVT (eq. 18)"}),
          "paired_fe_mode": (t, paired),

@@ -132,7 +132,8 @@ def validate_gvt(ds: xr.Dataset) -> None:
     bad = (comp < 1) | (comp > 6)
     if np.any(bad):
         raise InputError(f"{where}: components {np.unique(comp[bad]).tolist()} are not in 1..6 "
-                         f"(grids {np.unique(grid[bad]).tolist()}). Fix: use 1-3 translations, 4-6 rotations.")
+                         f"(grids {np.unique(grid[bad]).tolist()}). Fix: use 1-3 translations, "
+                         "4-6 rotations.")
     key = grid.astype(np.int64) * 10 + comp
     uk, kc = np.unique(key, return_counts=True)
     if np.any(kc > 1):
@@ -141,7 +142,8 @@ def validate_gvt(ds: xr.Dataset) -> None:
                          "value per DOF (average repeated roving-sensor measurements first).")
     freq = ds["frequency"].values
     if not np.all(np.isfinite(freq)) or np.any(freq < 0):
-        raise InputError(f"{where}: frequencies of modes {modes[~(np.isfinite(freq) & (freq >= 0))].tolist()} "
+        bad_f = modes[~(np.isfinite(freq) & (freq >= 0))].tolist()
+        raise InputError(f"{where}: frequencies of modes {bad_f} "
                          "are not finite and >= 0. Fix: correct the frequency records.")
     if not np.all(np.isfinite(ds["damping"].values)):
         raise InputError(f"{where}: damping of modes "
@@ -206,7 +208,7 @@ def read_uff(path: str | os.PathLike, *, drop_unmeasured: bool = True, units: st
     try:
         sets = pyuff.UFF(str(path)).read_sets()
         sets = [sets] if isinstance(sets, dict) else list(sets)
-        nodes, records = _from_pyuff(sets)
+        nodes, records = _from_pyuff(sets, path)
         reader = "pyuff"
     except InputError:
         raise
@@ -219,15 +221,18 @@ def read_uff(path: str | os.PathLike, *, drop_unmeasured: bool = True, units: st
     return _assemble(path, nodes, records, drop_unmeasured=drop_unmeasured, reader=reader, units=units)
 
 
-def _from_pyuff(sets) -> tuple[dict, list]:
+def _from_pyuff(sets, path: Path) -> tuple[dict, list]:
     """Nodes {id: (xyz, def_cs, disp_cs)} and mode records from pyuff dictionaries."""
     nodes, records = {}, []
     for s in sets:
         kind = s.get("type")
         if kind in (15, 2411):
+            n = len(s["node_nums"])
+            def_cs = np.asarray(s.get("def_cs", np.zeros(n)))
+            disp_cs = np.asarray(s.get("disp_cs", np.zeros(n)))
             for i, nid in enumerate(np.asarray(s["node_nums"])):
-                cs = (s.get("def_cs", [0] * (i + 1))[i], s.get("disp_cs", [0] * (i + 1))[i])
-                nodes[_as_int(nid)] = (np.array([s["x"][i], s["y"][i], s["z"][i]], float), *cs)
+                nodes[_as_int(nid)] = (np.array([s["x"][i], s["y"][i], s["z"][i]], float),
+                                       _as_int(def_cs[i]), _as_int(disp_cs[i]))
         elif kind == 55:
             ndv = int(s["n_data_per_node"])
             node_nums = np.asarray(s["node_nums"])
@@ -236,12 +241,14 @@ def _from_pyuff(sets) -> tuple[dict, list]:
                 raise ValueError("pyuff returned inconsistent node and value counts")
             if int(s["analysis_type"]) == 2:
                 eig = None
-                freq, mmass, zeta = float(s["freq"]), float(s.get("modal_m", 0.0)), float(s.get("modal_damp_vis", 0.0))
+                freq, mmass = float(s["freq"]), float(s.get("modal_m", 0.0))
+                zeta = float(s.get("modal_damp_vis", 0.0))
             elif int(s["analysis_type"]) in (3, 7):
                 eig, freq, mmass, zeta = complex(s["eig"]), None, 0.0, None
             else:
-                raise InputError(f"UFF 55 mode {s.get('mode_n')}: analysis type {s['analysis_type']} is not "
-                                 "normal or complex modes. Fix: export the test modes (analysis type 2).")
+                raise InputError(f"GVT file {path}, dataset 55 mode {s.get('mode_n')}: analysis type "
+                                 f"{s['analysis_type']} is not normal (2) or complex (3) modes. Fix: export "
+                                 "the test mode shapes.")
             records.append(dict(mode=int(s["mode_n"]), freq=freq, eig=eig, modal_mass=mmass, zeta=zeta,
                                 name=str(s.get("id4", "")), nodes=node_nums.astype(np.int64),
                                 values=vals, ndv=ndv))
@@ -260,8 +267,9 @@ def _numbers(text: str) -> list[float]:
     return [float(t.replace("D", "E").replace("d", "e")) for t in _NUMBER.findall(text)]
 
 
-def _split_blocks(path: Path) -> list[tuple[int, list[str]]]:
-    """(dataset number, body lines) of every ASCII dataset between ``-1`` delimiter lines."""
+def _split_blocks(path: Path) -> list[tuple[int | None, list[str]]]:
+    """(dataset number, body lines) of every dataset between ``-1`` delimiter lines; the number is
+    None for a binary dataset header (``2414b``), which only pyuff reads."""
     lines = [ln.rstrip() for ln in path.read_bytes().decode("latin-1").splitlines()]
     blocks, i, n = [], 0, len(lines)
     while i < n:
@@ -276,10 +284,7 @@ def _split_blocks(path: Path) -> list[tuple[int, list[str]]]:
         if not block or not block[0].split():
             continue
         head = block[0].split()[0]
-        if not head.isdigit():
-            raise InputError(f"GVT file {path}: dataset header {block[0]!r} is not a plain ASCII dataset "
-                             "number (binary UFF?). Fix: export ASCII universal files.")
-        blocks.append((int(head), block[1:]))
+        blocks.append((int(head) if head.isdigit() else None, block[1:]))
     return blocks
 
 
@@ -287,6 +292,9 @@ def _parse_tolerant(path: Path, blocks) -> tuple[dict, list]:
     """Token-stream parser of UFF 15/2411/55 tolerant of D exponents, CRLF, blanks, free format."""
     nodes, records = {}, []
     for kind, body in blocks:
+        if kind is None:
+            raise InputError(f"GVT file {path}: a binary dataset that pyuff could not read. Fix: export "
+                             "ASCII universal files.")
         if kind in (15, 2411):
             vals = _numbers("\n".join(body))
             if len(vals) % 7:
@@ -304,6 +312,9 @@ def _parse_55(body: list[str], path: Path) -> dict:
         raise InputError(f"GVT file {path}: a dataset 55 is truncated. Fix: re-export the file.")
     name = body[3].strip()
     tok = _numbers("\n".join(body[5:]))
+    if len(tok) < 8 or len(tok) < 8 + _as_int(tok[6]) + _as_int(tok[7]) or _as_int(tok[7]) < 2:
+        raise InputError(f"GVT file {path}: the header records 6-8 of a dataset 55 ({body[3].strip()!r}) are "
+                         "incomplete. Fix: re-export the file.")
     _model, analysis, data_ch, _spec, data_type, ndv = (_as_int(t) for t in tok[:6])
     nint, nreal = _as_int(tok[6]), _as_int(tok[7])
     ints = [_as_int(t) for t in tok[8:8 + nint]]
@@ -372,7 +383,8 @@ def _assemble(path: Path, nodes: dict, records: list, *, drop_unmeasured: bool, 
             raise InputError(f"GVT file {path}, mode {r['mode']}: nodes {u[cnt > 1].tolist()} appear twice. "
                              "Fix: one record per node.")
         freq[k], zeta[k], vals = _realise(r)
-        shape[k, np.searchsorted(all_nodes, r["nodes"])] = vals  # nodes absent from a record are 0 (UFF note 9)
+        # nodes absent from a record are 0 (UFF note 9)
+        shape[k, np.searchsorted(all_nodes, r["nodes"])] = vals
     grid = np.repeat(all_nodes, ndv)
     comp = np.tile(np.arange(1, ndv + 1), all_nodes.size)
     shape = shape.reshape(len(records), -1)
@@ -411,8 +423,8 @@ def write_uff(ds: xr.Dataset, path: str | os.PathLike, *, title: str = "GVT mode
     sets = []
     if "x" in ds.coords:
         first = np.unique(grid, return_index=True)[1]
-        sets.append(pyuff.prepare_15(node_nums=nodes.astype(int), x=ds["x"].values[first].astype(float),
-                                     y=ds["y"].values[first].astype(float), z=ds["z"].values[first].astype(float)))
+        xyz = {c: ds[c].values[first].astype(float) for c in ("x", "y", "z")}
+        sets.append(pyuff.prepare_15(node_nums=nodes.astype(int), **xyz))
         sets[-1].update(def_cs=np.zeros(nodes.size, int), disp_cs=np.zeros(nodes.size, int),
                         color=np.zeros(nodes.size, int))
     names = ds["name"].values if "name" in ds else [""] * ds.sizes["mode"]
