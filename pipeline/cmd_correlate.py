@@ -140,6 +140,9 @@ def correlation_tables(corr) -> str:
                      f"{abs(corr['paired_cross_orthogonality'].values[k]):6.3f} {klass:>9} "
                      + " ".join(f"{v:>14}" for v in verdicts))
     lines.append(f"mode interchanges: {corr.attrs.get('interchanges', 'none')}")
+    if "max_sensor_offset" in corr.attrs:
+        lines.append(f"largest distance GVT node - model grid: {corr.attrs['max_sensor_offset']:.4g} "
+                     "(model units; large values mean misnumbered nodes)")
     fe_labels = [str(int(m)) for m in paired]
     lines += ["", "MAC (rows: GVT modes, columns: paired FE modes)",
               _matrix(corr["mac"].sel(fe_mode=paired).values, rows, fe_labels, fmt="{:5.2f}"),

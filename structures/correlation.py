@@ -397,6 +397,9 @@ def correlate(fe_modes: xr.Dataset, gvt: xr.Dataset, settings: CorrelationSettin
         coords={"test_mode": test_modes, "test_mode_2": test_modes, "fe_mode": fe_modes["mode"].values})
     if "name" in gvt:
         ds["test_name"] = (t, gvt["name"].values.astype(object))
+    if all(c in gvt.coords and c in fe_modes.coords for c in ("x", "y", "z")):
+        offset = np.sqrt(sum((gvt[c].values - fe_modes[c].values[index]) ** 2 for c in ("x", "y", "z")))
+        ds.attrs["max_sensor_offset"] = float(offset.max())  # GVT node vs model grid position
     swaps = ", ".join(f"{test_modes[i]}<->{test_modes[j]}" for i, j in pairing.swaps)
     ds.attrs.update({
         "pair_by": settings.pair_by, "a_set": settings.a_set, "n_serep_modes": basis.shape[1],

@@ -76,6 +76,7 @@ def test_modes_file_and_uff_print_tables_and_write_dataset(files, capsys):
     assert "FAIL(f)" in out and sorted(p.name for p in (folder / "fig").iterdir()) == [
         "cross_orthogonality.png", "frequencies.png", "mac.png", "orthogonality.png"]
     assert isinstance(corr, xr.Dataset)
+    assert corr.attrs["max_sensor_offset"] < 1e-5           # GVT nodes written at the grid positions
 
 
 def test_case_file_gives_deck_and_gvt(files, tmp_path, capsys):
