@@ -8,7 +8,8 @@ elements")::
     M = B eps + D kappa          kappa = [kappa_x, kappa_y, 2 kappa_xy]
     Q = S gamma                  gamma = [gamma_xz, gamma_yz]
 
-with ``A = T G1``, ``B = T^2 G4``, ``D = (12 I / T^3) (T^3 / 12) G2`` and ``S = (TS/T) T G3``, where
+for strains eps(z) = eps + z kappa through the thickness (z along the element normal; kappa_x =
+-w,xx for a Kirchhoff plate), with ``A = T G1``, ``B = T^2 G4``, ``D = (12 I / T^3) (T^3 / 12) G2`` and ``S = (TS/T) T G3``, where
 ``Gi`` is the material matrix of MIDi (PSHELL fields MID1..MID4, 12I/T**3 and TS/T). A blank MID2
 gives a membrane-only shell (``D = 0``, ``S = 0``); a blank MID3 with MID2 present means "no
 transverse shear flexibility" (Kirchhoff plate), flagged in ``shear_rigid`` so that the element can

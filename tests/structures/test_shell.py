@@ -199,6 +199,65 @@ def test_material_angle_rotates_orthotropy():
     np.testing.assert_allclose(Ka, Kb, rtol=0, atol=1e-10 * np.abs(Ka).max())
 
 
+def rotated_plane_stress(Q: np.ndarray, theta: float) -> np.ndarray:
+    """Q in element axes for material axis 1 at +theta from element x, by tensor rotation.
+
+    Independent of the kernel's Voigt transformation: each unit engineering strain is turned into a
+    2x2 tensor, expressed in material axes (columns of Rm), multiplied by Q and brought back.
+    """
+    c, s = np.cos(theta), np.sin(theta)
+    Rm = np.array([[c, -s], [s, c]])                     # columns: material axes in element axes
+    out = np.zeros((3, 3))
+    for j in range(3):
+        e = np.zeros(3)
+        e[j] = 1.0
+        eps_el = np.array([[e[0], e[2] / 2], [e[2] / 2, e[1]]])
+        eps_m = Rm.T @ eps_el @ Rm
+        sig_m_v = Q @ np.array([eps_m[0, 0], eps_m[1, 1], 2 * eps_m[0, 1]])
+        sig_m = np.array([[sig_m_v[0], sig_m_v[2]], [sig_m_v[2], sig_m_v[1]]])
+        sig_el = Rm @ sig_m @ Rm.T
+        out[:, j] = [sig_el[0, 0], sig_el[1, 1], sig_el[0, 1]]
+    return out
+
+
+def test_material_angle_direction():
+    """theta = +30 deg (material 1 axis from element x towards y) equals a MAT2 holding the
+    tensor-rotated matrices at theta = 0 (membrane, bending and transverse shear)."""
+    th = np.deg2rad(30.0)
+    mat8 = Mat8(1, 3e6, 1e6, 0.3, 4e5, 2e5, 1e5)
+    Qe = rotated_plane_stress(mat8.plane_stress(), th)
+    c, s = np.cos(th), np.sin(th)
+    Rm = np.array([[c, -s], [s, c]])
+    Se = Rm @ np.diag([2e5, 1e5]) @ Rm.T
+    mats = {1: mat8, 2: Mat2(2, Qe[0, 0], Qe[0, 1], Qe[0, 2], Qe[1, 1], Qe[1, 2], Qe[2, 2]),
+            3: Mat2(3, Se[0, 0], Se[0, 1], 0.0, Se[1, 1], 0.0, 0.0)}
+    sec8 = pshell_section(PShell(1, 0.01, 1, 1, mid3=1), mats, 1)
+    sec2 = pshell_section(PShell(2, 0.01, 2, 2, mid3=3), mats, 1)
+    K8, _ = quad4_matrices(QUAD_WARPED[None], sec8, np.array([th]))
+    K2, _ = quad4_matrices(QUAD_WARPED[None], sec2, np.zeros(1))
+    np.testing.assert_allclose(K8, K2, rtol=0, atol=1e-10 * np.abs(K2).max())
+
+
+@pytest.mark.parametrize("kernel,conn", [(quad4_matrices, PATCH_QUADS),
+                                         (tria3_matrices, PATCH_TRIAS)], ids=["quad4", "tria3"])
+def test_membrane_bending_coupling_energy(kernel, conn):
+    """With MID4, the energy of constant (eps, kappa) is area * (eps.A.eps/2 + eps.B.kappa +
+    kappa.D.kappa/2) for strains eps(z) = eps0 + z kappa, kappa = -[w,xx, w,yy, 2 w,xy], z along
+    the element normal (so the sign of B is checked, not only its size)."""
+    xyz = np.column_stack([PATCH_XY, np.zeros(len(PATCH_XY))])
+    sec = pshell_section(PShell(1, 0.01, 1, 1, mid3=1, mid4=1), MAT, len(conn))
+    K = assemble_patch(kernel, conn, xyz, sec)
+    q_m, eps = membrane_field(xyz)
+    q_b, w2 = bending_field(xyz)
+    kappa = -w2
+    q = q_m + q_b
+    area = 0.24 * 0.12
+    expected = area * (0.5 * eps @ sec.A[0] @ eps + eps @ sec.B[0] @ kappa
+                       + 0.5 * kappa @ sec.D[0] @ kappa)
+    np.testing.assert_allclose(0.5 * q @ K @ q, expected, rtol=1e-9)
+    assert abs(eps @ sec.B[0] @ kappa) > 0.1 * abs(expected)      # the coupling term matters
+
+
 def test_pshell_semantics():
     mats = {1: MAT[1], 4: MAT[1]}
     membrane = pshell_section(PShell(1, 0.01, mid1=1), mats)
