@@ -13,7 +13,8 @@ for strains eps(z) = eps + z kappa through the thickness (z along the element no
 ``D = (12 I / T^3) (T^3 / 12) G2`` and ``S = (TS/T) T G3``, where ``Gi`` is the material matrix of
 MIDi (PSHELL fields MID1..MID4, 12I/T**3 and TS/T). A blank MID2 gives a membrane-only shell
 (``D = 0``, ``S = 0``); a blank MID3 with MID2 present means "no transverse shear flexibility"
-(Kirchhoff plate), flagged in ``shear_rigid`` so that the element can impose it. Z1/Z2 only locate stress recovery fibres and do not enter the stiffness.
+(Kirchhoff plate), flagged in ``shear_rigid`` so that the element can impose it. Z1/Z2 only locate
+stress recovery fibres and do not enter the stiffness.
 """
 from __future__ import annotations
 
