@@ -20,7 +20,8 @@ def main(n_grid: int = 8262, n_modes: int = 30, n_test: int = 14, n_measured: in
     rng = np.random.default_rng(0)
     grids = np.arange(1, n_grid + 1)
     modes = xr.Dataset({"frequency": ("mode", np.sort(rng.uniform(1.0, 40.0, n_modes))),
-                        "shape": (("mode", "dof"), rng.standard_normal((n_modes, 6 * n_grid)))},
+                        "shape": (("mode", "dof"), rng.standard_normal((n_modes, 6 * n_grid))),
+                        "generalized_mass": ("mode", np.ones(n_modes))},
                        coords={"mode": np.arange(1, n_modes + 1), "grid": ("dof", np.repeat(grids, 6)),
                                "component": ("dof", np.tile(np.arange(1, 7), n_grid))})
     dofs = np.sort(rng.choice(np.nonzero(modes["component"].values <= 3)[0], n_measured, replace=False))

@@ -43,6 +43,7 @@ import xarray as xr
 from structures.acceptance import DEFAULT_CRITERIA, evaluate_checks
 from structures.errors import InputError
 from structures.gvt import check_dofs_in_model, validate_gvt
+from structures.modes import check_modes
 from structures.pairing import pair_modes
 
 _PAIR_BY = ("mac", "cross_orthogonality")
@@ -270,16 +271,6 @@ def measured_dof_index(fe_modes: xr.Dataset, gvt: xr.Dataset) -> np.ndarray:
     return order[pos]
 
 
-def _check_modes(fe_modes: xr.Dataset) -> None:
-    for var in ("frequency", "shape", "grid", "component"):
-        if var not in fe_modes.variables:
-            raise InputError(f"analysis modes {fe_modes.attrs.get('deck', '')}: {var!r} is missing. "
-                             "Fix: pass a modes Dataset (structures.modal.compute_modes / read_modes).")
-    if not np.all(np.isfinite(fe_modes["shape"].values)):
-        raise InputError(f"analysis modes {fe_modes.attrs.get('deck', '')}: NaN in the shapes. Fix: "
-                         "recompute the modes.")
-
-
 def _serep_basis(fe_modes: xr.Dataset, settings: CorrelationSettings) -> xr.Dataset:
     if settings.serep_modes is None:
         return fe_modes
@@ -291,9 +282,17 @@ def _serep_basis(fe_modes: xr.Dataset, settings: CorrelationSettings) -> xr.Data
     return fe_modes.sel(mode=wanted)
 
 
-def _a_set_mask(fe_modes: xr.Dataset, settings: CorrelationSettings) -> np.ndarray:
+def _prepare(fe_modes: xr.Dataset, gvt: xr.Dataset, settings: CorrelationSettings):
+    """Validate; return measured-DOF index (n_MD,), A-set mask (n_dof,), SEREP basis (n_dof, m)."""
+    validate_gvt(gvt)
+    check_modes(fe_modes, where=f"analysis modes {fe_modes.attrs.get('deck', '')}".strip())
+    index = measured_dof_index(fe_modes, gvt)
     comp = fe_modes["component"].values
-    return np.ones(comp.size, bool) if settings.a_set == "all" else comp <= 3
+    a_mask = np.ones(comp.size, bool) if settings.a_set == "all" else comp <= 3
+    if not np.all(a_mask[index]):
+        raise InputError("correlation: rotations were measured but a_set='translational'. Fix: use "
+                         "a_set='all'.")
+    return index, a_mask, _serep_basis(fe_modes, settings)["shape"].values.T
 
 
 def expand_test_shapes(fe_modes: xr.Dataset, gvt: xr.Dataset,
@@ -306,14 +305,7 @@ def expand_test_shapes(fe_modes: xr.Dataset, gvt: xr.Dataset,
         ``frequency(mode)``, ``shape(mode, dof)`` on the A-set DOFs with the analysis Dataset's
         dof coordinates; ``mode`` holds the test mode numbers.
     """
-    validate_gvt(gvt)
-    _check_modes(fe_modes)
-    index = measured_dof_index(fe_modes, gvt)
-    a_mask = _a_set_mask(fe_modes, settings)
-    if not np.all(a_mask[index]):
-        raise InputError("correlation: rotations were measured but a_set='translational'. Fix: use "
-                         "a_set='all'.")
-    basis = _serep_basis(fe_modes, settings)["shape"].values.T             # Phi (n_dof x m)
+    index, a_mask, basis = _prepare(fe_modes, gvt, settings)
     q = serep_coordinates(basis[index], gvt["shape"].values.T, max_condition=settings.max_condition)
     expanded = (basis[a_mask] @ q).T                                       # eq. 14
     fe_a = fe_modes.isel(dof=np.nonzero(a_mask)[0])
@@ -351,15 +343,7 @@ def correlate(fe_modes: xr.Dataset, gvt: xr.Dataset, settings: CorrelationSettin
         ``fe_frequency(fe_mode)``, and the pass/fail variables of
         :func:`structures.acceptance.evaluate_checks` on (check, test_mode).
     """
-    validate_gvt(gvt)
-    _check_modes(fe_modes)
-    index = measured_dof_index(fe_modes, gvt)
-    a_mask = _a_set_mask(fe_modes, settings)
-    if not np.all(a_mask[index]):
-        raise InputError("correlation: rotations were measured but a_set='translational'. Fix: use "
-                         "a_set='all'.")
-    basis_ds = _serep_basis(fe_modes, settings)
-    basis = basis_ds["shape"].values.T                                     # Phi_Aset (all dofs x m)
+    index, a_mask, basis = _prepare(fe_modes, gvt, settings)
     phi_fe = fe_modes["shape"].values.T                                    # Phi_A (all dofs x n_fe)
     phi_gm = gvt["shape"].values.T                                         # Phi~_GM (n_MD x n)
     q = serep_coordinates(basis[index], phi_gm, max_condition=settings.max_condition)
