@@ -10,7 +10,11 @@ kernel integrals.
     w_i / V = sum_j D_ij(k) dCp_j,
     D_ij = D_steady_ij + chord_j / (8 pi) int_{-e}^{e} [P1(eta)/r1^2 + P2(eta)/r1^4] d eta
 
-(A&R eq. 16; chord_j the mean box chord, e_j the semi-width of the doublet line in the y-z plane).
+(A&R eq. 16; chord_j the mean box chord, e_j the semi-width of the doublet line in the y-z plane)
+with P1 = -(K1 exp(-i omega x0/V) - K10) T1 and P2 = -(K2 exp(-i omega x0/V) - K20) T2* (RTM).
+The minus sign makes the kernel consistent with the horseshoe lattice: at k = 0,
+-chord/(8 pi) int (K10 T1/r1^2 + K20 T2*/r1^4) d eta is exactly the horseshoe normalwash of
+:mod:`aero.vlm` (checked by tests/aero/test_dlm.py::test_steady_kernel_equals_horseshoe).
 Conventions: k = omega b / V with b = refc / 2 (Nastran), time dependence exp(i omega t),
 w the induced velocity along the receiving box's normal, dCp = (p_lower - p_upper)/q positive
 along the sending box's normal (:mod:`aero.panels`), so D's steady diagonal is negative.
@@ -71,7 +75,8 @@ def _increment_block(xr, yz, nrm, snd, mach, wv, method):
     sinx = sr * cq - cr * sq
     re, im = dk.incremental_k1(geo, wv, cosx, sinx)              # (nk, r, n*nq)
     nk, r = wv.size, xr.size
-    om = w1 * ((snd["chord"] / (8.0 * np.pi * e)) * t1)[:, None]     # A&R eq. 16, 1/e weights
+    # P1 = -(K1 e^{-i w x0} - K10) T1 (RTM); A&R eq. 16 with the 1/e of the span weights
+    om = w1 * ((-snd["chord"] / (8.0 * np.pi * e)) * t1)[:, None]
     out = (np.einsum("krnq,nq->krn", re.reshape(nk, r, n, nq), om)
            + 1j * np.einsum("krnq,nq->krn", im.reshape(nk, r, n, nq), om))
     js = np.nonzero(np.abs(zh) > dk.NEAR_PLANAR)[0]
@@ -84,7 +89,7 @@ def _increment_block(xr, yz, nrm, snd, mach, wv, method):
         dnr = dyz[js] @ nrm[1:]                                  # d . n_r at the midpoint
         yn = snd["ye"][js] @ nrm                                 # y_e(sender) . n_r
         t2 = (zh[js] * es)[:, None] * (dnr[:, None] - es[:, None] * sig * yn[:, None])
-        c2 = snd["chord"][js] / (8.0 * np.pi * es ** 3)          # A&R eq. 16, 1/e^3 weights
+        c2 = -snd["chord"][js] / (8.0 * np.pi * es ** 3)         # P2 = -(dK2) T2*, 1/e^3 weights
         out[..., js] += np.einsum("krpq,pq->krp", dk2, w2[js] * t2 * c2[:, None])
     return out
 
