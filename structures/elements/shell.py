@@ -37,6 +37,7 @@ from structures.errors import InputError
 
 KIRCHHOFF_PENALTY = 1.0e4
 DRILL_FACTOR = 1.0e-4
+CHUNK = 2048            # elements per vectorised block: bounds the temporaries (~100 MB)
 
 _G = 1.0 / np.sqrt(3.0)
 _GAUSS_2X2 = np.array([[-_G, -_G], [_G, -_G], [_G, _G], [-_G, _G]])   # weights 1
@@ -158,6 +159,17 @@ def _drill_k(A: np.ndarray, D: np.ndarray, area: np.ndarray) -> np.ndarray:
     return DRILL_FACTOR * (dA * area + dD)
 
 
+def _chunked(block, xyz, section, theta, lumped, ndof):
+    """Run ``block`` over chunks of CHUNK elements into preallocated K, M (bounded temporaries)."""
+    ne = xyz.shape[0]
+    K = np.empty((ne, ndof, ndof))
+    M = np.empty((ne, ndof, ndof))
+    for start in range(0, ne, CHUNK):
+        part = slice(start, min(start + CHUNK, ne))
+        K[part], M[part] = block(xyz[part], section.take(part), theta[part], lumped)
+    return K, M
+
+
 def _quad_frame(xyz: np.ndarray):
     """Element axes R (ne,3,3) (rows x, y, z), local 2-D corners (ne,4,2), offsets h (ne,4)."""
     d13 = xyz[:, 2] - xyz[:, 0]
@@ -219,6 +231,11 @@ def quad4_matrices(xyz: np.ndarray, section: ShellSection, theta: np.ndarray,
         DOFs node-major [T1, T2, T3, R1, R2, R3] per grid, basic frame.
     """
     xyz, theta = _check_xyz(xyz, section, theta, 4, "quad4_matrices")
+    return _chunked(_quad4_block, xyz, section, theta, lumped, 24)
+
+
+def _quad4_block(xyz: np.ndarray, section: ShellSection, theta: np.ndarray, lumped: bool):
+    """CQUAD4 K, M of one chunk of elements (see :func:`quad4_matrices`)."""
     ne = xyz.shape[0]
     R, xy, h = _quad_frame(xyz)
     A, B, D, S = _material_to_element(section, theta)
@@ -343,6 +360,11 @@ def tria3_matrices(xyz: np.ndarray, section: ShellSection, theta: np.ndarray,
         DOFs node-major [T1, T2, T3, R1, R2, R3] per grid, basic frame.
     """
     xyz, theta = _check_xyz(xyz, section, theta, 3, "tria3_matrices")
+    return _chunked(_tria3_block, xyz, section, theta, lumped, 18)
+
+
+def _tria3_block(xyz: np.ndarray, section: ShellSection, theta: np.ndarray, lumped: bool):
+    """CTRIA3 K, M of one chunk of elements (see :func:`tria3_matrices`)."""
     ne = xyz.shape[0]
     R, xy = _tria_frame(xyz)
     A, B, D, _ = _material_to_element(section, theta)
