@@ -11,7 +11,7 @@ import sys
 from structures.errors import PipelineError
 
 #: Subcommand modules, in the order ``pipeline --help`` lists them.
-COMMANDS = ("pipeline.cmd_run", "pipeline.cmd_modes")
+COMMANDS = ("pipeline.cmd_run", "pipeline.cmd_modes", "pipeline.cmd_correlate")
 
 
 def build_parser() -> argparse.ArgumentParser:
