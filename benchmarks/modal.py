@@ -135,7 +135,7 @@ def main() -> None:
         print(f"cpu_count: {os.cpu_count()}")
         print(f"load_average_1min_before: {os.getloadavg()[0]:.2f}")
         env = dict(os.environ, PYTHONPATH=str(Path(__file__).resolve().parents[1]))
-        wall, peak, out = run_measured([sys.executable, str(Path(__file__).resolve()), "--worker",
+        wall, cpu, peak, out = run_measured([sys.executable, str(Path(__file__).resolve()), "--worker",
                                         str(deck), str(folder / "modes.nc"), str(args.modes)],
                                        folder, env)
         ours = json.loads(out.strip().splitlines()[-1])
@@ -143,26 +143,32 @@ def main() -> None:
             print(f"ours_{phase}_s: {seconds:.3f}")
         print(f"ours_a_set_dof: {ours['a_set_dof']}")
         print(f"ours_total_wall_s: {wall:.3f}")
+        print(f"ours_total_cpu_s: {cpu:.3f}")
         print(f"ours_peak_rss_mb: {peak:.0f}")
         print("ours_first5_hz: " + " ".join(f"{f:.5g}" for f in ours["frequencies"][:5]))
         exe = None if args.no_mystran else mystran_executable()
         if exe is None:
             print("mystran: not run")
             return
-        wall_m, peak_m, _ = run_measured([exe, deck.name], folder, dict(os.environ))
+        wall_m, cpu_m, peak_m, _ = run_measured([exe, deck.name], folder, dict(os.environ))
         theirs = mystran_frequencies(deck)
         print(f"mystran_total_wall_s: {wall_m:.3f}")
+        print(f"mystran_total_cpu_s: {cpu_m:.3f}")
         print(f"mystran_peak_rss_mb: {peak_m:.0f}")
         print("mystran_first5_hz: " + " ".join(f"{f:.5g}" for f in theirs[:5]))
         n = min(len(theirs), len(ours["frequencies"]))
         diff = np.max(np.abs(np.array(ours["frequencies"][:n]) / theirs[:n] - 1.0))
         print(f"max_relative_frequency_difference_{n}_modes: {diff:.4f}")
-        print(f"speedup_mystran_over_ours: {wall_m / wall:.2f}")
+        print(f"speedup_mystran_over_ours_wall: {wall_m / wall:.2f}")
+        print(f"speedup_mystran_over_ours_cpu: {cpu_m / cpu:.2f}")
         print(f"load_average_1min_after: {os.getloadavg()[0]:.2f}")
 
 
-def run_measured(cmd: list[str], cwd: Path, env: dict) -> tuple[float, float, str]:
-    """Run ``cmd`` in ``cwd``; return (wall s, peak RSS MB of that child alone, its stdout text)."""
+def run_measured(cmd: list[str], cwd: Path, env: dict) -> tuple[float, float, float, str]:
+    """Run ``cmd`` in ``cwd``; return (wall s, CPU s, peak RSS MB) of that child alone and its output.
+
+    CPU seconds (user + system) are less sensitive than wall time to other load on a shared machine.
+    """
     log = cwd / (Path(cmd[-1]).stem + f"_{len(list(cwd.glob('*.log')))}.log")
     t0 = time.perf_counter()
     with open(log, "w") as out:
@@ -173,7 +179,7 @@ def run_measured(cmd: list[str], cwd: Path, env: dict) -> tuple[float, float, st
     text = log.read_text(errors="replace")
     if proc.returncode != 0:
         raise SystemExit(f"{cmd[0]} failed with exit code {proc.returncode}:\n{text[-3000:]}")
-    return wall, usage.ru_maxrss / 1024.0, text
+    return wall, usage.ru_utime + usage.ru_stime, usage.ru_maxrss / 1024.0, text
 
 
 def mystran_frequencies(deck: Path) -> np.ndarray:
