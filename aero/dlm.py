@@ -45,9 +45,12 @@ def _senders(mesh: BoxMesh, samples: np.ndarray) -> dict:
     ye[:, 1:] = d[:, 1:] / (2.0 * e[:, None])
     mid = 0.5 * (mesh.doublet_in + mesh.doublet_out)
     tanl = d[:, 0] / (2.0 * e)                                   # tan(sweep of the doublet line)
+    eta = e[:, None, None] * samples[None, :, None]              # (n, nq, 1)
+    pts = mid[:, None, :] + eta * (ye + np.outer(tanl, [1.0, 0.0, 0.0]))[:, None, :]
+    # sample points shared by neighbouring boxes (strip edges) are evaluated once
+    upts, inv = np.unique(pts.reshape(-1, 3), axis=0, return_inverse=True)
     return {"mid": mid, "e": e, "ye": ye, "n": np.array(mesh.normal), "tanl": tanl,
-            "chord": np.array(mesh.chord),
-            "xq": mid[:, 0, None] + e[:, None] * samples[None, :] * tanl[:, None]}
+            "chord": np.array(mesh.chord), "upts": upts, "inv": inv.ravel()}
 
 
 def _increment_block(xr, yz, nrm, snd, mach, wv, method):
@@ -64,24 +67,26 @@ def _increment_block(xr, yz, nrm, snd, mach, wv, method):
     zh = np.einsum("ni,ni->n", dyz, snd["n"][:, 1:]) / e         # zbar / e
     t1 = snd["n"] @ nrm                                          # T1 = n_r . n_s (A&R eq. 8)
     w1, w2 = dk.span_weights(yh, zh, method)                     # (n, nq)
-    r1q = (e[:, None] * np.sqrt((yh[:, None] - sig) ** 2 + zh[:, None] ** 2)).ravel()
-    x0q = xr[:, None] - snd["xq"].reshape(1, -1)                 # (r, n*nq), x0 = x_r - x_q
-    geo = dk.kernel_geometry(x0q, r1q, mach)
+    upts, inv = snd["upts"], snd["inv"]                          # U distinct sample points
+    r1u = np.sqrt((yz[0] - upts[:, 1]) ** 2 + (yz[1] - upts[:, 2]) ** 2)
+    x0u = xr[:, None] - upts[None, :, 0]                         # (r, U), x0 = x_r - x_q
+    geo = dk.kernel_geometry(x0u, r1u, mach)
     # cos/sin(omega x0/V) as separable products of receiver and sender terms
     cr, sr = dk.sincos(wv[:, None] * xr[None, :])
-    cq, sq = dk.sincos(wv[:, None] * snd["xq"].reshape(1, -1))
+    cq, sq = dk.sincos(wv[:, None] * upts[None, :, 0])
     cr, sr, cq, sq = cr[:, :, None], sr[:, :, None], cq[:, None, :], sq[:, None, :]
     cosx = cr * cq + sr * sq
     sinx = sr * cq - cr * sq
-    re, im = dk.incremental_k1(geo, wv, cosx, sinx)              # (nk, r, n*nq)
+    re, im = dk.incremental_k1(geo, wv, cosx, sinx)              # (nk, r, U)
     nk, r = wv.size, xr.size
+    re, im = re.take(inv, axis=-1), im.take(inv, axis=-1)        # (nk, r, n*nq)
     # P1 = -(K1 e^{-i w x0} - K10) T1 (RTM); A&R eq. 16 with the 1/e of the span weights
     om = w1 * ((-snd["chord"] / (8.0 * np.pi * e)) * t1)[:, None]
     out = (np.einsum("krnq,nq->krn", re.reshape(nk, r, n, nq), om)
            + 1j * np.einsum("krnq,nq->krn", im.reshape(nk, r, n, nq), om))
     js = np.nonzero(np.abs(zh) > dk.NEAR_PLANAR)[0]
     if js.size:
-        pts = (js[:, None] * nq + np.arange(nq)).ravel()
+        pts = inv[(js[:, None] * nq + np.arange(nq)).ravel()]
         geo2 = {key: (val[..., pts] if np.ndim(val) else val) for key, val in geo.items()}
         ex = cosx[..., pts] - 1j * sinx[..., pts]
         dk2 = dk.incremental_k2(geo2, mach, wv, ex).reshape(nk, r, js.size, nq)

@@ -28,7 +28,7 @@ from structures.errors import InputError, card_message
 __all__ = ["steady_aic"]
 
 _FOUR_PI = 4.0 * np.pi
-_TARGET_ELEMENTS = 1 << 18          # pair entries per chunk (a few MB of temporaries)
+_TARGET_ELEMENTS = 1 << 16          # pair entries per chunk (fastest on a 2 MB L2 cache)
 
 
 def check_mach(mach: float) -> float:
