@@ -1,0 +1,354 @@
+"""Model tuning: the optimisation problem of the paper's eq. 25 over several configurations.
+
+    minimise  J = sum_i w_i J_i          (indices selected as objective terms)
+    such that J_k <= eps_k               (indices selected as constraints; MAC: J_k >= eps_k)
+
+over design variables shared by every configuration (e.g. empty and full fuel decks with the same
+structural properties, each with its own GVT). Every evaluation pairs test and analysis modes anew by
+the assignment on |cross-orthogonality| (mode tracking through interchange, paper sec. V.A) before the
+indices (:mod:`structures.indices`) are formed; gradients come from :mod:`structures.sensitivity`.
+
+Optimisers: scipy SLSQP and trust-constr with analytic gradients, and differential evolution (global,
+gradient-free, for hard starts) followed by an SLSQP polish. The optimiser works on the scaled
+variables z = x / scale with the side constraints as bounds; constraints are passed normalised,
+1 - J_k / eps_k >= 0. Every evaluation is recorded: the history Dataset has dims ``iteration``
+(evaluation number), ``design_variable`` and ``index``.
+
+Restart (the paper's "previous optimization history" start, sec. V.C): :func:`best_from_history`
+picks the evaluation with the lowest objective among those whose largest normalised constraint
+violation max_k (J_k / eps_k - 1) does not exceed ``allowed_violation`` (default 0.05, i.e. a
+constraint may be exceeded by 5 % of its limit); if none qualifies, the least-violating one.
+"""
+from __future__ import annotations
+
+import fnmatch
+import time
+from dataclasses import dataclass, field
+from typing import Callable, Mapping
+
+import numpy as np
+import scipy.optimize as so
+import xarray as xr
+
+from structures.design import DesignSpace, bind
+from structures.errors import InputError, SolverError
+from structures.gvt import check_dofs_in_model, validate_gvt
+from structures.indices import build_catalogue, correlation_terms, index_values, mass_quantities
+from structures.model import FEModel
+from structures.sensitivity import (SHAPE_METHODS, SubAssembly, eigenvalue_derivatives,
+                                    mode_shape_derivatives, model_modes)
+
+METHODS = ("slsqp", "trust-constr", "differential_evolution")
+FEASIBILITY_TOL = 1e-6
+
+
+@dataclass(frozen=True)
+class TuningConfiguration:
+    """One configuration: its model, its GVT and its measured mass properties.
+
+    Attributes
+    ----------
+    name : str
+    model : FEModel (start design)
+    gvt : xarray.Dataset (structures.gvt layout)
+    nmodes : int, analysis modes (SEREP basis, rigid modes included, as the paper's 30)
+    mass : {'deck', 'consistent', 'lumped'}
+    test_modes : tuple of int, optional, GVT modes to tune (default all)
+    mass_targets : {quantity: value} measured weight, CG, inertias (structures.indices.MASS_QUANTITIES)
+    mass_references : {quantity: denominator} for zero targets
+    """
+
+    name: str
+    model: FEModel
+    gvt: xr.Dataset
+    nmodes: int = 30
+    mass: str = "deck"
+    test_modes: tuple | None = None
+    mass_targets: Mapping = field(default_factory=dict)
+    mass_references: Mapping = field(default_factory=dict)
+
+    def __post_init__(self):
+        validate_gvt(self.gvt)
+        if self.nmodes < 1:
+            raise InputError(f"configuration {self.name}: nmodes = {self.nmodes} must be >= 1.")
+        if self.test_modes is not None:
+            missing = sorted(set(self.test_modes) - set(self.gvt["mode"].values.tolist()))
+            if missing:
+                raise InputError(f"configuration {self.name}: test modes {missing} are not in the GVT "
+                                 f"{self.gvt['mode'].values.tolist()}.")
+
+
+@dataclass(frozen=True)
+class TuningProblem:
+    """Configurations, shared design variables, objective terms and constraints (eq. 25).
+
+    ``objective`` is a tuple of (index name or glob pattern, weight); ``constraints`` a tuple of
+    (index name or pattern, eps). Names follow :mod:`structures.indices` (``CONFIG:KIND:MODES``).
+    """
+
+    configurations: tuple
+    variables: tuple
+    objective: tuple
+    constraints: tuple = ()
+    shape_method: str = "nelson"
+
+    def __post_init__(self):
+        if not self.configurations:
+            raise InputError("tuning: no configurations.")
+        if not self.objective:
+            raise InputError("tuning: no objective terms. Fix: select at least one index with a weight.")
+        if self.shape_method not in SHAPE_METHODS:
+            raise InputError(f"tuning: shape_method {self.shape_method!r}; valid: {list(SHAPE_METHODS)}.")
+
+
+class _Configuration:
+    """Evaluation of one configuration's indices at a design."""
+
+    def __init__(self, cfg: TuningConfiguration, space: DesignSpace, method: str):
+        self.cfg, self.space, self.method = cfg, space, method
+        gvt = cfg.gvt if cfg.test_modes is None else cfg.gvt.sel(mode=list(cfg.test_modes))
+        check_dofs_in_model(gvt, cfg.model.grids.ids)
+        if cfg.nmodes > gvt.sizes["dof"]:
+            raise InputError(f"configuration {cfg.name}: nmodes = {cfg.nmodes} SEREP modes but only "
+                             f"{gvt.sizes['dof']} measured DOFs (SEREP needs n_MD >= m). Fix: lower nmodes.")
+        self.catalogue = build_catalogue(cfg.name, gvt["mode"].values, cfg.mass_targets,
+                                         cfg.mass_references)
+        self.phi_gm = gvt["shape"].values.T
+        self.f_test = gvt["frequency"].values
+        self.sub = SubAssembly(cfg.model, space, cfg.mass)
+        rows = (cfg.model.grids.index(gvt["grid"].values, card="GVT") * 6
+                + gvt["component"].values.astype(int) - 1)
+        self.rows = self.sub.tr[rows]
+
+    def evaluate(self, x, gradient: bool):
+        k, m, m0, lam, phi, n_rigid, lu = model_modes(self.sub, x, self.cfg.nmodes)
+        phi_m = self.rows @ phi
+        if not gradient:
+            mass_v, _ = mass_quantities(m0, self.cfg.model.wtmass)
+            terms = correlation_terms(phi_m, self.phi_gm, lam, self.f_test, n_rigid=n_rigid)
+            values, _ = index_values(self.catalogue, mass_v, terms)
+            return values, None, terms
+        dk, dm, dm0 = self.sub.derivatives(x)
+        dlam = eigenvalue_derivatives(lam, phi, dk, dm)
+        dphi_m = mode_shape_derivatives(k, m, lam, phi, dk, dm, dlam, n_rigid=n_rigid,
+                                        rigid=self.sub.rigid, method=self.method, rows=self.rows, lu=lu,
+                                        filename=self.cfg.model.filename)
+        mass_v, mass_g = mass_quantities(m0, self.cfg.model.wtmass, dm0)
+        terms = correlation_terms(phi_m, self.phi_gm, lam, self.f_test, n_rigid=n_rigid,
+                                  dphi_m=dphi_m, dlam=dlam)
+        values, grad = index_values(self.catalogue, mass_v, terms, mass_g)
+        return values, grad, terms
+
+
+def _select(patterns, names, what: str):
+    """Indices of ``names`` matched by each (pattern, number) pair; InputError if none."""
+    out = []
+    for pattern, number in patterns:
+        hits = [i for i, n in enumerate(names) if fnmatch.fnmatchcase(n, str(pattern))]
+        if not hits:
+            raise InputError(f"tuning {what}: {pattern!r} names no index. An index names a configuration, "
+                             "a kind and tuned (paired) test modes, e.g. 'empty:frequency:7' or "
+                             f"'empty:cross_orthogonality:7-9'. Available (first 12): {list(names[:12])}.")
+        out += [(i, float(number)) for i in hits]
+    return out
+
+
+class Evaluator:
+    """All configurations of a problem: index values, objective, constraints, history.
+
+    Everything is validated at construction (design variables, index names), before any solve.
+    """
+
+    def __init__(self, problem: TuningProblem):
+        self.problem = problem
+        self.space = bind(problem.variables, [c.model for c in problem.configurations])
+        self.configs = [_Configuration(c, self.space, problem.shape_method)
+                        for c in problem.configurations]
+        self.names = [n for c in self.configs for n in c.catalogue.names]
+        self.lower_is_better = np.concatenate([c.catalogue.lower_is_better for c in self.configs])
+        self.paper_k = np.concatenate([c.catalogue.paper_k for c in self.configs])
+        obj = _select(problem.objective, self.names, "objective")
+        con = _select(problem.constraints, self.names, "constraint")
+        self.weights = np.zeros(len(self.names))
+        for i, w in obj:
+            self.weights[i] = w * (1.0 if self.lower_is_better[i] else -1.0)
+        self.limits = np.full(len(self.names), np.nan)
+        for i, eps in con:
+            if not eps > 0:
+                raise InputError(f"tuning constraint {self.names[i]}: limit {eps} must be > 0.")
+            self.limits[i] = eps
+        self.con_index = np.flatnonzero(np.isfinite(self.limits))
+        self.pair_labels = [f"{c.cfg.name}:{t}" for c in self.configs for t in c.catalogue.test_modes]
+        self.records = []
+        self._cache = {}
+
+    # ------------------------------------------------------------------------------ evaluation
+    def evaluate(self, x, gradient: bool = False):
+        """(values (nidx,), grad (nidx, nvar) or None) at design x; every new design is recorded."""
+        x = self.space.check(np.clip(x, self.space.lower, self.space.upper))
+        key = x.tobytes()
+        hit = self._cache.get(key)
+        if hit is not None and (hit[1] is not None or not gradient):
+            return hit[0], hit[1]
+        vals, grads, pairs, inter, freqs = [], [], [], [], []
+        for c in self.configs:
+            v, g, terms = c.evaluate(x, gradient)
+            vals.append(v)
+            grads.append(g)
+            pairs.append(terms.fe_index + 1)
+            inter.append(terms.interchanged)
+            freqs.append(terms.fe_frequency)
+        values = np.concatenate(vals)
+        grad = np.concatenate(grads) if gradient else None
+        self._cache = {key: (values, grad)}
+        if hit is None:
+            self.records.append((x.copy(), values, np.concatenate(pairs), np.concatenate(inter),
+                                 np.concatenate(freqs)))
+        return values, grad
+
+    def objective(self, values) -> float:
+        return float(np.nansum(self.weights * values))                     # eq. 25 objective
+
+    def normalised_constraints(self, values) -> np.ndarray:
+        """1 - J_k / eps_k (upper) or J_k / eps_k - 1 (MAC); >= 0 when satisfied."""
+        ratio = values[self.con_index] / self.limits[self.con_index]
+        return np.where(self.lower_is_better[self.con_index], 1.0 - ratio, ratio - 1.0)
+
+    def max_violation(self, values) -> float:
+        g = self.normalised_constraints(values)
+        return float(max(0.0, -g.min())) if g.size else 0.0
+
+    # ------------------------------------------------------------------------- scipy callables
+    def f(self, z):
+        return self.objective(self.evaluate(self.space.from_scaled(z))[0])
+
+    def df(self, z):
+        _, g = self.evaluate(self.space.from_scaled(z), True)
+        return (self.weights[:, None] * g).sum(axis=0) * self.space.scale
+
+    def g(self, z):
+        return self.normalised_constraints(self.evaluate(self.space.from_scaled(z))[0])
+
+    def dg(self, z):
+        _, grad = self.evaluate(self.space.from_scaled(z), True)
+        idx = self.con_index
+        sign = np.where(self.lower_is_better[idx], -1.0, 1.0)
+        return (sign / self.limits[idx])[:, None] * grad[idx] * self.space.scale[None, :]
+
+    # --------------------------------------------------------------------------------- history
+    def history(self) -> xr.Dataset:
+        """Every evaluation: design, every index, objective, violation, feasibility, pairing."""
+        if not self.records:
+            raise SolverError("tuning: no evaluation was recorded.")
+        x, v, p, inter, f = (np.array(a) for a in zip(*self.records))
+        obj = np.array([self.objective(r) for r in v])
+        viol = np.array([self.max_violation(r) for r in v])
+        role = np.where(self.weights != 0, "objective",
+                        np.where(np.isfinite(self.limits), "constraint", "monitor"))
+        it, dv, ix, pr = ("iteration",), ("iteration", "design_variable"), ("iteration", "index"), \
+            ("iteration", "pair")
+        return xr.Dataset(
+            {"design": (dv, x, {"long_name": "design variable values (unscaled)"}),
+             "index_value": (ix, v, {"long_name": "performance index J_k (paper eqs. 1-24)"}),
+             "objective": (it, obj, {"long_name": "sum_i w_i J_i (eq. 25)"}),
+             "max_violation": (it, viol, {"long_name": "max_k (J_k/eps_k - 1), 0 if feasible"}),
+             "feasible": (it, viol <= FEASIBILITY_TOL),
+             "paired_fe_mode": (pr, p, {"long_name": "analysis mode paired with the test mode"}),
+             "paired_fe_frequency": (pr, f, {"units": "Hz"}),
+             "interchanged": (pr, inter)},
+            coords={"iteration": np.arange(len(x)), "design_variable": self.space.names,
+                    "index": self.names, "pair": self.pair_labels,
+                    "lower": ("design_variable", self.space.lower),
+                    "upper": ("design_variable", self.space.upper),
+                    "start": ("design_variable", self.space.x0),
+                    "weight": ("index", self.weights), "limit": ("index", self.limits),
+                    "role": ("index", role.astype(str)), "paper_k": ("index", self.paper_k)},
+            attrs={"reference": "Pak & Truong, X-56A model tuning, eqs. 1-25",
+                   "constraint_form": "J_k <= eps_k (MAC: J_k >= eps_k)",
+                   "mac_objective_sign": "MAC terms enter the objective with a minus sign"})
+
+
+@dataclass(frozen=True)
+class TuningResult:
+    """Outcome of :func:`tune`: the design, the history and the optimiser's own report."""
+
+    x: np.ndarray
+    space: DesignSpace
+    history: xr.Dataset
+    success: bool
+    message: str
+    iterations: int
+
+
+def best_from_history(history: xr.Dataset, allowed_violation: float = 0.05) -> np.ndarray:
+    """The restart design (module docstring rule): lowest objective with max violation <=
+    ``allowed_violation``, else the least violating evaluation.
+
+    Returns
+    -------
+    (nvar,) design values
+    """
+    viol, obj = history["max_violation"].values, history["objective"].values
+    ok = np.flatnonzero(viol <= allowed_violation)
+    pick = ok[np.argmin(obj[ok])] if ok.size else int(np.argmin(viol))
+    return history["design"].values[pick].copy()
+
+
+def tune(problem: TuningProblem, *, method: str = "slsqp", start=None, maxiter: int = 50,
+         tol: float = 1e-8, progress: Callable | None = None, seed: int = 0,
+         evaluator: Evaluator | None = None) -> TuningResult:
+    """Solve the tuning problem (eq. 25).
+
+    Parameters
+    ----------
+    problem : TuningProblem
+    method : {'slsqp', 'trust-constr', 'differential_evolution'}
+    start : (nvar,) design values, default the decks' values (e.g. :func:`best_from_history`)
+    maxiter : int, optimiser iterations (generations for differential evolution)
+    tol : float
+    progress : callable(iteration, objective, max_violation, seconds), called once per iteration
+    seed : int, for differential evolution
+
+    Returns
+    -------
+    TuningResult
+    """
+    if method not in METHODS:
+        raise InputError(f"tuning: unknown method {method!r}; valid: {list(METHODS)}.")
+    ev = evaluator or Evaluator(problem)
+    space = ev.space
+    x_start = space.x0 if start is None else space.check(start)
+    z0 = space.to_scaled(x_start)
+    bounds = so.Bounds(space.to_scaled(space.lower), space.to_scaled(space.upper))
+    t0, count = time.perf_counter(), [0]
+
+    def callback(*args):
+        count[0] += 1
+        if progress is not None:
+            z = args[0] if not isinstance(args[0], so.OptimizeResult) else args[0].x
+            values, _ = ev.evaluate(space.from_scaled(np.asarray(z)))
+            progress(count[0], ev.objective(values), ev.max_violation(values),
+                     time.perf_counter() - t0)
+
+    ev.evaluate(x_start)
+    has_con = ev.con_index.size > 0
+    if method == "slsqp":
+        cons = [{"type": "ineq", "fun": ev.g, "jac": ev.dg}] if has_con else []
+        res = so.minimize(ev.f, z0, jac=ev.df, method="SLSQP", bounds=bounds, constraints=cons,
+                          tol=tol, callback=callback, options={"maxiter": maxiter})
+    elif method == "trust-constr":
+        cons = [so.NonlinearConstraint(ev.g, 0.0, np.inf, jac=ev.dg)] if has_con else []
+        res = so.minimize(ev.f, z0, jac=ev.df, method="trust-constr", bounds=bounds,
+                          constraints=cons, callback=callback,
+                          options={"maxiter": maxiter, "gtol": tol, "xtol": tol})
+    else:
+        cons = [so.NonlinearConstraint(ev.g, 0.0, np.inf)] if has_con else ()
+        glob = so.differential_evolution(ev.f, bounds, constraints=cons, maxiter=maxiter, seed=seed,
+                                         polish=False, x0=z0, callback=callback, tol=tol)
+        cons = [{"type": "ineq", "fun": ev.g, "jac": ev.dg}] if has_con else []
+        res = so.minimize(ev.f, glob.x, jac=ev.df, method="SLSQP", bounds=bounds, constraints=cons,
+                          tol=tol, callback=callback, options={"maxiter": maxiter})
+    x = space.check(np.clip(space.from_scaled(res.x), space.lower, space.upper))
+    ev.evaluate(x)
+    return TuningResult(x=x, space=space, history=ev.history(), success=bool(res.success),
+                        message=str(res.message), iterations=count[0])
