@@ -153,7 +153,7 @@ def sensor_dofs(groups, n: int = 120):
     return np.array([p[0] for p in picks]), np.array([p[1] for p in picks])
 
 
-def write_cantilever_deck(path, *, ratio: float = 1.01, n_elem: int = 10):
+def write_cantilever_deck(path, *, ratio: float = 1.0, coupling: float = 0.42, n_elem: int = 10):
     """Clamped CBAR beam (root grid SPC 123456) with first two bending frequencies f2 / f1 = ratio
     (I2 = ratio^2 I1), a tip CONM2 (eid 99) with inertia, a PBUSH-free design: PBAR 1, MAT1 1."""
     i1 = 1e-6
@@ -164,7 +164,8 @@ def write_cantilever_deck(path, *, ratio: float = 1.01, n_elem: int = 10):
         lines.append(f"GRID,{k + 1},,{_f(0.3 * k)},0.,0.")
     for k in range(n_elem):
         lines.append(f"CBAR,{k + 1},1,{k + 1},{k + 2},0.,0.,1.")
-    lines.append(f"CONM2,99,{n_elem + 1},,{_f(5.0)},,,,,\n,{_f(0.2)},,{_f(0.1)},,,{_f(0.1)}")
+    # tip CONM2 with offset and product of inertia I32: couples the two bending planes
+    lines.append(f"CONM2,99,{n_elem + 1},,{_f(5.0)},0.,0.03,0.02,\n,{_f(0.2)},,{_f(2.0)},,{_f(coupling)},{_f(2.0)}")
     lines.append("SPC1,1,123456,1")
     lines.append("ENDDATA")
     path.write_text("\n".join(lines) + "\n")
