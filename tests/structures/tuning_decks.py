@@ -170,3 +170,21 @@ def write_cantilever_deck(path, *, ratio: float = 1.0, coupling: float = 0.42, n
     lines.append("ENDDATA")
     path.write_text("\n".join(lines) + "\n")
     return path
+
+
+def synthetic_gvt(truth_modes, groups, test_modes, *, rng=None, f_noise=0.0, s_noise=0.0,
+                  n_dofs: int = 120, source: str = "synthetic"):
+    """A 'measured' GVT Dataset from a truth modes Dataset at the sensor DOFs of
+    :func:`sensor_dofs`, with the correlation issue's noise model: frequencies times
+    (1 + f_noise N(0,1)), shapes plus s_noise * rms(shape) * N(0,1) per DOF."""
+    from structures.gvt import make_gvt_dataset
+    grid, comp = sensor_dofs(groups, n_dofs)
+    key = truth_modes["grid"].values * 10 + truth_modes["component"].values
+    index = np.array([np.flatnonzero(key == g * 10 + c)[0] for g, c in zip(grid, comp)])
+    sub = truth_modes.sel(mode=list(test_modes)).isel(dof=index)
+    freq, shape = sub["frequency"].values.copy(), sub["shape"].values.copy()
+    if rng is not None:
+        freq = freq * (1 + f_noise * rng.standard_normal(freq.size))
+        rms = np.sqrt(np.mean(shape ** 2, axis=1, keepdims=True))
+        shape = shape + s_noise * rms * rng.standard_normal(shape.shape)
+    return make_gvt_dataset(freq, shape, grid, comp, mode=list(test_modes), source=source)
