@@ -190,10 +190,11 @@ def dlm_aic(mesh: BoxMesh, mach: float, k, *, refc: float, method: str = "quarti
 def check_mesh_for_k(mesh: BoxMesh, mach: float, kmax: float, refc: float) -> list[str]:
     """Box-size checks of a mesh for reduced frequencies up to ``kmax``.
 
-    Two rules of the MSC.Nastran Aeroelastic Analysis User's Guide (Rodden & Johnson 1994,
-    sec. 2.3 "Doublet-lattice" modelling guidelines): the streamwise box chord should satisfy
-    dx < 0.08 V/f, i.e. at least 12.5 boxes per wavelength V/f = 2 pi b / k (b = refc/2), and
-    boxes should be roughly square; we flag span/chord outside [0.25, 4].
+    Two modelling rules for the doublet-lattice method from Rodden & Johnson, MSC.Nastran
+    Aeroelastic Analysis User's Guide (1994), chapter 2 (doublet-lattice modelling guidelines):
+    the streamwise box chord should satisfy dx < 0.08 V/f, i.e. at least 12.5 boxes per
+    wavelength V/f = 2 pi b / k (b = refc/2), and boxes should be roughly square; the guide asks
+    for aspect ratios of a few at most, and the band [0.25, 4] flagged here is our reading of it.
 
     Parameters
     ----------

@@ -21,12 +21,14 @@ I1 and I2 use the 12-term exponential approximation of Desmarais (1982, NASA TP-
 
     I1  = exp(-i k1 u) [1 - u/sqrt(1+u^2) - i k1 I0]
     3I2 = exp(-i k1 u) [(2 + i k1 u)(1 - u/sqrt(1+u^2)) - u/(1+u^2)^(3/2) - i k1 I0 + k1^2 J0]
-    I0  = sum a_n e^{-p_n u}/(p_n + i k1),  J0 = sum a_n e^{-p_n u} (1 + (p_n + i k1) u)/(p_n + i k1)^2
+    I0  = sum a_n e^{-p_n u}/(p_n + i k1)
+    J0  = sum a_n e^{-p_n u} (1 + (p_n + i k1) u)/(p_n + i k1)^2
 
-and for u < 0 the symmetry I(u) = 2 Re I(0) - conj(I(-u)) (A&R appendix; the integrands are even
-in u). The incremental numerators are P1 = -(K1 exp(-i omega x0/V) - K10) T1 and
-P2 = -(K2 exp(-i omega x0/V) - K20) T2* (RTM; the sign is applied by aero.dlm) with T1 = n_r . n_s and T2* = (d . n_r)(d . n_s) (A&R
-eqs. 8-9; d the receiver-minus-sender offset).
+and for u < 0 the symmetry I(u) = 2 Re I(0) - conj(I(-u)) (A&R; the integrands' real parts are
+even and their imaginary parts odd in u). The incremental numerators are
+P1 = -(K1 exp(-i omega x0/V) - K10) T1 and P2 = -(K2 exp(-i omega x0/V) - K20) T2* (RTM; the
+minus sign is applied by aero.dlm) with T1 = n_r . n_s and T2* = (d . n_r)(d . n_s) (A&R eqs. 8-9;
+d the receiver-minus-sender offset).
 
 P1, P2 are interpolated along the doublet line (eta in [-e, e]) by a parabola through eta = -e,
 0, e (A&R) or a quartic through eta = -e, -e/2, 0, e/2, e (RTM), and the interpolants are

@@ -57,7 +57,8 @@ def horseshoe_normalwash(colloc: np.ndarray, normal: np.ndarray, a: np.ndarray, 
     """w/V at receivers per unit dCp on horseshoe-vortex senders (one block, no chunking).
 
     Bound vortex a -> b (Katz & Plotkin eq. 10.115):
-    v = (r1 x r2)/|r1 x r2|^2 * r0 . (r1/|r1| - r2/|r2|) / (4 pi), r1 = p - a, r2 = p - b, r0 = b - a;
+    v = (r1 x r2)/|r1 x r2|^2 * r0 . (r1/|r1| - r2/|r2|) / (4 pi), r1 = p - a, r2 = p - b,
+    r0 = b - a;
     semi-infinite legs along +x from a point q (eq. 10.115 with one end at infinity):
     v = (x_hat x r)/|x_hat x r|^2 (1 + r_x/|r|) / (4 pi), r = p - q, for b -> infinity and
     minus that for a -> infinity. A receiver on a vortex line gets no velocity from it.

