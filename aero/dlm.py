@@ -184,6 +184,16 @@ def dlm_aic(mesh: BoxMesh, mach: float, k, *, refc: float, method: str = "quarti
     else:
         for idx in blocks:
             run(idx)
+    bad = ~np.isfinite(out)
+    if bad.any():
+        _, i, j = (int(v[0]) for v in np.nonzero(bad))
+        raise InputError(card_message(
+            f"the doublet-lattice AIC is singular for receiving box {mesh.box_id[i]} and sending "
+            f"box {mesh.box_id[j]} (or its XZ image): the collocation point lies on the "
+            "streamwise extension of a side edge of the sending box, in its plane.",
+            card="CAERO1", card_id=int(mesh.panel_id[j]),
+            fix="align the spanwise divisions (NSPAN/LSPAN) of coplanar panels, or move one "
+                "panel slightly out of the other's plane."))
     return out
 
 

@@ -240,12 +240,12 @@ def span_weights(yh: np.ndarray, zh: np.ndarray, method: str):
         f0 = np.where(planar, 2.0 / (yh * yh - 1.0),
                       (np.arctan((1.0 - yh) / zs) + np.arctan((1.0 + yh) / zs)) / zs)
         lg = np.log(((1.0 - yh) ** 2 + z * z) / ((1.0 + yh) ** 2 + z * z))
-    mu = [f0, 0.5 * lg + yh * f0]
-    for m in range(2, nq):
-        even = 2.0 / (m - 1) if (m - 2) % 2 == 0 else 0.0     # int_-1^1 sigma^(m-2)
-        mu.append(even + 2.0 * yh * mu[m - 1] - rho2 * mu[m - 2])
-    mu = np.stack(mu, axis=-1)
-    w1 = mu @ fit
+        mu = [f0, 0.5 * lg + yh * f0]                 # (non-finite only on a side-edge line,
+        for m in range(2, nq):                        # which aero.dlm reports)
+            even = 2.0 / (m - 1) if (m - 2) % 2 == 0 else 0.0     # int_-1^1 sigma^(m-2)
+            mu.append(even + 2.0 * yh * mu[m - 1] - rho2 * mu[m - 2])
+        mu = np.stack(mu, axis=-1)
+        w1 = mu @ fit
     nonplanar = ~planar
     w2 = np.zeros_like(w1)
     if np.any(nonplanar):

@@ -412,6 +412,15 @@ def test_bad_reduced_frequency(k):
         dlm_aic(small_mesh(), 0.5, k, refc=1.0)
 
 
+def test_collocation_on_a_side_edge_line_raises():
+    """A coplanar panel whose strip mid-line lies on another panel's box edge line: the planar
+    kernel's finite part is singular there (as in Nastran); we fail loudly naming the boxes."""
+    wing = caero1_boxes(1, [0, 0, 0], 1.0, [0, 2, 0], 1.0, [0, 0.5, 1], [0, 1])
+    tail = caero1_boxes(9, [3, 0.5, 0], 1.0, [3, 1.5, 0], 1.0, [0, 1], [0, 1])    # mid-line y = 1
+    with pytest.raises(InputError, match=r"singular for receiving box (1|2|9) and sending box (1|2|9).*Fix"):
+        dlm_aic(concat([wing, tail]), 0.5, [0.3], refc=1.0)
+
+
 def test_bad_refc_and_chunk():
     with pytest.raises(InputError, match="REFC"):
         dlm_aic(small_mesh(), 0.5, [0.1], refc=0.0)
