@@ -17,6 +17,9 @@ surface z(x, t) is w = dz/dt + V dz/dx (Nastran's D1/D2 matrices).
 Symmetry ``symxz`` (Nastran AERO/AEROS SYMXZ): +1 symmetric, -1 antisymmetric about y = 0, 0 none.
 The image of every box is added with the factor ``-symxz`` in its natural orientation
 (:func:`aero.panels.mirror_xz`), because its natural normal is minus the mirrored normal.
+A vertical surface lying in the plane y = 0 is its own image: it carries no load in symmetric
+motion (its columns of D vanish for symxz = +1, leave it out of symmetric models) and twice its
+own influence in antisymmetric motion.
 """
 from __future__ import annotations
 
