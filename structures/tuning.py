@@ -295,7 +295,7 @@ def best_from_history(history: xr.Dataset, allowed_violation: float = 0.05) -> n
 
 
 def tune(problem: TuningProblem, *, method: str = "slsqp", start=None, maxiter: int = 50,
-         tol: float = 1e-8, progress: Callable | None = None, seed: int = 0,
+         tol: float = 1e-8, progress: Callable | None = None, seed: int = 0, popsize: int = 8,
          evaluator: Evaluator | None = None) -> TuningResult:
     """Solve the tuning problem (eq. 25).
 
@@ -307,7 +307,7 @@ def tune(problem: TuningProblem, *, method: str = "slsqp", start=None, maxiter: 
     maxiter : int, optimiser iterations (generations for differential evolution)
     tol : float
     progress : callable(iteration, objective, max_violation, seconds), called once per iteration
-    seed : int, for differential evolution
+    seed, popsize : int, for differential evolution (population popsize x nvar per generation)
 
     Returns
     -------
@@ -344,7 +344,8 @@ def tune(problem: TuningProblem, *, method: str = "slsqp", start=None, maxiter: 
     else:
         cons = [so.NonlinearConstraint(ev.g, 0.0, np.inf)] if has_con else ()
         glob = so.differential_evolution(ev.f, bounds, constraints=cons, maxiter=maxiter, seed=seed,
-                                         polish=False, x0=z0, callback=callback, tol=tol)
+                                         popsize=popsize, polish=False, x0=z0, callback=callback,
+                                         tol=tol)
         cons = [{"type": "ineq", "fun": ev.g, "jac": ev.dg}] if has_con else []
         res = so.minimize(ev.f, glob.x, jac=ev.df, method="SLSQP", bounds=bounds, constraints=cons,
                           tol=tol, callback=callback, options={"maxiter": maxiter})

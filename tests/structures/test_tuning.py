@@ -1,0 +1,253 @@
+"""Tests of structures.tuning: recovery of perturbed properties from synthetic two-configuration GVT
+data, mode tracking through an interchange, restart from history, optimisers, bad input."""
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+import xarray as xr
+
+sys.path.insert(0, str(Path(__file__).parent))
+from tuning_decks import synthetic_gvt, write_aircraft_deck, write_cantilever_deck  # noqa: E402
+
+import structures.sensitivity as sensitivity  # noqa: E402
+from structures.bdf import read_model  # noqa: E402
+from structures.design import DesignVariable  # noqa: E402
+from structures.errors import InputError, MissingReferenceError  # noqa: E402
+from structures.gvt import make_gvt_dataset  # noqa: E402
+from structures.modal import compute_modes  # noqa: E402
+from structures.netcdf import read_dataset, write_dataset  # noqa: E402
+from structures.tuning import (Evaluator, TuningConfiguration, TuningProblem, best_from_history,  # noqa: E402
+                               tune)
+
+# ------------------------------------------------------------------------- recoverable problem
+VARIABLES = (
+    DesignVariable("fus_I1", [("PBAR", 1, "I1")]), DesignVariable("fus_I2", [("PBAR", 1, "I2")]),
+    DesignVariable("fus_J", [("PBAR", 1, "J")]),
+    DesignVariable("in_I1", [("PBAR", 11, "I1"), ("PBAR", 12, "I1")]),
+    DesignVariable("in_J", [("PBAR", 11, "J"), ("PBAR", 12, "J")]),
+    DesignVariable("out_I1", [("PBAR", 13, "I1"), ("PBAR", 14, "I1")]),
+    DesignVariable("out_J", [("PBAR", 13, "J"), ("PBAR", 14, "J")]),
+    DesignVariable("skin_T", [("PSHELL", 21, "T"), ("PSHELL", 22, "T")]),
+    DesignVariable("engine", [("CONM2", 900, "M"), ("CONM2", 901, "M")]),
+    DesignVariable("pylon", [("PELAS", 41, "K")]),
+    DesignVariable("tail_I1", [("PBAR", 31, "I1")]), DesignVariable("fin_I1", [("PBAR", 32, "I1")]))
+TEST_MODES = list(range(7, 17))        # 10 elastic test modes per configuration
+SIGMA_F, SIGMA_S = 0.01, 0.01          # reference noise: frequency (1 %), cross-orthogonality entry
+
+
+def _truth_factors(seed=3):
+    rng = np.random.default_rng(seed)
+    return {v.name: 1 + rng.uniform(-0.15, 0.15) for v in VARIABLES}
+
+
+def _recovery_problem(tmp, noise):
+    """Two configurations (empty, 250 kg fuel) sharing 12 design variables (20 fields), GVT at
+    120 DOFs from the perturbed truth; also returns the noise-free truth GVTs."""
+    factors = _truth_factors()
+    changes = {(r.card, r.card_id, r.field): factors[v.name] for v in VARIABLES for r in v.fields}
+    configs, truth_gvts = [], {}
+    for k, (name, fuel) in enumerate((("empty", 0.0), ("full", 250.0))):
+        info = write_aircraft_deck(tmp / f"{name}.bdf", n_span=6, fuel=fuel)
+        truth = read_model(write_aircraft_deck(tmp / f"{name}_truth.bdf", n_span=6, fuel=fuel,
+                                               changes=changes)["path"])
+        modes = compute_modes(truth, 24)
+        truth_gvts[name] = synthetic_gvt(modes, info["grids"], TEST_MODES)
+        gvt = (synthetic_gvt(modes, info["grids"], TEST_MODES, rng=np.random.default_rng(11 + k),
+                             f_noise=0.01, s_noise=0.05) if noise else truth_gvts[name])
+        configs.append(TuningConfiguration(name, read_model(info["path"]), gvt, nmodes=20))
+    problem = TuningProblem(tuple(configs), VARIABLES,
+                            objective=(("*:frequency:*", 1.0), ("*:cross_orthogonality:*", 1.0)))
+    return problem, factors, truth_gvts
+
+
+def _crb_std(problem):
+    """Cramer-Rao standard deviation of each relative parameter from the paired frequencies
+    (sigma 1 %) and cross-orthogonality off-diagonals (sigma 0.01), at the start design."""
+    ev = Evaluator(problem)
+    rows = []
+    for conf in ev.configs:
+        _, _, terms = conf.evaluate(ev.space.x0, True)
+        off = ~np.eye(terms.cross.shape[0], dtype=bool)
+        rows.append(terms.d_freq_error.T * ev.space.x0 / SIGMA_F)
+        rows.append(terms.d_cross[:, off].T * ev.space.x0 / SIGMA_S)
+    jac = np.vstack(rows)
+    return np.sqrt(np.diag(np.linalg.inv(jac.T @ jac)))
+
+
+def _against_truth(problem, truth_gvts, x):
+    """Largest |frequency error| and |cross-orthogonality off-diagonal| of design x against the
+    noise-free truth GVT (pairing by the tracking assignment)."""
+    configs = tuple(TuningConfiguration(c.name, c.model, truth_gvts[c.name], nmodes=c.nmodes)
+                    for c in problem.configurations)
+    ev = Evaluator(TuningProblem(configs, problem.variables, (("*:frequency:*", 1.0),)))
+    values, _ = ev.evaluate(x)
+    names = np.array(ev.names)
+    freq = np.sqrt(values[np.char.find(names.astype(str), ":frequency:") >= 0]).max()
+    cross = np.sqrt(values[np.char.find(names.astype(str), ":cross_orthogonality:") >= 0]).max()
+    return freq, cross
+
+
+def test_recover_perturbed_properties_noise_free(tmp_path):
+    """Noise-free GVT (two configurations, 120 DOFs, 10 test modes each) from a truth with 12
+    properties (20 fields) perturbed by up to 15 %; tuning from the unperturbed decks.
+
+    Measured against the (noise-free) test data, which here is the truth: every paired frequency
+    within 0.5 %, every cross-orthogonality off-diagonal below 0.05, and every identifiable
+    parameter within 2 %. Identifiable: its Cramer-Rao std under the reference noise (1 % on
+    frequencies, 0.01 on cross-orthogonality entries) is below 20 %; the others (fuselage lateral
+    bending and torsion, pylon, tail, fin: stds of 27 % to 1e6 %) barely move the test modes.
+    """
+    problem, factors, truth_gvts = _recovery_problem(tmp_path, noise=False)
+    std = _crb_std(problem)
+    names = [v.name for v in VARIABLES]
+    identifiable = [n for n, s in zip(names, std) if s < 0.20]
+    assert {"in_I1", "in_J", "out_I1", "skin_T"} <= set(identifiable)
+    result = tune(problem, maxiter=60)
+    freq, cross = _against_truth(problem, truth_gvts, result.x)
+    assert freq < 0.005, freq
+    assert cross < 0.05, cross
+    recovered = dict(zip(names, result.x / result.space.x0))
+    for name in identifiable:
+        assert abs(recovered[name] / factors[name] - 1) < 0.02, (name, recovered[name], factors[name])
+    assert result.history.sizes["iteration"] == len(result.history["objective"])
+
+
+@pytest.mark.slow
+def test_recover_perturbed_properties_with_noise(tmp_path):
+    """The same with the correlation issue's noise (1 % frequency, 5 % shape, fixed seeds).
+
+    What is measured: the tuned model against the NOISE-FREE truth GVT (frequencies within 0.5 %,
+    cross-orthogonality off-diagonals below 0.05), since against the noisy data a 1 % frequency
+    noise cannot be fitted to 0.5 %; parameters identifiable at this noise level (3 sigma of the
+    Cramer-Rao std <= 2 %) within 2 %, and the others with std < 20 % within 3 sigma."""
+    problem, factors, truth_gvts = _recovery_problem(tmp_path, noise=True)
+    std = _crb_std(problem)
+    result = tune(problem, maxiter=60)
+    freq, cross = _against_truth(problem, truth_gvts, result.x)
+    assert freq < 0.005, freq
+    assert cross < 0.05, cross
+    names = [v.name for v in VARIABLES]
+    error = np.array([result.x[i] / result.space.x0[i] / factors[n] - 1 for i, n in enumerate(names)])
+    assert np.any(3 * std <= 0.02)
+    for n, e, s in zip(names, error, std):
+        if 3 * s <= 0.02:
+            assert abs(e) < 0.02, (n, e)
+        elif s < 0.20:
+            assert abs(e) < 3 * s, (n, e, s)
+
+
+# ---------------------------------------------------------------------------------- interchange
+@pytest.fixture(scope="module")
+def beam(tmp_path_factory):
+    """Cantilever whose two bending planes swap order between the start (I2 = 0.98^2 I1) and
+    the truth (I2 = 1.03^2 I1); GVT: the truth's first four modes at y/z of every free grid."""
+    tmp = tmp_path_factory.mktemp("tune")
+    start = read_model(write_cantilever_deck(tmp / "start.bdf", ratio=0.98, coupling=0.0))
+    truth = compute_modes(read_model(write_cantilever_deck(tmp / "truth.bdf", ratio=1.03,
+                                                           coupling=0.0)), 6)
+    pick = np.flatnonzero(np.isin(truth["component"].values, (2, 3)) & (truth["grid"].values > 1))
+    sub = truth.sel(mode=[1, 2, 3, 4]).isel(dof=pick)
+    gvt = make_gvt_dataset(sub["frequency"].values, sub["shape"].values, sub["grid"].values,
+                           sub["component"].values, mode=[1, 2, 3, 4], source="truth")
+    cfg = TuningConfiguration("beam", start, gvt, nmodes=6)
+    variables = (DesignVariable("I2", [("PBAR", 1, "I2")]), DesignVariable("I1", [("PBAR", 1, "I1")]))
+    return TuningProblem((cfg,), variables, objective=(("*:frequency:*", 1.0),)), gvt, start
+
+
+def test_mode_interchange_is_tracked(beam):
+    problem, gvt, start = beam
+    result = tune(problem)
+    hist = result.history
+    first, last = hist.isel(iteration=0), hist.isel(iteration=-1)
+    # at the start, test mode 1 (plane-1 bending) is the analysis mode 2: interchanged
+    np.testing.assert_array_equal(first["paired_fe_mode"].values, [2, 1, 4, 3])
+    assert first["interchanged"].values.all()
+    np.testing.assert_array_equal(last["paired_fe_mode"].values, [1, 2, 3, 4])
+    assert not last["interchanged"].values.any()
+    # tracked indices stay continuous: test mode 1's frequency error at the start is that of its
+    # own (second) analysis mode, 0, not the 2 % that frequency-order pairing would give
+    f_start = compute_modes(start, 2)["frequency"].values
+    f1 = gvt["frequency"].values[0]
+    assert first["index_value"].sel(index="beam:frequency:1").item() == pytest.approx(
+        ((f_start[1] - f1) / f1) ** 2, abs=1e-12)
+    assert abs(f_start[0] - f1) / f1 > 0.019
+    assert np.sqrt(last["index_value"].sel(index=[f"beam:frequency:{m}" for m in (1, 2, 3, 4)])).max() < 1e-4
+    assert result.x[0] / result.space.x0[0] == pytest.approx((1.03 / 0.98) ** 2, rel=1e-4)
+
+
+# ------------------------------------------------------------------------------------- restart
+def test_restart_from_history_reproduces_best_and_continues(beam, tmp_path):
+    problem, _, _ = beam
+    first = tune(problem, maxiter=2)
+    path = write_dataset(first.history, tmp_path / "history.nc")
+    hist = read_dataset(path)
+    assert set(hist["index_value"].dims) == {"iteration", "index"}
+    assert set(hist["design"].dims) == {"iteration", "design_variable"}
+    best = best_from_history(hist)
+    k = int(np.argmin(hist["objective"].values))
+    np.testing.assert_array_equal(best, hist["design"].values[k])
+    second = tune(problem, start=best, maxiter=20)
+    replay = second.history.isel(iteration=0)
+    np.testing.assert_array_equal(replay["design"].values, best)
+    np.testing.assert_allclose(replay["index_value"].values, hist["index_value"].values[k],
+                               rtol=1e-10, atol=1e-18)
+    assert second.history["objective"].values.min() < 1e-3 * hist["objective"].values[k]
+
+
+def test_best_from_history_accepts_a_slightly_infeasible_design():
+    hist = xr.Dataset({"design": (("iteration", "design_variable"), [[1.0], [2.0], [3.0], [4.0]]),
+                       "objective": ("iteration", [5.0, 1.0, 3.0, 0.1]),
+                       "max_violation": ("iteration", [0.0, 0.04, 0.0, 0.5])})
+    assert best_from_history(hist)[0] == 2.0                  # 4 % over a limit: accepted
+    assert best_from_history(hist, allowed_violation=0.0)[0] == 3.0
+    hist["max_violation"][:] = [0.3, 0.2, 0.6, 0.5]
+    assert best_from_history(hist)[0] == 2.0                  # none qualifies: least violating
+
+
+# ----------------------------------------------------------------------------------- optimisers
+@pytest.mark.parametrize("method", ["trust-constr", "differential_evolution"])
+def test_other_optimisers_reduce_the_objective(beam, method):
+    problem, _, _ = beam
+    constrained = TuningProblem(problem.configurations, problem.variables,
+                                objective=(("beam:frequency:1", 1.0), ("beam:frequency:2", 1.0)),
+                                constraints=(("beam:frequency:3", 1e-2),))
+    result = tune(constrained, method=method, maxiter=15 if method == "trust-constr" else 4,
+                  popsize=4)
+    obj = result.history["objective"].values
+    assert obj[-1] < 1e-2 * obj[0]
+    assert result.history["feasible"].values[-1]
+
+
+# ------------------------------------------------------------------------------------ bad input
+@pytest.fixture()
+def no_solve(monkeypatch):
+    def fail(*args, **kwargs):
+        raise AssertionError("an eigenvalue problem was solved before the input was checked")
+    monkeypatch.setattr(sensitivity, "eigenpairs", fail)
+
+
+def test_bad_input_fails_before_any_solve(beam, no_solve):
+    problem, _, _ = beam
+    cfg = problem.configurations
+    with pytest.raises(MissingReferenceError, match="no PBAR with id 7"):
+        Evaluator(TuningProblem(cfg, (DesignVariable("x", [("PBAR", 7, "I1")]),), (("*:frequency:*", 1.0),)))
+    with pytest.raises(InputError, match="not a tunable field"):
+        DesignVariable("x", [("PBAR", 1, "K9")])
+    with pytest.raises(InputError, match="exclude the start value"):
+        Evaluator(TuningProblem(cfg, (DesignVariable("x", [("PBAR", 1, "I1")], lower=2e-6, upper=3e-6),),
+                                (("*:frequency:*", 1.0),)))
+    with pytest.raises(InputError, match="names no index"):
+        Evaluator(TuningProblem(cfg, problem.variables, (("beam:frequency:9", 1.0),)))
+    with pytest.raises(InputError, match="names no index"):
+        Evaluator(TuningProblem(cfg, problem.variables, (("beam:frequency:1", 1.0),),
+                                constraints=(("beam:cross_orthogonality:1-7", 0.1),)))
+    with pytest.raises(InputError, match="test modes \\[9\\]"):
+        TuningConfiguration("beam", cfg[0].model, cfg[0].gvt, nmodes=6, test_modes=(1, 9))
+    with pytest.raises(InputError, match="n_MD >= m"):
+        Evaluator(TuningProblem((TuningConfiguration("beam", cfg[0].model, cfg[0].gvt, nmodes=30),),
+                                problem.variables, (("*:frequency:*", 1.0),)))
+    with pytest.raises(InputError, match="unknown method"):
+        tune(problem, method="dot")
