@@ -179,6 +179,7 @@ class Evaluator:
             self.limits[i] = eps
         self.con_index = np.flatnonzero(np.isfinite(self.limits))
         self.pair_labels = [f"{c.cfg.name}:{t}" for c in self.configs for t in c.catalogue.test_modes]
+        self.pair_test_frequency = np.concatenate([c.f_test for c in self.configs])
         self.records = []
         self._cache = {}
 
@@ -258,6 +259,7 @@ class Evaluator:
              "interchanged": (pr, inter)},
             coords={"iteration": np.arange(len(x)), "design_variable": self.space.names,
                     "index": self.names, "pair": self.pair_labels,
+                    "test_frequency": ("pair", self.pair_test_frequency, {"units": "Hz"}),
                     "lower": ("design_variable", self.space.lower),
                     "upper": ("design_variable", self.space.upper),
                     "start": ("design_variable", self.space.x0),

@@ -251,3 +251,51 @@ def test_bad_input_fails_before_any_solve(beam, no_solve):
                                 problem.variables, (("*:frequency:*", 1.0),)))
     with pytest.raises(InputError, match="unknown method"):
         tune(problem, method="dot")
+
+
+# ------------------------------------------------------------------------------------------ CLI
+def test_pipeline_tune_command(beam, tmp_path, capsys):
+    import argparse
+
+    from pipeline import cmd_tune
+    from structures.gvt import write_gvt
+    problem, gvt, start = beam
+    write_cantilever_deck(tmp_path / "beam.bdf", ratio=0.98, coupling=0.0)
+    write_gvt(gvt, tmp_path / "gvt.nc")
+    (tmp_path / "case.toml").write_text("""
+name = "beam"
+[[configurations]]
+name = "beam"
+deck = "beam.bdf"
+gvt = "gvt.nc"
+nmodes = 6
+[tuning]
+maxiter = 20
+[[tuning.variables]]
+name = "I2"
+fields = [["PBAR", 1, "I2"]]
+[[tuning.variables]]
+name = "I1"
+fields = [["PBAR", 1, "I1"]]
+upper = 1.1e-6
+[[tuning.objective]]
+index = "beam:frequency:*"
+[[tuning.constraints]]
+index = "beam:cross_orthogonality:*"
+limit = 0.01
+""")
+    parser = argparse.ArgumentParser()
+    cmd_tune.add_parser(parser.add_subparsers())
+    args = parser.parse_args(["tune", str(tmp_path / "case.toml")])
+    assert args.func(args) == 0
+    printed = capsys.readouterr().out
+    assert "iteration    1" in printed and "Table 24" in printed
+    out = tmp_path / "beam_tuning"
+    hist = read_dataset(out / "history.nc")
+    tuned = read_model(out / "beam_tuned.bdf")
+    assert tuned.properties[1].fields["I2"] == pytest.approx(hist["design"].values[-1, 0], rel=1e-7)
+    assert tuned.properties[1].fields["I2"] == pytest.approx(1e-6 * 1.03 ** 2, rel=1e-3)
+    (tmp_path / "bad.toml").write_text((tmp_path / "case.toml").read_text().replace(
+        "[tuning]", "[tuning]\nmethods = 'slsqp'"))
+    with pytest.raises(InputError, match="unknown keys \\['methods'\\]"):
+        cmd_tune.read_tuning(tmp_path / "bad.toml")
