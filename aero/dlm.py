@@ -34,7 +34,7 @@ from structures.errors import InputError, card_message
 __all__ = ["dlm_aic", "check_mesh_for_k", "METHODS"]
 
 METHODS = ("quartic", "parabolic")
-_TARGET_POINTS = 1 << 16        # kernel points x frequencies per chunk (~100 MB of temporaries)
+_TARGET_POINTS = 1 << 16        # kernel points x frequencies per block (~30 MB of temporaries)
 
 
 def _senders(mesh: BoxMesh, samples: np.ndarray) -> dict:
@@ -53,49 +53,61 @@ def _senders(mesh: BoxMesh, samples: np.ndarray) -> dict:
             "chord": np.array(mesh.chord), "upts": upts, "inv": inv.ravel()}
 
 
-def _increment_block(xr, yz, nrm, snd, mach, wv, method):
-    """Unsteady increment for r receivers of one strip against all n senders.
-
-    xr : (r,) receiver x; yz : (2,) their common y, z; nrm : (3,) their common normal.
-    Returns complex (nk, r, n).
-    """
+def _strip_setup(yz, nrm, snd, wv, method):
+    """Everything that depends only on a receiving strip's y, z and normal (all its boxes)."""
     sig = dk.SAMPLES[method]
-    nq = sig.size
-    e, n = snd["e"], snd["e"].size
+    e = snd["e"]
     dyz = yz[None, :] - snd["mid"][:, 1:]                        # (n, 2) y-z offset to midpoint
     yh = np.einsum("ni,ni->n", dyz, snd["ye"][:, 1:]) / e        # ybar / e, sending frame
     zh = np.einsum("ni,ni->n", dyz, snd["n"][:, 1:]) / e         # zbar / e
     t1 = snd["n"] @ nrm                                          # T1 = n_r . n_s (A&R eq. 8)
     w1, w2 = dk.span_weights(yh, zh, method)                     # (n, nq)
-    upts, inv = snd["upts"], snd["inv"]                          # U distinct sample points
+    upts = snd["upts"]                                           # U distinct sample points
     r1u = np.sqrt((yz[0] - upts[:, 1]) ** 2 + (yz[1] - upts[:, 2]) ** 2)
-    x0u = xr[:, None] - upts[None, :, 0]                         # (r, U), x0 = x_r - x_q
-    geo = dk.kernel_geometry(x0u, r1u, mach)
-    # cos/sin(omega x0/V) as separable products of receiver and sender terms
-    cr, sr = dk.sincos(wv[:, None] * xr[None, :])
     cq, sq = dk.sincos(wv[:, None] * upts[None, :, 0])
-    cr, sr, cq, sq = cr[:, :, None], sr[:, :, None], cq[:, None, :], sq[:, None, :]
-    cosx = cr * cq + sr * sq
-    sinx = sr * cq - cr * sq
-    re, im = dk.incremental_k1(geo, wv, cosx, sinx)              # (nk, r, U)
-    nk, r = wv.size, xr.size
-    re, im = re.take(inv, axis=-1), im.take(inv, axis=-1)        # (nk, r, n*nq)
     # P1 = -(K1 e^{-i w x0} - K10) T1 (RTM); A&R eq. 16 with the 1/e of the span weights
-    om = w1 * ((-snd["chord"] / (8.0 * np.pi * e)) * t1)[:, None]
-    out = (np.einsum("krnq,nq->krn", re.reshape(nk, r, n, nq), om)
-           + 1j * np.einsum("krnq,nq->krn", im.reshape(nk, r, n, nq), om))
+    setup = {"r1u": r1u, "freq": dk.frequency_factors(r1u, wv), "cq": cq, "sq": sq,
+             "om": w1 * ((-snd["chord"] / (8.0 * np.pi * e)) * t1)[:, None]}
     js = np.nonzero(np.abs(zh) > dk.NEAR_PLANAR)[0]
+    setup["js"] = js
     if js.size:
-        pts = inv[(js[:, None] * nq + np.arange(nq)).ravel()]
-        geo2 = {key: (val[..., pts] if np.ndim(val) else val) for key, val in geo.items()}
-        ex = cosx[..., pts] - 1j * sinx[..., pts]
-        dk2 = dk.incremental_k2(geo2, mach, wv, ex).reshape(nk, r, js.size, nq)
         es = e[js]
         dnr = dyz[js] @ nrm[1:]                                  # d . n_r at the midpoint
         yn = snd["ye"][js] @ nrm                                 # y_e(sender) . n_r
         t2 = (zh[js] * es)[:, None] * (dnr[:, None] - es[:, None] * sig * yn[:, None])
         c2 = -snd["chord"][js] / (8.0 * np.pi * es ** 3)         # P2 = -(dK2) T2*, 1/e^3 weights
-        out[..., js] += np.einsum("krpq,pq->krp", dk2, w2[js] * t2 * c2[:, None])
+        setup["om2"] = w2[js] * t2 * c2[:, None]
+        setup["pts"] = snd["inv"][(js[:, None] * sig.size + np.arange(sig.size)).ravel()]
+    return setup
+
+
+def _increment_rows(xr, setup, snd, mach, wv, nq):
+    """Unsteady increment for receivers at x = xr (one strip) against all n senders.
+
+    Returns complex (nk, r, n).
+    """
+    upts, inv = snd["upts"], snd["inv"]
+    x0u = xr[:, None] - upts[None, :, 0]                         # (r, U), x0 = x_r - x_q
+    geo = dk.kernel_geometry(x0u, setup["r1u"], mach)
+    # cos/sin(omega x0/V) as separable products of receiver and sender terms
+    cr, sr = dk.sincos(wv[:, None] * xr[None, :])
+    cr, sr = cr[:, :, None], sr[:, :, None]
+    cq, sq = setup["cq"][:, None, :], setup["sq"][:, None, :]
+    cosx = cr * cq + sr * sq
+    sinx = sr * cq - cr * sq
+    re, im = dk.incremental_k1(geo, setup["freq"], wv, cosx, sinx)   # (nk, r, U)
+    nk, r, n = wv.size, xr.size, snd["e"].size
+    re, im = re.take(inv, axis=-1), im.take(inv, axis=-1)        # (nk, r, n*nq)
+    om = setup["om"]
+    out = (np.einsum("krnq,nq->krn", re.reshape(nk, r, n, nq), om)
+           + 1j * np.einsum("krnq,nq->krn", im.reshape(nk, r, n, nq), om))
+    js = setup["js"]
+    if js.size:
+        pts = setup["pts"]
+        geo2 = {key: (val[..., pts] if np.ndim(val) else val) for key, val in geo.items()}
+        ex = cosx[..., pts] - 1j * sinx[..., pts]
+        dk2 = dk.incremental_k2(geo2, mach, wv, ex).reshape(nk, r, js.size, nq)
+        out[..., js] += np.einsum("krpq,pq->krp", dk2, setup["om2"])
     return out
 
 
@@ -128,8 +140,10 @@ def dlm_aic(mesh: BoxMesh, mach: float, k, *, refc: float, method: str = "quarti
     symxz : {0, +1, -1}
         No symmetry, symmetric or antisymmetric about y = 0.
     chunk_size : int, optional
-        Receiving boxes per block. Peak temporaries scale as chunk_size * n * 5 * nk * ~200 B;
-        the default keeps them near 100 MB whatever n and nk.
+        Receiving boxes per block (blocks never mix strips). A block's temporaries take about
+        0.5 kB per (receiver, sample point, k); the default sizes blocks to ~2^16 such entries
+        (~30 MB per thread) whatever n and nk; the peak is that, the (nk, n, n) complex result
+        and the (n, n) steady matrix.
     workers : int, optional
         Threads over blocks of receiving boxes (default: the number of CPUs); each thread
         holds one block's temporaries.
@@ -169,20 +183,24 @@ def dlm_aic(mesh: BoxMesh, mach: float, k, *, refc: float, method: str = "quarti
         senders.append((-float(s), _senders(mirror_xz(mesh), dk.SAMPLES[method])))
     out = np.empty((nk, n, n), dtype=complex)
     out[:] = steady_aic(mesh, m, symxz=s)[None]
-    blocks = [g[i0:i0 + rows] for g in _strips(mesh) for i0 in range(0, g.size, rows)]
+    strips = _strips(mesh)
 
     def run(idx):
-        xr = mesh.collocation[idx, 0]
+        """One receiving strip: shared set-up once, then blocks of at most `rows` boxes."""
         yz, nrm = mesh.collocation[idx[0], 1:], mesh.normal[idx[0]]
-        for factor, snd in senders:                              # rows of blocks are disjoint
-            out[:, idx] += factor * _increment_block(xr, yz, nrm, snd, m, wv, method)
+        for factor, snd in senders:
+            setup = _strip_setup(yz, nrm, snd, wv, method)
+            for i0 in range(0, idx.size, rows):                  # strips' rows are disjoint
+                sub = idx[i0:i0 + rows]
+                out[:, sub] += factor * _increment_rows(mesh.collocation[sub, 0], setup, snd,
+                                                        m, wv, nq)
 
-    nthreads = min(len(blocks), os.cpu_count() or 1) if workers is None else int(workers)
+    nthreads = min(len(strips), os.cpu_count() or 1) if workers is None else int(workers)
     if nthreads > 1:                                             # numpy releases the GIL
         with ThreadPoolExecutor(max_workers=nthreads) as pool:
-            list(pool.map(run, blocks))
+            list(pool.map(run, strips))
     else:
-        for idx in blocks:
+        for idx in strips:
             run(idx)
     bad = ~np.isfinite(out)
     if bad.any():

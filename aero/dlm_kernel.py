@@ -45,7 +45,8 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = ["DESMARAIS_A", "DESMARAIS_P", "SAMPLES", "FIT", "NEAR_PLANAR", "FAR2", "sincos",
-           "kernel_geometry", "incremental_k1", "incremental_k2", "span_weights"]
+           "kernel_geometry", "frequency_factors", "incremental_k1", "incremental_k2",
+           "span_weights"]
 
 # Desmarais (1982) 12-term coefficients of 1 - u/sqrt(1+u^2) ~ sum a_n exp(-p_n u), p_n = b 2^n.
 DESMARAIS_A = np.array([0.000319759140, -0.000055461471, 0.002726074362, 0.005749551566,
@@ -139,17 +140,32 @@ _AP = DESMARAIS_A * DESMARAIS_P
 _P2 = DESMARAIS_P ** 2
 
 
-def incremental_k1(geo: dict, wv: np.ndarray, cosx: np.ndarray, sinx: np.ndarray):
+def frequency_factors(r1: np.ndarray, wv: np.ndarray) -> dict:
+    """Reduced-frequency factors that depend on r1 only (shared by a strip's receivers).
+
+    With c_n = 1/(p_n^2 + k1^2), k1 = (omega/V) r1: ``k1``, ``kappa`` = k1^2 (nk, m),
+    ``ac`` = a_n c_n and ``apc`` = a_n p_n c_n (nk, 12, m), ``s0`` = sum_n a_n c_n (nk, m).
+    """
+    k1 = wv[:, None] * r1[None, :]
+    kappa = k1 * k1
+    c = np.reciprocal(kappa[:, None, :] + _P2[None, :, None])
+    return {"k1": k1, "kappa": kappa, "ac": c * DESMARAIS_A[None, :, None],
+            "apc": c * _AP[None, :, None], "s0": np.matmul(DESMARAIS_A, c)}
+
+
+def incremental_k1(geo: dict, freq: dict, wv: np.ndarray, cosx: np.ndarray, sinx: np.ndarray):
     """Real and imaginary parts of K1 exp(-i omega x0/V) - K10 at every point and frequency.
 
     With c_n = 1/(p_n^2 + k1^2): S0 = sum a_n c_n, S1 = sum a_n p_n e_n c_n,
     S2 = sum a_n e_n c_n, so that 1 - u/sqrt(1+u^2) - i k1 I0 = f - k1^2 S2 - i k1 S1 and
-    Re I1(0) = 1 - k1^2 S0. The c_n depend on r1 only and are shared by the r receivers.
+    Re I1(0) = 1 - k1^2 S0.
 
     Parameters
     ----------
     geo : dict
         From :func:`kernel_geometry` (r receivers, m points).
+    freq : dict
+        From :func:`frequency_factors` of the same m points.
     wv : (nk,) float
         omega / V = k / b for each reduced frequency.
     cosx, sinx : (nk, r, m) float
@@ -159,13 +175,9 @@ def incremental_k1(geo: dict, wv: np.ndarray, cosx: np.ndarray, sinx: np.ndarray
     -------
     (re, im) : two (nk, r, m) float arrays
     """
-    k1 = wv[:, None] * geo["r1"][None, :]               # (nk, m)
-    kappa = k1 * k1
-    c = np.reciprocal(kappa[:, None, :] + _P2[None, :, None])    # (nk, 12, m)
-    s0 = np.matmul(DESMARAIS_A, c)[:, None, :]
-    s1 = np.einsum("nrm,knm->krm", geo["en"], c * _AP[None, :, None])
-    s2 = np.einsum("nrm,knm->krm", geo["en"], c * DESMARAIS_A[None, :, None])
-    k1, kappa = k1[:, None, :], kappa[:, None, :]
+    s1 = np.einsum("nrm,knm->krm", geo["en"], freq["apc"])
+    s2 = np.einsum("nrm,knm->krm", geo["en"], freq["ac"])
+    k1, kappa = freq["k1"][:, None, :], freq["kappa"][:, None, :]
     ar = geo["f"] - kappa * s2                          # Re of [1 - u/sqrt(1+u^2) - i k1 I0]
     bi = k1 * s1                                        # minus its imaginary part
     alpha = geo["sgn"] * ar - geo["A"]
@@ -173,7 +185,8 @@ def incremental_k1(geo: dict, wv: np.ndarray, cosx: np.ndarray, sinx: np.ndarray
         ct, st = sincos(wv[:, None, None] * geo["theta"][None])
     else:                                               # M = 0: no phase
         ct, st = np.ones_like(ar), np.zeros_like(ar)
-    two_re0 = geo["negf"] * (2.0 - 2.0 * kappa * s0)    # 2 Re I1(0), only for u1 < 0
+    # 2 Re I1(0) = 2 (1 - k1^2 S0), only where u1 < 0
+    two_re0 = geo["negf"] * (2.0 - 2.0 * kappa * freq["s0"][:, None, :])
     re = ct * alpha + st * bi - two_re0 * cosx - geo["K10"]
     im = ct * bi - st * alpha + two_re0 * sinx
     return re, im
