@@ -145,13 +145,20 @@ def dlm_aic(mesh: BoxMesh, mach: float, k, *, refc: float, method: str = "quarti
         (~30 MB per thread) whatever n and nk; the peak is that, the (nk, n, n) complex result
         and the (n, n) steady matrix.
     workers : int, optional
-        Threads over blocks of receiving boxes (default: the number of CPUs); each thread
-        holds one block's temporaries.
+        Threads over receiving strips (default: the number of CPUs); each thread holds one
+        block's temporaries.
 
     Returns
     -------
     (nk, n, n) complex
         D[k, i, j]: w_i / V per unit dCp_j; D[k] -> steady_aic(mesh, mach) as k -> 0.
+
+    Raises
+    ------
+    InputError
+        Mach outside [0, 1), unknown method (the message lists the valid ones), negative or
+        non-finite k, refc <= 0, chunk_size < 1, or a collocation point on the side-edge line of
+        a coplanar box (singular kernel; the message names both boxes).
     """
     m = check_mach(mach)
     s = check_symxz(symxz)
