@@ -8,16 +8,19 @@ aerodynamic forces"; Rodden & Johnson, eqs. 2-35..2-40)::
 so that the generalized aerodynamic force on the modal coordinates u_h is ``q * Q_hh @ u_h`` for
 harmonic motion ``u_h e^{i omega t}``, q = rho V^2 / 2. Here:
 
-* G_kg Phi: the box motion of each mode from the splines (:mod:`aero.splines`): normal displacement h
-  and slope dh/dx at the 3/4-chord collocation points, h at the 1/4-chord load points;
+* G_kg Phi: the box motion of each mode from the splines (:mod:`aero.splines`): normal
+  displacement h and slope dh/dx at the 3/4-chord collocation points, h at the 1/4-chord load
+  points;
 * D_jk = d/dx + i k / b: the normalwash over V of the harmonic motion, ``w/V = dh/dx + i (k/b) h``
   (flow tangency; b = REFC / 2, k = omega b / V);
 * A_jj^-1: the doublet-lattice pressure solution, ``Delta Cp = D^-1 (w/V)`` with
   ``D = aero.dlm.dlm_aic`` ({w/V} = D {Delta Cp});
-* S_kj: box area integration, the box force ``q * area * Delta Cp`` along the box normal acting at the
-  box's 1/4-chord load point; W_kk = I;
+* S_kj: box area integration, the box force ``q * area * Delta Cp`` along the box normal acting at
+  the box's 1/4-chord load point; W_kk = I;
 * Phi^T G_kg^T: the work of those forces on the modal displacement h at the load points.
 
+The signs and the half-model convention (SYMXZ: forces on the modelled half only) agree with
+Nastran's QHH of the BAH wing (tests/aero/test_gaf.py; that run used the parabolic kernel).
 Reduced frequency is Nastran's k = omega * b / V with b = REFC / 2.
 """
 from __future__ import annotations
@@ -66,7 +69,8 @@ def spline_matrices(aero_model) -> SplineMatrices:
         origin, axes = spline_frame(sp, normal, panel.p1, aero_model.aero_frame)
         hc, sc, hl = spline_transform(
             sp, grid_aero=aero_model.aero_frame.from_basic(sp.grid_xyz),
-            colloc=np.asarray(mesh.collocation)[rows], load=0.5 * (mesh.doublet_in[rows] + mesh.doublet_out[rows]),
+            colloc=np.asarray(mesh.collocation)[rows],
+            load=0.5 * (mesh.doublet_in[rows] + mesh.doublet_out[rows]),
             frame_origin=origin, frame_axes=axes, aero_axes=aero_model.aero_frame.axes)
         cols = (6 * np.array([col_of[int(g)] for g in sp.grid_ids])[:, None] + np.arange(6)).ravel()
         if sp.usage in ("BOTH", "DISP"):
@@ -111,7 +115,8 @@ def mode_columns(modes_ds: xr.Dataset, grid: np.ndarray, component: np.ndarray,
         raise MissingReferenceError(card_message(
             f"spline grids {missing[:10]} are not in the modes Dataset (source "
             f"{modes_ds.attrs.get('source', '?')}).", card="SET1",
-            fix="compute the modes on the deck that holds the splines' grids, or correct the SET1."))
+            fix="compute the modes on the deck that holds the splines' grids, or correct the "
+                "SET1."))
     idx = np.array([index[(int(a), int(b))] for a, b in zip(grid, component)], dtype=int)
     if grid_xyz and all(name in modes_ds.coords for name in ("x", "y", "z")):
         xyz = np.column_stack([modes_ds[name].values[idx] for name in ("x", "y", "z")])
@@ -120,8 +125,8 @@ def mode_columns(modes_ds: xr.Dataset, grid: np.ndarray, component: np.ndarray,
         bad = np.abs(xyz - ref).max(axis=1) > 1e-6 * size
         if bad.any():
             raise InputError(card_message(
-                f"grids {sorted(set(np.asarray(grid)[bad].tolist()))[:10]} have other positions in the "
-                "modes Dataset than in the aerodynamic deck.", card="GRID",
+                f"grids {sorted(set(np.asarray(grid)[bad].tolist()))[:10]} have other positions in "
+                "the modes Dataset than in the aerodynamic deck.", card="GRID",
                 fix="use modes computed on the same deck."))
     return np.asarray(modes_ds["shape"].values, dtype=float)[:, idx].T
 
@@ -160,7 +165,8 @@ def pressure_coefficients(D: np.ndarray, h_colloc: np.ndarray, slope_colloc: np.
     ndarray of complex, shape (nk, nbox, nmode)
     """
     ks = np.asarray(ks, dtype=float).reshape(-1)
-    w = slope_colloc[None] + 1j * (ks / semichord)[:, None, None] * h_colloc[None]  # D_jk = d/dx + ik/b
+    # w/V = D_jk h with D_jk = d/dx + i k/b (flow tangency, Nastran's D1JK + i k D2JK)
+    w = slope_colloc[None] + 1j * (ks / semichord)[:, None, None] * h_colloc[None]
     return np.linalg.solve(D, w)
 
 
@@ -192,9 +198,9 @@ def generalized_aero_forces(aero_model, modes_ds: xr.Dataset, machs, ks, *,
     Returns
     -------
     xarray.Dataset
-        ``Q(mach, k, mode_i, mode_j)`` complex (generalized force on mode i per unit dynamic pressure
-        and unit modal coordinate j); attrs ``refc``, ``rhoref``, ``symxz``, ``k_convention``,
-        ``method``, ``units``, ``deck``.
+        ``Q(mach, k, mode_i, mode_j)`` complex (generalized force on mode i per unit dynamic
+        pressure and unit modal coordinate j); attrs ``refc``, ``rhoref``, ``symxz``,
+        ``k_convention``, ``method``, ``units``, ``deck``.
     """
     if method not in METHODS:
         raise InputError(f"generalized_aero_forces: unknown method {method!r}. Fix: use one of "
@@ -202,8 +208,8 @@ def generalized_aero_forces(aero_model, modes_ds: xr.Dataset, machs, ks, *,
     machs = np.atleast_1d(np.asarray(machs, dtype=float))
     ks = np.atleast_1d(np.asarray(ks, dtype=float))
     if machs.ndim != 1 or ks.ndim != 1 or machs.size == 0 or ks.size == 0 or np.any(ks < 0):
-        raise InputError("generalized_aero_forces: machs and ks must be non-empty 1-D lists, k >= 0. "
-                         "Fix: pass e.g. machs=[0.5], ks=[0.1, 0.5].")
+        raise InputError("generalized_aero_forces: machs and ks must be non-empty 1-D lists, "
+                         "k >= 0. Fix: pass e.g. machs=[0.5], ks=[0.1, 0.5].")
     h_c, s_c, h_l = modal_box_motion(aero_model, modes_ds)
     area = np.asarray(aero_model.mesh.area, dtype=float)
     b = aero_model.refc / 2.0
@@ -221,7 +227,8 @@ def generalized_aero_forces(aero_model, modes_ds: xr.Dataset, machs, ks, *,
         coords={"mach": machs, "k": ks, "mode_i": modes, "mode_j": modes},
         attrs={"refc": float(aero_model.refc), "rhoref": float(aero_model.rhoref),
                "symxz": int(aero_model.symxz), "k_convention": K_CONVENTION, "method": method,
-               "units": f"Q: area x (mode shape units)^2 ({units}); generalized force = q * Q @ u_h",
+               "units": f"Q: area x (mode shape units)^2 ({units}); "
+                        "generalized force = q * Q @ u_h",
                "deck": aero_model.filename, "modes_source": str(modes_ds.attrs.get("source", ""))})
     ds["Q"].attrs["long_name"] = "generalized aerodynamic force matrix per unit dynamic pressure"
     return ds
@@ -257,8 +264,8 @@ def interpolate_q(q_ds: xr.Dataset, mach: float, k) -> np.ndarray:
     out = (kq < kk[0] - 1e-12) | (kq > kk[-1] + 1e-12)
     if np.any(out):
         raise InputError(f"interpolate_q: k = {np.atleast_1d(kq)[np.atleast_1d(out)].tolist()} is "
-                         f"outside the tabulated range [{kk[0]}, {kk[-1]}] at Mach {mach}. Fix: add "
-                         "MKAERO reduced frequencies covering it.")
+                         f"outside the tabulated range [{kk[0]}, {kk[-1]}] at Mach {mach}. "
+                         "Fix: add MKAERO reduced frequencies covering it.")
     vals = np.asarray(table.transpose("k", "mode_i", "mode_j").values)
     spline = CubicSpline(kk, vals, axis=0)
     return spline(np.clip(kq, kk[0], kk[-1]))

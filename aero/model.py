@@ -43,8 +43,8 @@ def _frozen(values, dtype=float, shape_tail=()) -> np.ndarray:
 
 @dataclass(frozen=True)
 class Frame:
-    """A rectangular frame: ``origin`` (3,) in basic and ``axes`` (3, 3) whose rows are the unit x, y, z
-    axes in basic. A point p in the frame is ``origin + p @ axes`` in basic."""
+    """A rectangular frame: ``origin`` (3,) in basic and ``axes`` (3, 3) whose rows are the unit
+    x, y, z axes in basic. A point p in the frame is ``origin + p @ axes`` in basic."""
 
     cid: int
     origin: np.ndarray
@@ -54,8 +54,8 @@ class Frame:
         origin = _frozen(self.origin)
         axes = np.array(self.axes, dtype=float).reshape(3, 3)
         if origin.shape != (3,) or not np.allclose(axes @ axes.T, np.eye(3), atol=1e-9):
-            raise InputError(card_message("coordinate system is not a rectangular orthonormal frame.",
-                                          card="CORD2R", card_id=self.cid,
+            raise InputError(card_message("coordinate system is not a rectangular orthonormal "
+                                          "frame.", card="CORD2R", card_id=self.cid,
                                           fix="use a CORD2R/CORD1R (rectangular) system here."))
         axes.setflags(write=False)
         object.__setattr__(self, "origin", origin)
@@ -172,8 +172,8 @@ class AeroModel:
     """The aerodynamic model of one deck (see module docstring for frames).
 
     ``mesh`` is the :class:`aero.panels.BoxMesh` of all CAERO1 boxes in the ACSID frame;
-    ``mach_k`` (n, 2) the MKAERO Mach / reduced-frequency pairs in card order (within an MKAERO1 card
-    Mach-major). ``symxz`` = +1 symmetric, -1 antisymmetric, 0 none (AERO SYMXZ).
+    ``mach_k`` (n, 2) the MKAERO Mach / reduced-frequency pairs in card order (within an MKAERO1
+    card Mach-major). ``symxz`` = +1 symmetric, -1 antisymmetric, 0 none (AERO SYMXZ).
     """
 
     filename: str
@@ -193,8 +193,8 @@ class AeroModel:
             raise InputError(card_message(f"REFC={self.refc} must be > 0.", card="AERO",
                                           filename=self.filename, fix="give the reference chord."))
         if self.symxz not in (-1, 0, 1) or self.symxy not in (-1, 0, 1):
-            raise InputError(card_message(f"SYMXZ={self.symxz}, SYMXY={self.symxy} must be -1, 0 or 1.",
-                                          card="AERO", filename=self.filename,
+            raise InputError(card_message(f"SYMXZ={self.symxz}, SYMXY={self.symxy} must be -1, "
+                                          "0 or 1.", card="AERO", filename=self.filename,
                                           fix="correct the symmetry flags."))
         mk = np.array(self.mach_k, dtype=float).reshape(-1, 2)
         mk.setflags(write=False)
@@ -241,8 +241,9 @@ def _read_bdf(path: Path):
                                   xref_sets=False, xref_optimization=False)
     except (KeyError, RuntimeError, ValueError, SyntaxError, AssertionError, IndexError,
             FileNotFoundError, NotImplementedError) as exc:
-        raise InputError(f"file {path}: pyNastran could not read the deck: {exc}. Fix: correct the "
-                         "card named above (field formats, INCLUDE files, coordinate systems).") from exc
+        raise InputError(f"file {path}: pyNastran could not read the deck: {exc}. Fix: correct "
+                         "the card named above (field formats, INCLUDE files, coordinate "
+                         "systems).") from exc
     return model
 
 
@@ -250,13 +251,14 @@ def _frame(bdf, cid: int, card: str, card_id, filename: str) -> Frame:
     if cid in (0, None):
         return BASIC
     if cid not in bdf.coords:
-        raise MissingReferenceError(card_message(f"coordinate system {cid} is not defined.", card=card,
-                                                 card_id=card_id, filename=filename,
+        raise MissingReferenceError(card_message(f"coordinate system {cid} is not defined.",
+                                                 card=card, card_id=card_id, filename=filename,
                                                  fix=f"add a CORD2R {cid} or use 0 (basic)."))
     coord = bdf.coords[cid]
     if coord.type not in ("CORD2R", "CORD1R"):
         raise UnsupportedCardError(card_message(
-            f"coordinate system {cid} is a {coord.type}; only rectangular systems are allowed here.",
+            f"coordinate system {cid} is a {coord.type}; only rectangular systems are allowed "
+            "here.",
             card=card, card_id=card_id, filename=filename, fix=f"make {cid} a CORD2R."))
     return Frame(cid, np.asarray(coord.origin, dtype=float), np.asarray(coord.beta(), dtype=float))
 
@@ -280,8 +282,9 @@ def _check_cards(bdf, filename: str) -> None:
 def _fractions(bdf, n, aefact_id, what: str, eid: int, filename: str) -> np.ndarray:
     if aefact_id in (None, 0):
         if not n or n < 1:
-            raise InputError(card_message(f"N{what}={n}: needs >= 1 division or an AEFACT in L{what}.",
-                                          card="CAERO1", card_id=eid, filename=filename,
+            raise InputError(card_message(f"N{what}={n}: needs >= 1 division or an AEFACT in "
+                                          f"L{what}.", card="CAERO1", card_id=eid,
+                                          filename=filename,
                                           fix=f"set N{what} or L{what}."))
         return np.linspace(0.0, 1.0, int(n) + 1)
     if aefact_id not in bdf.aefacts:
@@ -318,8 +321,9 @@ def _splines(bdf, panels: list, filename: str) -> list:
         s = bdf.splines[eid]
         card = s.type
         if s.caero not in ranges:
-            raise MissingReferenceError(card_message(f"CAERO={s.caero} is not a CAERO1 of the deck.",
-                                                     card=card, card_id=eid, filename=filename,
+            raise MissingReferenceError(card_message(f"CAERO={s.caero} is not a CAERO1 of the "
+                                                     "deck.", card=card, card_id=eid,
+                                                     filename=filename,
                                                      fix=f"use one of {sorted(ranges)}."))
         lo, hi = ranges[s.caero]
         if not (lo <= s.box1 <= s.box2 <= hi):
@@ -336,7 +340,8 @@ def _splines(bdf, panels: list, filename: str) -> list:
         if missing:
             raise MissingReferenceError(card_message(
                 f"SET1 {s.setg} lists grids {missing[:10]} that are not defined.", card=card,
-                card_id=eid, filename=filename, fix="define those GRIDs or remove them from the SET1."))
+                card_id=eid, filename=filename,
+                fix="define those GRIDs or remove them from the SET1."))
         xyz = np.array([bdf.nodes[g].get_position() for g in gids], dtype=float)
         common = dict(eid=eid, caero=s.caero, box1=s.box1, box2=s.box2, setg=s.setg, grid_ids=gids,
                       grid_xyz=xyz, dz=float(s.dz or 0.0), usage=(s.usage or "BOTH").upper())

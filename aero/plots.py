@@ -59,8 +59,9 @@ def box_layout(aero_model) -> BoxLayout:
     grids = {int(g): x for s in aero_model.splines for g, x in zip(s.grid_ids, s.grid_xyz)}
     gids = np.array(sorted(grids), dtype=int)
     gxy = aero_model.aero_frame.from_basic(np.array([grids[g] for g in gids]).reshape(-1, 3))[:, :2]
-    return BoxLayout(panel_ids=np.array([p.eid for p in aero_model.panels]), panel_outlines=outlines,
-                     box_ids=np.asarray(mesh.box_id), box_corners=np.asarray(mesh.corners)[:, :, :2],
+    return BoxLayout(panel_ids=np.array([p.eid for p in aero_model.panels]),
+                     panel_outlines=outlines, box_ids=np.asarray(mesh.box_id),
+                     box_corners=np.asarray(mesh.corners)[:, :, :2],
                      collocation=np.asarray(mesh.collocation)[:, :2],
                      load_points=(0.5 * (mesh.doublet_in + mesh.doublet_out))[:, :2],
                      grid_ids=gids, grid_xy=gxy)

@@ -5,8 +5,8 @@ Two interpolants, both from Harder & Desmarais, "Interpolation using surface spl
 "Interconnection of the structure with aerodynamics"):
 
 * SPLINE1, **infinite-plate spline** (IPS). In the plane of the CAERO1 panel the out-of-plane
-  displacement is that of an infinite plate (bending stiffness D = 1) loaded by point forces F_i at the
-  projections (x_i, y_i) of the structural grids::
+  displacement is that of an infinite plate (bending stiffness D = 1) loaded by point forces F_i at
+  the projections (x_i, y_i) of the structural grids::
 
       w(x, y) = a0 + a1 x + a2 y + sum_i F_i K(r_i),  K(r) = r^2 ln(r^2) / (16 pi)     (H&D eq. 8)
 
@@ -16,18 +16,24 @@ Two interpolants, both from Harder & Desmarais, "Interpolation using surface spl
 
 * SPLINE2, **beam spline** (Nastran's "linear spline"). A free-free beam (EI = 1) with torsion
   (GJ = 1/DTOR) along the spline axis: the y axis of the spline's CID projected on the panel plane.
-  Bending deflection Z(y) and twist theta(y) come from point forces P_i, moments M_i and torques T_i at
-  the grids' axial stations y_i::
+  Bending deflection Z(y) and twist theta(y) come from point forces P_i, moments M_i and torques
+  T_i at the grids' axial stations y_i::
 
       Z(y)     = a0 + a1 y + sum_i P_i G(y - y_i) - sum_i M_i G'(y - y_i),  G(r) = |r|^3 / 12
       theta(y) = b0 + sum_i T_i H(y - y_i),                                 H(r) = -DTOR |r| / 2
 
-  (the infinite-beam Green's functions of EI Z'''' = p and GJ theta'' = -t). The grids' out-of-plane
-  translation is matched with flexibility DZ (units length^3), their rotation about the spline x axis
-  with the slope Z' (flexibility DTHX) and about the spline y axis with the twist theta (flexibility
-  DTHY); a negative DTHX / DTHY leaves that rotation unattached (Nastran Quick Reference Guide,
-  SPLINE2 remarks). If no twist is attached the twist is zero. A chordwise-rigid section then gives
-  the displacement at chordwise offset x (along the spline x axis) as ``h = Z(y) - x theta(y)``.
+  (the infinite-beam Green's functions of EI Z'''' = p and GJ theta'' = -t). What is taken from
+  the Nastran Aeroelastic Analysis User's Guide (sec. 2.3, "linear splines") and the Quick
+  Reference Guide (SPLINE2): the spline is a beam along the projection of the CID y axis on the
+  panel plane, with bending and torsion, the torsion flexibility ratio DTOR = EI/GJ, the grids'
+  out-of-plane translation attached with flexibility DZ, their rotation about the spline x axis
+  (bending slope Z') with DTHX and about its y axis (twist theta) with DTHY, a negative DTHX/DTHY
+  meaning "not attached". Our choices: EI = 1 in the model's units (so DZ is in length^3 and DTHX,
+  DTHY in length; DZ = DTHX = DTHY = 0, the usual case, is independent of that choice); a blank
+  DTHX/DTHY reads as 0.0 (pyNastran's default: attached); with no twist attached the twist is
+  zero. A chordwise-rigid section gives the displacement at chordwise offset x (along the spline x
+  axis) as ``h = Z(y) - x theta(y)`` and ``dh/dx = -theta(y)``; outside the grids' span the beam
+  continues straight (linear Z, constant theta).
 
 With zero attachment flexibilities both interpolate the grid values exactly; both reproduce rigid
 motion exactly (the polynomial terms). The transformation outputs, for every box, the normal
@@ -65,8 +71,8 @@ def _solve_bordered(C: np.ndarray, B: np.ndarray, label: str) -> np.ndarray:
     try:
         return np.linalg.solve(A, rhs)
     except np.linalg.LinAlgError as exc:
-        raise InputError(f"{label}: singular spline system ({exc}); coincident structural points?") \
-            from exc
+        raise InputError(f"{label}: singular spline system ({exc}); coincident structural "
+                         "points?") from exc
 
 
 def ips_weights(grid_xy: np.ndarray, points_xy: np.ndarray, dz: float = 0.0,
@@ -131,16 +137,16 @@ def beam_weights(grid_y: np.ndarray, points_xy: np.ndarray, *, dz: float = 0.0, 
     points_xy : ndarray, shape (m, 2)
         Spline-frame (x, y) of the wanted points: x chordwise offset from the axis, y axial station.
     dz, dtor, dthx, dthy : float
-        SPLINE2 flexibilities: translation (length^3 with EI = 1), EI/GJ, rotation about the spline x
-        axis (slope) and about its y axis (twist); negative dthx/dthy = rotation not attached.
+        SPLINE2 flexibilities: translation (length^3 with EI = 1), EI/GJ, rotation about the
+        spline x axis (slope) and about its y axis (twist); negative dthx/dthy = not attached.
     label : str
         Names the spline in error messages.
 
     Returns
     -------
     W, Wx, Wy : ndarray, shape (m, n, 3)
-        Weights of the grid inputs (out-of-plane translation, rotation about spline x, rotation about
-        spline y) for h, dh/dx and dh/dy at the points.
+        Weights of the grid inputs (out-of-plane translation, rotation about spline x, rotation
+        about spline y) for h, dh/dx and dh/dy at the points.
     """
     y = np.asarray(grid_y, dtype=float).reshape(-1)
     p = np.asarray(points_xy, dtype=float).reshape(-1, 2)
@@ -197,9 +203,10 @@ class SplineMatrices:
     """G_kg: box motion per structural degree of freedom.
 
     ``grid`` (ndof,), ``component`` (ndof,) label the columns (basic-frame components 1..6);
-    ``box_ids`` (nbox,) the rows, in mesh order. ``h_colloc`` and ``slope_colloc`` (nbox, ndof) give the
-    normal displacement and its derivative along the free stream at the 3/4-chord collocation points,
-    ``h_load`` (nbox, ndof) the normal displacement at the 1/4-chord load points.
+    ``box_ids`` (nbox,) the rows, in mesh order. ``h_colloc`` and ``slope_colloc`` (nbox, ndof)
+    give the normal displacement and its derivative along the free stream at the 3/4-chord
+    collocation points, ``h_load`` (nbox, ndof) the normal displacement at the 1/4-chord load
+    points.
     """
 
     box_ids: np.ndarray
@@ -210,7 +217,8 @@ class SplineMatrices:
     h_load: np.ndarray
 
 
-def spline_frame(spline, normal: np.ndarray, p1: np.ndarray, aero_frame) -> tuple[np.ndarray, np.ndarray]:
+def spline_frame(spline, normal: np.ndarray, p1: np.ndarray,
+                 aero_frame) -> tuple[np.ndarray, np.ndarray]:
     """Origin (3,) and axes (3, 3) (rows x, y, z) of a spline's plane frame, in the ACSID frame.
 
     Parameters
@@ -228,15 +236,16 @@ def spline_frame(spline, normal: np.ndarray, p1: np.ndarray, aero_frame) -> tupl
     if spline.kind == "IPS":
         ex = np.array([1.0, 0.0, 0.0]) - n[0] * n  # free stream projected on the plane
         if np.linalg.norm(ex) < 1e-9:
-            raise InputError(card_message("the panel is normal to the free stream.", card=spline.card,
-                                          card_id=spline.eid, fix="check the CAERO1 geometry."))
+            raise InputError(card_message("the panel is normal to the free stream.",
+                                          card=spline.card, card_id=spline.eid,
+                                          fix="check the CAERO1 geometry."))
         ex /= np.linalg.norm(ex)
         return p1, np.vstack([ex, np.cross(n, ex), n])
     cid_y = aero_frame.axes @ spline.frame.axes[1]  # CID y axis in ACSID components
     ey = cid_y - (cid_y @ n) * n  # projected on the panel plane (QRG SPLINE2 remarks)
     if np.linalg.norm(ey) < 1e-9:
-        raise InputError(card_message(f"the y axis of CID {spline.frame.cid} is normal to the panel.",
-                                      card=spline.card, card_id=spline.eid,
+        raise InputError(card_message(f"the y axis of CID {spline.frame.cid} is normal to the "
+                                      "panel.", card=spline.card, card_id=spline.eid,
                                       fix="choose a CID whose y axis lies along the elastic axis."))
     ey /= np.linalg.norm(ey)
     origin = aero_frame.from_basic(spline.frame.origin)

@@ -242,7 +242,8 @@ def test_dataset_layout_interpolation_and_io(tmp_path):
 
 
 def test_bad_input_mach_and_k_warning(tmp_path):
-    """Mach >= 1 fails in the DLM; k beyond the boxes-per-wavelength rule warns with the panel id."""
+    """Mach >= 1 fails in the DLM; k beyond the boxes-per-wavelength rule warns naming the
+    panel id and the k."""
     half, _ = half_and_full_decks(tmp_path, 1)
     modes = synthetic_modes(half, [lambda x, y: np.ones_like(x)])
     with pytest.raises(InputError, match=r"Mach number 1\.2"):

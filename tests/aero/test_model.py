@@ -63,7 +63,7 @@ def test_aefact_divisions_cp_frame_set1_thru_mkaero2(tmp_path):
     pan = m.panels[0]
     np.testing.assert_allclose(pan.span_fractions, [0.0, 0.5, 0.8, 1.0])
     np.testing.assert_allclose(pan.chord_fractions, [0.0, 0.25, 1.0])
-    # CP 7: local x -> basic -y, local z -> basic +z: P1 (0,0,0) -> (10,0,1); P4 (-6,0,0) -> (10,6,1)
+    # CP 7: local x -> basic -y, z -> basic +z: P1 (0,0,0) -> (10,0,1); P4 (-6,0,0) -> (10,6,1)
     np.testing.assert_allclose(pan.p1, [10.0, 0.0, 1.0], atol=1e-12)
     np.testing.assert_allclose(pan.p4, [10.0, 6.0, 1.0], atol=1e-12)
     np.testing.assert_array_equal(m.mesh.box_id, np.arange(101, 107))

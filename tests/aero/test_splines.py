@@ -149,7 +149,8 @@ def test_spline1_interpolates_structural_values_at_their_positions(tmp_path):
 
 
 def test_spline_without_points_in_reach_raises(tmp_path):
-    """Two grids (or grids on one line) cannot carry an infinite-plate spline; the error names it."""
+    """Two grids (or grids on one line) cannot carry an infinite-plate spline; the error names
+    the spline."""
     m = _ips_deck(tmp_path, "SET1,5,1,2")
     with pytest.raises(InputError, match=r"SPLINE1 201.*2 structural point"):
         spline_matrices(m)
