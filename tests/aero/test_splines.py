@@ -7,7 +7,7 @@ import pytest
 from aero.gaf import spline_matrices
 from aero.model import read_aero_model
 from aero.splines import beam_weights, ips_weights
-from aero_decks import BAH, wing_grids, write_deck
+from aero_decks import BAH, DATA, wing_grids, write_deck
 from structures.errors import InputError
 
 RNG = np.random.default_rng(7)
@@ -96,6 +96,23 @@ def test_bah_plane_splines_rigid_plunge_and_pitch():
     np.testing.assert_allclose(G.h_colloc @ pitch, theta * xb_c, atol=TOL)
     np.testing.assert_allclose(G.h_load @ pitch, theta * xb_l, atol=TOL)
     np.testing.assert_allclose(G.slope_colloc @ pitch, -theta, atol=TOL)
+
+
+@pytest.mark.parametrize("deck", ["pt145/pt145.bdf", "two_mode_flutter/0012_flutter.bdf"])
+def test_validation_decks_splines_rigid_motion(deck):
+    """PT145 (SPLINE2 along a 15-degree swept CID 1 axis, CAERO1 in CP 1) and the two-mode plate
+    (SPLINE1 on 116 grids): any rigid rotation about an arbitrary point is reproduced exactly."""
+    m = read_aero_model(DATA / deck)
+    G = spline_matrices(m)
+    xyz = _xyz_of(m)
+    rot, about = np.array([0.011, -0.02, 0.007]), np.array([0.3, -1.2, 0.4])
+    u = _rigid_dofs(G.grid, G.component, xyz, t=(0.0, 0.0, 0.05), r=rot, about=about)
+    c = m.to_basic(m.mesh.collocation)
+    n = m.mesh.normal @ m.aero_frame.axes
+    h = np.einsum("bi,bi->b", 0.05 * np.array([0, 0, 1.0]) + np.cross(rot, c - about), n)
+    np.testing.assert_allclose(G.h_colloc @ u, h, atol=TOL)
+    flow = m.aero_frame.axes[0]
+    np.testing.assert_allclose(G.slope_colloc @ u, np.cross(rot, flow) @ n.T, atol=TOL)
 
 
 def _ips_deck(tmp_path, set_line, extra=""):
