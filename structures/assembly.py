@@ -359,8 +359,11 @@ def assemble(model: FEModel, mass: str = "deck") -> AssembledSystem:
     n_g = 6 * len(model.grids)
     k_basic, m_basic = assemble_g(model, mass)
     rot = rotation_matrix(model)
-    k_cd = (rot.T @ k_basic @ rot).tocsr()
-    m_cd = (rot.T @ m_basic @ rot).tocsr()
+    if np.any(model.grids.cd != 0):
+        k_cd = (rot.T @ k_basic @ rot).tocsr()
+        m_cd = (rot.T @ m_basic @ rot).tocsr()
+    else:
+        k_cd, m_cd = k_basic, m_basic
     m_dofs, g_mo = solve_constraints(model.grids, model.rigid, n_g, model.filename)
     fixed = _constrained(model, m_dofs)
     is_m = np.zeros(n_g, dtype=bool)
@@ -373,7 +376,9 @@ def assemble(model: FEModel, mass: str = "deck") -> AssembledSystem:
         g_mn = g_mo[:, n_dofs]
         t_gn = t_gn + sp.csr_matrix((np.ones(len(m_dofs)), (m_dofs, np.arange(len(m_dofs)))),
                                     shape=(n_g, len(m_dofs))) @ g_mn
-    k_nn = (t_gn.T @ k_cd @ t_gn).tocsr()
+        k_nn = (t_gn.T @ k_cd @ t_gn).tocsr()
+    else:
+        k_nn = k_cd[n_dofs][:, n_dofs]
     diag = np.abs(k_nn.diagonal())
     rot_dof = (n_dofs % 6) >= 3
     scale = np.array([diag[~rot_dof].max(initial=0.0), diag[rot_dof].max(initial=0.0)])
@@ -381,8 +386,13 @@ def assemble(model: FEModel, mass: str = "deck") -> AssembledSystem:
     free = ~fixed[n_dofs] & ~no_stiffness
     autospc = n_dofs[~fixed[n_dofs] & no_stiffness]
     t_ga = t_gn[:, np.flatnonzero(free)].tocsr()
-    k_aa = (t_ga.T @ k_cd @ t_ga).tocsc()
-    m_aa = (t_ga.T @ m_cd @ t_ga).tocsc()
+    if len(m_dofs):
+        k_aa = (t_ga.T @ k_cd @ t_ga).tocsc()
+        m_aa = (t_ga.T @ m_cd @ t_ga).tocsc()
+    else:  # T is a selection: slicing is much cheaper than two sparse products
+        a_dofs = n_dofs[free]
+        k_aa = k_cd[a_dofs][:, a_dofs].tocsc()
+        m_aa = m_cd[a_dofs][:, a_dofs].tocsc()
     if k_aa.shape[0] == 0:
         raise InputError(card_message("the model has no free degrees of freedom.",
                                       filename=model.filename,

@@ -16,6 +16,7 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 import xarray as xr
+from threadpoolctl import threadpool_limits
 
 from structures.assembly import AssembledSystem, assemble
 from structures.errors import SolverError, card_message
@@ -39,21 +40,54 @@ def _massless_mechanism(filename: str) -> SolverError:
             "CBEAM instead of CBAR)."))
 
 
-def _factor(a: sp.csc_matrix, filename: str):
-    """Sparse LU of the shifted matrix; tiny pivots (relative to the diagonal) mean singular."""
-    try:
-        lu = spla.splu(a, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
-                       options={"SymmetricMode": True})
-    except RuntimeError:
-        raise _massless_mechanism(filename) from None
-    pivots = np.abs(lu.U.diagonal())
-    diag = np.abs(a.diagonal())[lu.perm_c]
-    if not np.all(np.isfinite(pivots)) or np.any(pivots <= PIVOT_RATIO * diag):
-        raise _massless_mechanism(filename)
-    return lu
+class ShiftedFactor:
+    """Sparse LU of the shifted matrix K - sigma M, ordered on the grid graph.
+
+    A minimum-degree ordering of the grid connectivity (one node per grid), expanded to each
+    grid's DOFs, gives less fill than ordering the DOF graph directly (about 16M instead of 21M
+    factor non-zeros on a 60,000-DOF shell model) and costs a fraction of a second. Tiny pivots
+    (relative to the matrix diagonal) mean a singular matrix: a massless mechanism.
+    """
+
+    def __init__(self, a: sp.csc_matrix, groups: np.ndarray | None, filename: str):
+        self.perm = _grouped_ordering(a, groups)
+        permuted = a[self.perm][:, self.perm].tocsc()
+        try:
+            self.lu = spla.splu(permuted, permc_spec="NATURAL", diag_pivot_thresh=0.0,
+                                options={"SymmetricMode": True})
+        except RuntimeError:
+            raise _massless_mechanism(filename) from None
+        pivots = np.abs(self.lu.U.diagonal())
+        diag = np.abs(permuted.diagonal())[self.lu.perm_c]
+        if not np.all(np.isfinite(pivots)) or np.any(pivots <= PIVOT_RATIO * diag):
+            raise _massless_mechanism(filename)
+
+    def solve(self, b: np.ndarray) -> np.ndarray:
+        out = np.empty_like(b)
+        out[self.perm] = self.lu.solve(b[self.perm])
+        return out
+
+
+def _grouped_ordering(a: sp.csc_matrix, groups: np.ndarray | None) -> np.ndarray:
+    """Fill-reducing permutation of ``a`` computed on the graph of DOF groups (grids)."""
+    n = a.shape[0]
+    if groups is None:
+        groups = np.arange(n)
+    labels, inverse = np.unique(groups, return_inverse=True)
+    coo = a.tocoo()
+    graph = sp.csc_matrix((-np.ones(coo.nnz), (inverse[coo.row], inverse[coo.col])),
+                          shape=(len(labels), len(labels)))
+    graph.sum_duplicates()
+    graph.data[:] = -1.0
+    graph = graph + sp.diags(np.asarray(abs(graph).sum(axis=1)).ravel() + 1.0)  # dominant
+    # SuperLU's perm_c[j] is the new position of column j.
+    rank = spla.splu(graph.tocsc(), permc_spec="MMD_AT_PLUS_A",
+                     options={"SymmetricMode": True}).perm_c
+    return np.lexsort((np.arange(n), rank[inverse]))
 
 
 def solve_eigen(k: sp.spmatrix, m: sp.spmatrix, nmodes: int, *, shift: float = DEFAULT_SHIFT,
+                groups: np.ndarray | None = None,
                 filename: str = "") -> tuple[np.ndarray, np.ndarray]:
     """Lowest ``nmodes`` eigenpairs of (K, M).
 
@@ -62,6 +96,7 @@ def solve_eigen(k: sp.spmatrix, m: sp.spmatrix, nmodes: int, *, shift: float = D
     k, m : sparse (n, n) symmetric; M positive semi-definite.
     nmodes : int
     shift : float, negative shift sigma (rad/s)^2.
+    groups : (n,) int, optional, the grid of each DOF (orders the factorisation by grids).
 
     Returns
     -------
@@ -88,12 +123,15 @@ def solve_eigen(k: sp.spmatrix, m: sp.spmatrix, nmodes: int, *, shift: float = D
                 "asked for.", filename=filename, fix="ask for fewer modes or add mass."))
         lam = shift + 1.0 / mu
     else:
-        lu = _factor(shifted, filename)
-        op = spla.LinearOperator((n, n), matvec=lu.solve, dtype=float)
+        factor = ShiftedFactor(shifted, groups, filename)
+        op = spla.LinearOperator((n, n), matvec=factor.solve, dtype=float)
         ncv = min(n, max(2 * nmodes + 1, nmodes + 20))
         try:
-            lam, vec = spla.eigsh(k, k=nmodes, M=m, sigma=shift, which="LM", OPinv=op, ncv=ncv,
-                                  tol=1e-12)
+            # ARPACK's small dense steps gain nothing from BLAS threads and lose a lot when the
+            # cores are shared: run them on one thread.
+            with threadpool_limits(limits=1, user_api="blas"):
+                lam, vec = spla.eigsh(k, k=nmodes, M=m, sigma=shift, which="LM", OPinv=op,
+                                      ncv=ncv, tol=1e-9)
         except spla.ArpackNoConvergence as exc:
             raise SolverError(card_message(f"the eigensolver did not converge ({exc}).",
                                            filename=filename,
@@ -149,7 +187,8 @@ def compute_modes(model: FEModel, nmodes: int | None = None, *, mass: str = "dec
     if system is None:
         system = assemble(model, mass)
     n = nmodes or model.eigrl_nd or 20
-    lam, phi = solve_eigen(system.K, system.M, n, shift=shift, filename=model.filename)
+    lam, phi = solve_eigen(system.K, system.M, n, shift=shift, groups=system.a_dofs // 6,
+                           filename=model.filename)
     dk = system.K.diagonal()
     dm = system.M.diagonal()
     ratio = dk[dm > 0] / dm[dm > 0]
