@@ -215,10 +215,11 @@ def dlm_aic(mesh: BoxMesh, mach: float, k, *, refc: float, method: str = "quarti
         raise InputError(card_message(
             f"the doublet-lattice AIC is singular for receiving box {mesh.box_id[i]} and sending "
             f"box {mesh.box_id[j]} (or its XZ image): the collocation point lies on the "
-            "streamwise extension of a side edge of the sending box, in its plane.",
+            "streamwise extension of a side edge of the sending box in its plane, or on its "
+            "doublet line (overlapping panels).",
             card="CAERO1", card_id=int(mesh.panel_id[j]),
-            fix="align the spanwise divisions (NSPAN/LSPAN) of coplanar panels, or move one "
-                "panel slightly out of the other's plane."))
+            fix="align the spanwise divisions (NSPAN/LSPAN) of coplanar panels, remove overlaps, "
+                "or move one panel slightly out of the other's plane."))
     return out
 
 
