@@ -31,7 +31,7 @@ def run_case(method: str) -> dict:
     from structures.modal import compute_modes
 
     out = {}
-    t0, c0 = time.perf_counter(), time.process_time()
+    t0 = time.perf_counter()
     am = read_aero_model(DECK)
     out["read_aero_model_seconds"] = time.perf_counter() - t0
     t0 = time.perf_counter()
