@@ -280,3 +280,16 @@ def test_plots_and_pressure_consistent_with_q(tmp_path):
     fig.savefig(tmp_path / "cp.png")
     with pytest.raises(InputError, match=r"unknown part"):
         plot_pressure(half, cp, part="modulus")
+
+
+def test_modes_must_hold_the_spline_grids(tmp_path):
+    """A modes Dataset without some spline grid, or with the grids elsewhere, is rejected."""
+    from structures.errors import MissingReferenceError
+
+    half, _ = half_and_full_decks(tmp_path, 1)
+    modes = synthetic_modes(half, [lambda x, y: np.ones_like(x)])
+    with pytest.raises(MissingReferenceError, match=r"spline grids \[12\] are not in the modes"):
+        generalized_aero_forces(half, modes.isel(dof=slice(0, 66)), [0.0], [0.1])
+    moved = modes.assign_coords(x=modes["x"] + 0.5)
+    with pytest.raises(InputError, match=r"other positions in the modes Dataset"):
+        generalized_aero_forces(half, moved, [0.0], [0.1])
