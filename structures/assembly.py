@@ -201,23 +201,17 @@ def _bushes(model, es):
     return np.stack([ga, gb], axis=1), k, None
 
 
-def _shell_frames(kind, xyz):
-    if kind == "CQUAD4":
-        return shell._quad_frame(xyz)[0]
-    return shell._tria_frame(xyz)[0]
-
-
 def _shells(model, es, lumped):
     grids = model.grids
     gi = grids.index(es.nodes, card=es.card, filename=model.filename)
     xyz = grids.xyz[gi]
-    axes = _shell_frames(es.card, xyz)
+    axes = shell.element_axes(xyz)
     normal = axes[:, 2]
     theta = np.array(es.data["theta"], float)
-    for e in np.flatnonzero(es.data["mcid"] >= 0):
-        raise InputError(card_message("material coordinate system MCID is not supported yet.",
-                                      card=es.card, card_id=es.eids[e], filename=model.filename,
-                                      fix="give the material angle THETA instead."))
+    with_mcid = np.flatnonzero(es.data["mcid"] >= 0)
+    if with_mcid.size:
+        theta[with_mcid] = shell.material_angle(axes[with_mcid],
+                                                es.data["mcid_x"][with_mcid])
     zoff = np.asarray(es.data["zoffset"], float)
     t_nodal = np.asarray(es.data["t_nodal"], float)
     nn = xyz.shape[1]

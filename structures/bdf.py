@@ -145,6 +145,11 @@ def _materials(model) -> dict:
     }
     for mid, mat in model.materials.items():
         fields = {key: getattr(mat, attr) for key, attr in names[mat.type]}
+        if mat.type == "MAT8":
+            # pyNastran stores a blank G1Z/G2Z as 1e8; Nastran's blank means rigid in shear.
+            for key in ("G1Z", "G2Z"):
+                if fields[key] == 1e8:
+                    fields[key] = None
         out[mid] = Material(mid, mat.type, fields)
     return out
 
@@ -216,6 +221,7 @@ def _line_elements(model, kind, filename):
 
 
 def _elements(model, filename: str) -> dict:
+    coords = model.coords
     sets = {}
     for kind in ("CBAR", "CBEAM"):
         es = _line_elements(model, kind, filename)
@@ -246,11 +252,18 @@ def _elements(model, filename: str) -> dict:
         shells = [e for e in model.elements.values() if e.type == kind]
         if not shells:
             continue
-        theta, mcid, zoff, tnodal = [], [], [], []
+        theta, mcid, mcid_x, zoff, tnodal = [], [], [], [], []
         for e in shells:
+            mcid_x.append(np.zeros(3))
             if isinstance(e.theta_mcid, int):
+                if e.theta_mcid not in coords:
+                    raise MissingReferenceError(card_message(
+                        f"material coordinate system MCID={e.theta_mcid} is not defined.",
+                        card=kind, card_id=e.eid, filename=filename,
+                        fix=f"add CORD2R {e.theta_mcid} or give THETA instead."))
                 theta.append(0.0)
                 mcid.append(e.theta_mcid)
+                mcid_x[-1] = coords[e.theta_mcid].beta()[0]
             else:
                 theta.append(np.deg2rad(e.theta_mcid or 0.0))
                 mcid.append(-1)
@@ -264,7 +277,8 @@ def _elements(model, filename: str) -> dict:
                                                         fix="give absolute corner thicknesses."))
         sets[kind] = ElementSet(kind, [e.eid for e in shells], [e.pid for e in shells],
                                 [e.nodes for e in shells],
-                                dict(theta=theta, mcid=mcid, zoffset=zoff, t_nodal=tnodal))
+                                dict(theta=theta, mcid=mcid, mcid_x=mcid_x, zoffset=zoff,
+                                     t_nodal=tnodal))
     cmass = [m for m in model.masses.values() if m.type == "CMASS2"]
     if cmass:
         sets["CMASS2"] = ElementSet(

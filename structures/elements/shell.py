@@ -409,3 +409,32 @@ def _tria3_block(xyz: np.ndarray, section: ShellSection, theta: np.ndarray, lump
     else:
         Mt = (m / 12.0)[:, None, None] * (np.ones((3, 3)) + np.eye(3))      # (A/12)[[2,1,1],...]
     return 0.5 * (Kb + Kb.transpose(0, 2, 1)), _translational_mass(Mt)
+
+
+def element_axes(xyz: np.ndarray) -> np.ndarray:
+    """Element coordinate axes of CQUAD4 (``xyz`` (ne, 4, 3)) or CTRIA3 (``xyz`` (ne, 3, 3)).
+
+    Returns
+    -------
+    (ne, 3, 3) rows are the element x, y, z axes in basic (QRG conventions: CQUAD4 x bisects the
+    diagonals, CTRIA3 x runs from G1 to G2; z is the normal).
+    """
+    xyz = np.asarray(xyz, float)
+    return _quad_frame(xyz)[0] if xyz.shape[1] == 4 else _tria_frame(xyz)[0]
+
+
+def material_angle(axes: np.ndarray, material_x: np.ndarray) -> np.ndarray:
+    """Angle [rad] from the element x axis to the projection of ``material_x`` on the element plane.
+
+    Parameters
+    ----------
+    axes : (ne, 3, 3) element axes (rows), from :func:`element_axes`.
+    material_x : (ne, 3) the MCID system's x axis in basic (QRG CQUAD4 MCID: projected on the
+        element surface).
+
+    Returns
+    -------
+    (ne,) angles.
+    """
+    local = np.einsum("eij,ej->ei", axes, np.asarray(material_x, float))
+    return np.arctan2(local[:, 1], local[:, 0])
