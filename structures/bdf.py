@@ -239,10 +239,16 @@ def _elements(model, filename: str) -> dict:
             [[n or 0 for n in e.nodes] for e in springs],
             dict(c1=[int(e.c1 or 0) for e in springs], c2=[int(e.c2 or 0) for e in springs], k=k))
     bushes = [e for e in model.elements.values() if e.type == "CBUSH"]
+    for e in bushes:
+        if e.ocid not in (None, -1):
+            raise UnsupportedCardError(card_message(
+                "a spring-damper offset system OCID is not supported.", card="CBUSH",
+                card_id=e.eid, filename=filename,
+                fix="leave OCID blank (the spring then lies on the line GA-GB at S)."))
     if bushes:
         sets["CBUSH"] = ElementSet(
             "CBUSH", [e.eid for e in bushes], [e.pid for e in bushes],
-            [[e.ga, e.gb or 0] for e in bushes],
+            [[e.nodes[0], e.nodes[1] or 0] for e in bushes],
             dict(v=[np.zeros(3) if e.x is None or e.x[0] is None else np.asarray(e.x, float)
                     for e in bushes],
                  g0=[e.g0 or 0 for e in bushes],

@@ -1,0 +1,86 @@
+"""CROD, CELAS1/2, CBUSH, CMASS2, PBARL and CBAR offsets against analytic or equivalent models."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from structures.bdf import read_model
+from structures.modal import compute_modes
+
+
+def _modes(tmp_path, text, n, name="d.bdf", **kw):
+    path = tmp_path / name
+    path.write_text(text)
+    return compute_modes(read_model(path), n, **kw)["frequency"].values
+
+
+def test_crod_axial_modes_fixed_free(tmp_path):
+    """f_n = (2n - 1) / (4 L) sqrt(E / rho) (Blevins table 8-16), consistent mass, 40 rods."""
+    nel, length, e, rho = 40, 2.0, 2.0e11, 7800.0
+    lines = ["PARAM,COUPMASS,1", f"MAT1,1,{e},,0.3,{rho}", "PROD,1,1,1.e-4,1.e-8",
+             "SPC1,1,123456,1"]
+    lines += [f"GRID,{i + 1},,{length * i / nel!r},0.,0.,,23456" for i in range(nel + 1)]
+    lines += [f"CROD,{i + 1},1,{i + 1},{i + 2}" for i in range(nel)]
+    freq = _modes(tmp_path, "\n".join(lines) + "\n", 3)
+    exact = (2 * np.arange(1, 4) - 1) / (4 * length) * np.sqrt(e / rho)
+    np.testing.assert_allclose(freq, exact, rtol=2e-3)
+
+
+def test_celas_and_cmass2_two_dof_system(tmp_path):
+    """Two masses on springs k1 (to ground), k2 (between): closed-form eigenvalues."""
+    k1, k2, m1, m2 = 4.0e4, 1.0e4, 2.0, 1.0
+    text = (f"GRID,1,,0.,0.,0.,,1456\nGRID,2,,1.,0.,0.,,1456\nPELAS,7,{k1}\n"
+            f"CELAS1,1,7,1,3\nCELAS2,2,{k2},1,3,2,3\nCELAS2,3,{k1},1,2\nCELAS2,4,{k1},2,2\n"
+            f"CMASS2,10,{m1},1,3\nCMASS2,11,{m2},2,3\nCMASS2,12,1.,1,2\nCMASS2,13,1.,2,2\n")
+    freq = _modes(tmp_path, text, 4)
+    kmat = np.array([[k1 + k2, -k2], [-k2, k2]])
+    lam = np.sort(np.linalg.eigvals(np.linalg.solve(np.diag([m1, m2]), kmat)).real)
+    expected = np.sort(np.concatenate([np.sqrt(lam), [np.sqrt(k1), np.sqrt(k1)]])) / (2 * np.pi)
+    np.testing.assert_allclose(freq, expected, rtol=1e-10)
+
+
+def test_cbush_equals_celas_springs(tmp_path):
+    """A CBUSH (CID=0) between coincident grids acts like six CELAS2 springs."""
+    ks = [1.0e5, 2.0e5, 3.0e5, 4.0e3, 5.0e3, 6.0e3]
+    base = ("GRID,1,,0.,0.,0.\nGRID,2,,0.,0.,0.\nSPC1,1,123456,1\n"
+            "CONM2,9,2,,3.0\n,0.5,0.,0.7,0.,0.,0.9\n")
+    bush = base + "CBUSH,5,6,1,2,,,,0\nPBUSH,6,K," + ",".join(map(str, ks)) + "\n"
+    springs = base + "".join(f"CELAS2,{10 + c},{k},1,{c + 1},2,{c + 1}\n" for c, k in enumerate(ks))
+    np.testing.assert_allclose(_modes(tmp_path, bush, 6, "b.bdf"),
+                               _modes(tmp_path, springs, 6, "s.bdf"), rtol=1e-10)
+
+
+def test_cbar_offsets_equal_rigid_links(tmp_path):
+    """CBAR with end offsets WA/WB == CBAR between offset grids tied by RBAR to the grids."""
+    common = ("MAT1,1,7.e10,,0.3,2700.\nPBAR,1,1,0.01,1.e-5,2.e-5,3.e-5\nPARAM,COUPMASS,1\n"
+              "GRID,1,,0.,0.,0.\nGRID,2,,2.,0.,0.\nSPC1,1,123456,1\nCONM2,9,2,,5.\n,0.1,,0.2,,,0.3\n")
+    offset = common + "CBAR,1,1,1,2,0.,1.,0.\n,,,0.,0.1,0.2,0.,0.1,0.2\n"
+    linked = common + ("GRID,11,,0.,0.1,0.2\nGRID,12,,2.,0.1,0.2\nRBAR,21,1,11,123456,,,123456\n"
+                       "RBAR,22,2,12,123456,,,123456\nCBAR,1,1,11,12,0.,1.,0.\n")
+    np.testing.assert_allclose(_modes(tmp_path, offset, 8, "o.bdf"),
+                               _modes(tmp_path, linked, 8, "l.bdf"), rtol=1e-10)
+
+
+def test_pbarl_rod_section_equals_pbar(tmp_path):
+    """PBARL ROD of radius r: A = pi r^2, I = pi r^4 / 4, J = pi r^4 / 2."""
+    r = 0.05
+    area, inertia = np.pi * r ** 2, np.pi * r ** 4 / 4
+    common = ("MAT1,1,7.e10,,0.3,2700.\nSPC1,1,123456,1\nPARAM,COUPMASS,1\n" +
+              "".join(f"GRID,{i + 1},,{0.25 * i!r},0.,0.\n" for i in range(9)) +
+              "".join(f"CBAR,{i + 1},1,{i + 1},{i + 2},0.,1.,0.\n" for i in range(8)))
+    pbarl = common + f"PBARL,1,1,,ROD\n,{r}\n"
+    pbar = common + f"PBAR,1,1,{area!r},{inertia!r},{inertia!r},{2 * inertia!r}\n"
+    np.testing.assert_allclose(_modes(tmp_path, pbarl, 6, "l.bdf"),
+                               _modes(tmp_path, pbar, 6, "p.bdf"), rtol=1e-8)
+
+
+@pytest.mark.parametrize("pins", ["6", "456"])
+def test_pinned_end_cantilever_equals_shorter_hinge_free_model(tmp_path, pins):
+    """A pin flag releasing bending at the tip of the last element leaves the tip rotation free:
+    the first frequency drops below the clamped-tip-rotation value but the model stays stable."""
+    text = ("MAT1,1,7.e10,,0.3,2700.\nPBAR,1,1,0.01,1.e-5,1.e-5,2.e-5\nSPC1,1,123456,1\n" +
+            "".join(f"GRID,{i + 1},,{0.5 * i!r},0.,0.\n" for i in range(5)) +
+            "".join(f"CBAR,{i + 1},1,{i + 1},{i + 2},0.,1.,0.\n" for i in range(3)) +
+            f"CBAR,4,1,4,5,0.,1.,0.\n,,{pins}\nCONM2,9,5,,1.\n,1.e-3,,1.e-3,,,1.e-3\n")
+    freq = _modes(tmp_path, text, 4)
+    assert np.all(np.isfinite(freq)) and freq[0] > 0
