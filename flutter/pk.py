@@ -23,6 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import xarray as xr
+from scipy.linalg.lapack import zgetrf, zgetrs
 
 from flutter.crossings import G_TOL, Crossing, find_brackets, illinois, interpolate_zero
 from flutter.gafinterp import GafInterpolator
@@ -42,6 +43,7 @@ class RootState:
     w: np.ndarray          # (R, n) left eigenvectors (unit 2-norm)
     converged: np.ndarray  # (R,) bool
     outside: np.ndarray    # (R,) bool, k outside the tabulated range
+    slope: np.ndarray | None = None  # (R,) dp per unit path length of the last step (predictor)
 
 
 class PKSolver:
@@ -69,7 +71,7 @@ class PKSolver:
 
     def __init__(self, system: ModalSystem, gaf, *, refc: float | None = None,
                  interpolation: str = "linear", tol: float = 1e-9, max_iter: int = 60,
-                 mac_min: float = 0.7, max_depth: int = 10):
+                 mac_min: float = 0.7, max_depth: int = 8):
         self.system = system
         self.gaf = gaf
         if refc is None:
@@ -139,49 +141,46 @@ class PKSolver:
         return C, Kt, outside
 
     # ----------------------------------------------------------------------------- kernels
-    def correct(self, state: RootState, V: float, rho: float, mach: float) -> RootState:
+    def correct(self, state: RootState, V: float, rho: float, mach: float,
+                p_start: np.ndarray | None = None) -> RootState:
         """Converge every root at (V, rho, M) from ``state`` by two-sided Rayleigh-quotient iteration.
 
         The k of each root follows its current eigenvalue at every step, so the fixed point is the
-        matched p-k root (k = b Im(p) / V).
+        matched p-k root (k = b Im(p) / V). ``p_start`` (predicted eigenvalues) replaces
+        ``state.p`` as the first guess.
         """
         M = self.system.mass
-        p, u, w = state.p.copy(), state.u.copy(), state.w.copy()
+        p = (state.p if p_start is None else p_start).copy()
+        u, w = state.u.copy(), state.w.copy()
         R = p.size
         done = np.zeros(R, dtype=bool)
         outside = np.zeros(R, dtype=bool)
-        eye = np.eye(M.shape[0])
         for it in range(self.max_iter):
-            act = ~done
+            act = np.flatnonzero(~done)
             k = self.b * np.abs(p[act].imag) / V
             C, Kt, out = self.pencil(k, V, rho, mach)
             outside[act] = out
-            ua, wa, pa = u[act], w[act].conj(), p[act]
-            a2 = np.einsum("ri,ij,rj->r", wa, M, ua)
-            a1 = np.einsum("ri,rij,rj->r", wa, C, ua)
-            a0 = np.einsum("ri,rij,rj->r", wa, Kt, ua)
+            ua, wa, pa = u[act], w[act], p[act]
+            wc = wa.conj()
+            a2 = np.einsum("ri,ij,rj->r", wc, M, ua)
+            a1 = np.einsum("ri,rij,rj->r", wc, C, ua)
+            a0 = np.einsum("ri,rij,rj->r", wc, Kt, ua)
             disc = np.sqrt(a1 * a1 - 4 * a2 * a0 + 0j)
             r1, r2 = (-a1 + disc) / (2 * a2), (-a1 - disc) / (2 * a2)
-            pn = np.where(np.abs(r1 - pa) <= np.abs(r2 - pa), r1, r2)
+            pn = np.where(np.abs(r1 - pa) <= np.abs(r2 - pa), r1, r2)  # Rayleigh functional root
             T = M[None] * (pn * pn)[:, None, None] + C * pn[:, None, None] + Kt
             Tp = 2 * M[None] * pn[:, None, None] + C
-            small = 1e-14 * (np.abs(T).max(axis=(1, 2)) + 1e-300)
-            Ts = T + small[:, None, None] * eye
-            un = np.linalg.solve(Ts, np.einsum("rij,rj->ri", Tp, ua)[..., None])[..., 0]
-            wn = np.linalg.solve(np.conj(np.swapaxes(Ts, 1, 2)),
-                                 np.einsum("rji,rj->ri", Tp.conj(), w[act])[..., None])[..., 0]
-            un /= np.linalg.norm(un, axis=1, keepdims=True)
-            wn /= np.linalg.norm(wn, axis=1, keepdims=True)
+            un, wn = inverse_iteration(T, np.einsum("rij,rj->ri", Tp, ua),
+                                       np.einsum("rji,rj->ri", Tp.conj(), wa))
             flip = pn.imag < 0
             pn = np.where(flip, pn.conj(), pn)
             un[flip] = un[flip].conj()
             wn[flip] = wn[flip].conj()
             dp = np.abs(pn - pa)
-            idx = np.flatnonzero(act)
-            p[idx], u[idx], w[idx] = pn, un, wn
+            p[act], u[act], w[act] = pn, un, wn
             conv = dp <= self.tol * np.maximum(np.abs(pn), self.scale)
             if it > 0:
-                done[idx[conv]] = True
+                done[act[conv]] = True
             if done.all():
                 break
         return RootState(p, u, w, done, outside)
@@ -193,29 +192,48 @@ class PKSolver:
         p = 1j * self.omega0.astype(complex)
         state = RootState(p, phi.T.astype(complex), phi.T.astype(complex),
                           np.ones(n, dtype=bool), np.zeros(n, dtype=bool))
-        return self.advance(state, (1e-4 * V, rho, mach), (V, rho, mach))
+        state = self.correct(state, 1e-3 * V, rho, mach)
+        return self.advance(state, (1e-3 * V, rho, mach), (V, rho, mach))
 
     def advance(self, state: RootState, frm: tuple, to: tuple, depth: int = 0) -> RootState:
-        """Continue all roots from flight point ``frm`` to ``to`` (V, rho, M), bisecting bad steps."""
-        new = self.correct(state, *to)
-        if depth < self.max_depth and not self._step_ok(state, new, strict=depth < 3):
+        """Continue all roots from flight point ``frm`` to ``to`` (V, rho, M), bisecting bad steps.
+
+        Predictor: linear extrapolation of each eigenvalue along the path (slope of the last step).
+        A step is bisected (up to ``max_depth`` times) when a root lands closer to another root's
+        prediction than to its own, loses eigenvector correlation while its eigenvalue jumps, or two
+        roots land on the same eigenpair.
+        """
+        h = _path_length(frm, to)
+        pred = state.p + (state.slope * h if state.slope is not None else 0)
+        pred = np.where(pred.imag < 0, pred.real + 0j, pred)
+        new = self.correct(state, *to, p_start=pred)
+        if depth < self.max_depth and not self._step_ok(state, new, pred, strict=depth < 3):
             mid = tuple(0.5 * (a + b) for a, b in zip(frm, to))
             half = self.advance(state, frm, mid, depth + 1)
             return self.advance(half, mid, to, depth + 1)
+        new.slope = (new.p - state.p) / h if h > 0 else None
         return new
 
-    def _step_ok(self, old: RootState, new: RootState, strict: bool) -> bool:
-        """Accept a step: eigenvectors correlate (MAC), roots distinct, (near the top) converged."""
-        mac = np.abs(np.einsum("ri,ri->r", old.u.conj(), new.u)) ** 2
-        if np.any(mac < self.mac_min) or (strict and not np.all(new.converged | ~old.converged)):
+    def _step_ok(self, old: RootState, new: RootState, pred: np.ndarray, strict: bool) -> bool:
+        """Accept a step by eigenvalue continuity, eigenvector correlation (MAC) and distinctness."""
+        sep = np.abs(pred[:, None] - pred[None, :])
+        np.fill_diagonal(sep, np.inf)
+        near = np.maximum(sep.min(axis=1), self.scale)
+        jump = np.abs(new.p - pred) / near
+        if np.any(jump > 0.5):
             return False
-        # distinct roots: two roots on the same eigenpair means one jumped
+        mac = np.abs(np.einsum("ri,ri->r", old.u.conj(), new.u)) ** 2
+        if np.any((mac < self.mac_min) & (jump > 0.05)):
+            return False
+        if strict and not np.all(new.converged | ~old.converged):
+            return False
         dp = np.abs(new.p[:, None] - new.p[None, :])
         close = dp <= 1e-6 * np.maximum(np.abs(new.p)[:, None], self.scale)
         np.fill_diagonal(close, False)
         if close.any():
-            cross = np.abs(new.u.conj() @ new.u.T) ** 2
-            if np.any(close & (cross > 0.99)):
+            same = close & (np.abs(new.u.conj() @ new.u.T) ** 2 > 0.99)
+            moved = jump > 0.05
+            if np.any(same & (moved[:, None] | moved[None, :])):
                 return False
         return True
 
@@ -228,6 +246,43 @@ class PKSolver:
             g = np.where(real, p.real * 2 * self.b / (np.asarray(V) * LN2),
                          2.0 * p.real / np.where(real, 1.0, p.imag))
         return g
+
+
+def inverse_iteration(T: np.ndarray, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """One right and one left inverse-iteration step per root with a single LU each.
+
+    Solves T_r u_r = x_r and T_r^H w_r = y_r (LAPACK zgetrf / zgetrs, trans='C') and normalises.
+    A singular T_r (an exactly converged root) is shifted by eps * max|T_r| so the null vector is
+    still returned.
+
+    Parameters
+    ----------
+    T : ndarray, shape (R, n, n)
+    x, y : ndarray, shape (R, n)
+
+    Returns
+    -------
+    u, w : ndarray, shape (R, n), unit 2-norm
+    """
+    R, n, _ = T.shape
+    u = np.empty((R, n), dtype=complex)
+    w = np.empty((R, n), dtype=complex)
+    eye = np.eye(n)
+    for r in range(R):
+        lu, piv, info = zgetrf(T[r])
+        if info > 0:
+            lu, piv, info = zgetrf(T[r] + np.finfo(float).eps * np.abs(T[r]).max() * eye)
+        u[r] = zgetrs(lu, piv, x[r])[0]
+        w[r] = zgetrs(lu, piv, y[r], trans=2)[0]
+    u /= np.linalg.norm(u, axis=1, keepdims=True)
+    w /= np.linalg.norm(w, axis=1, keepdims=True)
+    return u, w
+
+
+def _path_length(frm: tuple, to: tuple) -> float:
+    """Length of a step between flight points (relative V and rho changes, absolute Mach change)."""
+    (V0, r0, m0), (V1, r1, m1) = frm, to
+    return float(np.sqrt(((V1 - V0) / V0) ** 2 + ((r1 - r0) / r0) ** 2 + (m1 - m0) ** 2))
 
 
 def check_sweep(velocity: np.ndarray, density: np.ndarray, mach: np.ndarray, sweep: str):
