@@ -270,8 +270,9 @@ def apply_design(model: FEModel, space: DesignSpace, x, *, only=None) -> FEModel
         Apply these variables only (the others keep the model's values).
     """
     keep = set(range(len(space))) if only is None else set(only)
-    values = {ref: v for i, var in enumerate(space.variables) if i in keep
-              for ref, v in field_values(space, x).items() if ref in var.fields}
+    x = np.asarray(x, float)
+    values = {ref: float(x[i] * r) for i, var in enumerate(space.variables) if i in keep
+              for ref, r in zip(var.fields, space.ratios[i])}
     props, mats = dict(model.properties), dict(model.materials)
     mass, inertia = np.array(model.masses.mass), np.array(model.masses.inertia)
     celas = model.elements.get("CELAS")

@@ -250,6 +250,12 @@ def mode_shape_derivatives(k, m, lam, phi, dk, dm, dlam, *, n_rigid: int = 0, ri
             out[:, :, j] = np.stack([project(d[i]) for i in range(nvar)])
         return out
     lu = lu if lu is not None else _shifted_factor(k, m, shift, filename)
+    if rows is not None:
+        # adjoint form: rows S F = Z1^T F and rows S M S F = Z2^T F with S = (K - sigma M)^-1
+        # symmetric, Z1 = S rows^T, Z2 = S M Z1: two solves with n_rows right-hand sides in all
+        z1 = lu.solve(np.asarray(rows.T.todense()))
+        z2 = lu.solve(m @ z1)
+        phi_rows = rows @ phi
     for i in range(nvar):
         f0 = -(dk[i] @ phi[:, n_rigid:] - (dm[i] @ phi[:, n_rigid:]) * lam[None, n_rigid:])
         coupling = phi.T @ f0                                              # (m, m_el) phi_k^T F0_j
@@ -259,12 +265,16 @@ def mode_shape_derivatives(k, m, lam, phi, dk, dm, dlam, *, n_rigid: int = 0, ri
         for jj, j in enumerate(elastic):
             coef[j, jj] = -0.5 * phi[:, j] @ (dm[i] @ phi[:, j])
         # 1/(lambda_k - lambda_j) = 1/(lambda_k - s) + (lambda_j - s)/(lambda_k - s)^2 + ... (two terms)
-        s_f = lu.solve(f0)
-        s2_f = lu.solve(m @ s_f)
         inv = 1.0 / (lam - shift)[:, None]
-        residual = (s_f - phi @ (coupling * inv)
-                    + (s2_f - phi @ (coupling * inv ** 2)) * (lam[n_rigid:] - shift)[None, :])
-        out[i, :, n_rigid:] = project(phi @ coef + residual)
+        if rows is None:
+            s_f = lu.solve(f0)
+            s2_f = lu.solve(m @ s_f)
+            basis = phi
+        else:
+            s_f, s2_f, basis = z1.T @ f0, z2.T @ f0, phi_rows
+        residual = (s_f - basis @ (coupling * inv)
+                    + (s2_f - basis @ (coupling * inv ** 2)) * (lam[n_rigid:] - shift)[None, :])
+        out[i, :, n_rigid:] = basis @ coef + residual
     return out
 
 
@@ -283,7 +293,9 @@ def orient(phi, reference=None) -> np.ndarray:
 
 def _shifted_factor(k, m, shift, filename):
     try:
-        return spla.splu((k - shift * m).tocsc(), permc_spec="MMD_AT_PLUS_A")
+        # positive definite: no pivoting, symmetric ordering (as structures.modal)
+        return spla.splu((k - shift * m).tocsc(), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
+                         options={"SymmetricMode": True})
     except RuntimeError:
         raise SolverError(card_message("K - sigma M is singular (a massless mechanism).",
                                        filename=filename, fix="see structures.modal: constrain or "

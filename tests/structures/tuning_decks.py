@@ -139,18 +139,43 @@ def write_aircraft_deck(path, *, n_span: int = 8, n_chord: int = 2, n_fus: int =
     return {"path": path, "grids": {k: np.array(v) for k, v in groups.items()}, "n_grids": gid[0]}
 
 
+def _spread(items):
+    """Items reordered so that every prefix is spread over the list (van der Corput order)."""
+    n = len(items)
+    if n == 0:
+        return []
+    key = []
+    for i in range(n):
+        x, f, k = 0.0, 0.5, i + 1
+        while k:
+            x += f * (k & 1)
+            k >>= 1
+            f /= 2
+        key.append(x)
+    return [items[i] for i in np.argsort(key, kind="stable")]
+
+
 def sensor_dofs(groups, n: int = 120):
-    """(grid, component) of up to ``n`` measured DOFs, by a fixed priority: z of the wing skin
-    edges and spar, x/y/z of the fuselage, y of the spar, tail y/z, engines."""
+    """(grid, component) of ``n`` measured DOFs, taken in turn from the sensor families (z of the
+    wing skin and spar, x/y/z of the fuselage, y/z of the tail, x/y/z of the engines, y and x of
+    the spar, y of the skin), each family in an order that spreads its sensors along it."""
+    wing = np.concatenate([groups["skin"], groups["spar"]])
+    families = [[(g, 3) for g in wing],
+                [(g, c) for g in groups["fuselage"] for c in (1, 2, 3)],
+                [(g, c) for g in groups["tail"] for c in (2, 3)],
+                [(g, c) for g in groups["engine"] for c in (1, 2, 3)],
+                [(g, 2) for g in groups["spar"]], [(g, 1) for g in groups["spar"]],
+                [(g, 2) for g in groups["skin"]]]
+    queues = [_spread(f) for f in families]
     picks = []
-    picks += [(g, 3) for g in np.concatenate([groups["skin"], groups["spar"]])]
-    picks += [(g, c) for g in groups["fuselage"] for c in (1, 2, 3)]
-    picks += [(g, c) for g in groups["tail"] for c in (2, 3)]
-    picks += [(g, c) for g in groups["engine"] for c in (1, 2, 3)]
-    picks += [(g, 2) for g in groups["spar"]]
-    picks += [(g, 1) for g in groups["spar"]]
-    picks = picks[:n]
-    return np.array([p[0] for p in picks]), np.array([p[1] for p in picks])
+    while len(picks) < n and any(queues):
+        for q in queues:
+            if q and len(picks) < n:
+                picks.append(q.pop(0))
+    if len(picks) < n:
+        raise ValueError(f"the model has only {len(picks)} sensor DOFs; {n} were asked for")
+    order = np.lexsort((np.array([p[1] for p in picks]), np.array([p[0] for p in picks])))
+    return np.array([picks[i][0] for i in order]), np.array([picks[i][1] for i in order])
 
 
 def write_cantilever_deck(path, *, ratio: float = 1.0, coupling: float = 0.42, n_elem: int = 10):

@@ -1,0 +1,115 @@
+"""Tuning benchmark: 24 design variables, two configurations of a ~20,000-DOF model, 30 modes.
+
+The model is the aircraft-like beam/shell deck of ``tests/structures/tuning_decks.py`` refined to
+``--span`` stations per wing and ``--chord`` skin elements per station (defaults: ~3,300 grids,
+~19,800 DOFs); the "full" configuration adds fuel CONM2s along the spars. GVT data: 14 elastic
+modes of a perturbed truth at 120 DOFs. Objective: every frequency error and cross-orthogonality
+off-diagonal of both configurations (2 x (14 + 182) indices), SLSQP.
+
+Figures (``key: value`` lines): setup seconds, seconds per evaluation without gradients,
+evaluations per second, seconds per evaluation with gradients (per shape method), seconds per
+SLSQP iteration (with gradients), peak resident memory.
+
+Usage: ``PYTHONPATH=. python benchmarks/tuning.py [--span 180 --chord 8 --iterations 3]``
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import resource
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "structures"))
+from tuning_decks import synthetic_gvt, write_aircraft_deck  # noqa: E402
+
+from structures.bdf import read_model  # noqa: E402
+from structures.design import DesignVariable  # noqa: E402
+from structures.modal import compute_modes  # noqa: E402
+from structures.tuning import Evaluator, TuningConfiguration, TuningProblem, tune  # noqa: E402
+
+
+def variables():
+    """24 design variables (38 fields), left/right linked."""
+    both = lambda card, a, b, f: [(card, a, f), (card, b, f)]  # noqa: E731
+    out = [DesignVariable(f"fus_{f}", [("PBAR", 1, f)]) for f in ("A", "I1", "I2", "J")]
+    out += [DesignVariable(f"in_{f}", both("PBAR", 11, 12, f)) for f in ("I1", "I2", "J")]
+    out += [DesignVariable(f"out_{f}", both("PBAR", 13, 14, f)) for f in ("I1", "I2", "J")]
+    out += [DesignVariable(f"tail_{f}", [("PBAR", 31, f)]) for f in ("I1", "I2", "J")]
+    out += [DesignVariable(f"fin_{f}", [("PBAR", 32, f)]) for f in ("I1", "I2")]
+    out += [DesignVariable("skin_T", both("PSHELL", 21, 22, "T")),
+            DesignVariable("skin_E", [("MAT1", 2, "E")]), DesignVariable("bar_E", [("MAT1", 1, "E")]),
+            DesignVariable("engine_M", both("CONM2", 900, 901, "M")),
+            DesignVariable("engine_I22", both("CONM2", 900, 901, "I22")),
+            DesignVariable("pylon_K", [("PELAS", 41, "K")]),
+            DesignVariable("pylon_rot", both("CELAS2", 805, 808, "K")),
+            DesignVariable("payload", [("CONM2", 910, "M")]),
+            DesignVariable("fuel", [("CONM2", 950, "M")])]
+    return out
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--span", type=int, default=180)
+    parser.add_argument("--chord", type=int, default=8)
+    parser.add_argument("--iterations", type=int, default=3)
+    parser.add_argument("--methods", default="modal,nelson")
+    args = parser.parse_args(argv)
+    print(f"blas_threads: {os.environ.get('OPENBLAS_NUM_THREADS', 'default')}")
+    tmp = Path(tempfile.mkdtemp(prefix="tuning_bench_"))
+    t0 = time.perf_counter()
+    var = variables()
+    factors = {(r.card, r.card_id, r.field): 1.0 + 0.1 * np.sin(3.0 * i + 1.0)
+               for i, v in enumerate(var) for r in v.fields}
+    configs = []
+    for name, fuel in (("empty", 0.0), ("full", 300.0)):
+        info = write_aircraft_deck(tmp / f"{name}.bdf", n_span=args.span, n_chord=args.chord,
+                                   n_fus=60, fuel=fuel)
+        truth = read_model(write_aircraft_deck(tmp / f"{name}_truth.bdf", n_span=args.span,
+                                               n_chord=args.chord, n_fus=60, fuel=fuel,
+                                               changes=factors)["path"])
+        gvt = synthetic_gvt(compute_modes(truth, 30), info["grids"], list(range(7, 21)))
+        configs.append(TuningConfiguration(name, read_model(info["path"]), gvt, nmodes=30))
+    print(f"grids: {info['n_grids']}")
+    print(f"dofs: {6 * info['n_grids']}")
+    print(f"design_variables: {len(var)}")
+    print(f"truth_and_gvt_seconds: {time.perf_counter() - t0:.2f}")
+    for method in args.methods.split(","):
+        problem = TuningProblem(tuple(configs), tuple(var),
+                                objective=(("*:frequency:*", 1.0), ("*:cross_orthogonality:*", 1.0)),
+                                shape_method=method)
+        t0 = time.perf_counter()
+        ev = Evaluator(problem)
+        print(f"[{method}] setup_seconds: {time.perf_counter() - t0:.2f}")
+        print(f"[{method}] a_set_dofs: {[c.sub.system.K.shape[0] for c in ev.configs]}")
+        t0 = time.perf_counter()
+        n_eval = 3
+        for k in range(n_eval):
+            ev.evaluate(ev.space.x0 * (1.0 + 0.01 * (k + 1)))
+        per_eval = (time.perf_counter() - t0) / n_eval
+        print(f"[{method}] seconds_per_evaluation: {per_eval:.2f}")
+        print(f"[{method}] evaluations_per_second: {1.0 / per_eval:.3f}")
+        t0 = time.perf_counter()
+        ev.evaluate(ev.space.x0 * 1.005, True)
+        print(f"[{method}] seconds_per_evaluation_with_gradients: {time.perf_counter() - t0:.2f}")
+        stamps = []
+        t0 = time.perf_counter()
+        result = tune(problem, maxiter=args.iterations, evaluator=ev,
+                      progress=lambda it, obj, viol, sec: stamps.append((it, obj, sec)))
+        total = time.perf_counter() - t0
+        for it, obj, sec in stamps:
+            print(f"[{method}] iteration {it}: objective {obj:.4e} at {sec:.1f} s")
+        print(f"[{method}] slsqp_iterations: {len(stamps)}")
+        print(f"[{method}] evaluations: {result.history.sizes['iteration']}")
+        print(f"[{method}] seconds_per_iteration: {total / max(len(stamps), 1):.2f}")
+    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+    print(f"peak_rss_mb: {peak:.0f}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
