@@ -130,28 +130,35 @@ def beam_local_mass(length, mass_per_length, polar_inertia_per_length, lumped):
     return out
 
 
-def condense_pins(k, pins):
-    """Statically condense released end DOFs (pin flags) out of local stiffness matrices.
+def condense_pins(k, m, pins):
+    """Condense released end DOFs (pin flags) out of local stiffness and mass matrices.
+
+    The released DOFs follow the kept ones statically, u_r = -K_rr^-1 K_rk u_k, so with
+    T = [I; -K_rr^-1 K_rk] the element matrices become T^T K T (exact static condensation) and
+    T^T M T (the mass consistent with that motion; lumped translational mass is unchanged).
 
     Parameters
     ----------
-    k : (ne, 12, 12) local stiffness (not modified).
+    k, m : (ne, 12, 12) local stiffness and mass in element axes (not modified).
     pins : (ne,) int bit masks; bits 0-5 release end-A components 1-6, bits 6-11 end-B.
 
     Returns
     -------
-    (ne, 12, 12) condensed stiffness with zero rows/columns on the released DOFs.
+    k_c, m_c : (ne, 12, 12) with zero rows/columns on the released DOFs.
     """
-    out = np.array(k, copy=True)
+    k_out = np.array(k, copy=True)
+    m_out = np.array(m, copy=True)
     for e in np.flatnonzero(pins):
         rel = [i for i in range(12) if pins[e] >> i & 1]
         keep = [i for i in range(12) if i not in rel]
-        krr = out[e][np.ix_(rel, rel)]
-        kkr = out[e][np.ix_(keep, rel)]
-        cond = out[e][np.ix_(keep, keep)] - kkr @ np.linalg.solve(krr, kkr.T)
-        out[e] = 0.0
-        out[e][np.ix_(keep, keep)] = cond
-    return out
+        t = np.zeros((12, len(keep)))
+        t[keep, np.arange(len(keep))] = 1.0
+        t[rel, :] = -np.linalg.solve(k[e][np.ix_(rel, rel)], k[e][np.ix_(rel, keep)])
+        k_out[e] = 0.0
+        m_out[e] = 0.0
+        k_out[e][np.ix_(keep, keep)] = t.T @ k[e] @ t
+        m_out[e][np.ix_(keep, keep)] = t.T @ m[e] @ t
+    return k_out, m_out
 
 
 def to_grids(local, axes, offset_a, offset_b):
@@ -208,6 +215,9 @@ def beam_matrices(x_a, x_b, v, offset_a, offset_b, e, g, area, i1, i2, i12, j, n
     principal_axes = np.stack([axes[:, 0], c[:, None] * y + s[:, None] * z,
                                -s[:, None] * y + c[:, None] * z], axis=1)
     k_local = beam_local_stiffness(length, e, g, area, i1p, i2p, j, k1, k2)
+    polar = rho * (np.asarray(i1) + np.asarray(i2)) if torsional_inertia else np.zeros(len(length))
+    # The consistent mass is the same in element and principal axes (equal bending blocks).
+    m_local = beam_local_mass(length, rho * area + nsm, polar, lumped)
     if pins is not None and np.any(pins):
         # Pin flags are given in the element (not principal) axes: condense there.
         rot = np.zeros((len(length), 12, 12))
@@ -215,10 +225,8 @@ def beam_matrices(x_a, x_b, v, offset_a, offset_b, e, g, area, i1, i2, i12, j, n
         for blk in range(4):
             rot[:, 3 * blk:3 * blk + 3, 3 * blk:3 * blk + 3] = r
         k_elem = np.einsum("eji,ejk,ekl->eil", rot, k_local, rot)
-        k_local = condense_pins(k_elem, np.asarray(pins))
+        k_local, m_local = condense_pins(k_elem, m_local, np.asarray(pins))
         principal_axes = axes
-    polar = rho * (np.asarray(i1) + np.asarray(i2)) if torsional_inertia else np.zeros(len(length))
-    m_local = beam_local_mass(length, rho * area + nsm, polar, lumped)
     k = to_grids(k_local, principal_axes, offset_a, offset_b)
     m = to_grids(m_local, principal_axes, offset_a, offset_b)
     return k, m

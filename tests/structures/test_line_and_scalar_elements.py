@@ -74,13 +74,20 @@ def test_pbarl_rod_section_equals_pbar(tmp_path):
                                _modes(tmp_path, pbar, 6, "p.bdf"), rtol=1e-8)
 
 
-@pytest.mark.parametrize("pins", ["6", "456"])
-def test_pinned_end_cantilever_equals_shorter_hinge_free_model(tmp_path, pins):
-    """A pin flag releasing bending at the tip of the last element leaves the tip rotation free:
-    the first frequency drops below the clamped-tip-rotation value but the model stays stable."""
-    text = ("MAT1,1,7.e10,,0.3,2700.\nPBAR,1,1,0.01,1.e-5,1.e-5,2.e-5\nSPC1,1,123456,1\n" +
-            "".join(f"GRID,{i + 1},,{0.5 * i!r},0.,0.\n" for i in range(5)) +
-            "".join(f"CBAR,{i + 1},1,{i + 1},{i + 2},0.,1.,0.\n" for i in range(3)) +
-            f"CBAR,4,1,4,5,0.,1.,0.\n,,{pins}\nCONM2,9,5,,1.\n,1.e-3,,1.e-3,,,1.e-3\n")
-    freq = _modes(tmp_path, text, 4)
-    assert np.all(np.isfinite(freq)) and freq[0] > 0
+def test_pin_flag_equals_rbe2_hinge(tmp_path):
+    """PA = 5 on the second segment is the same as a coincident grid tied by RBE2 with CM = 12346
+    (a hinge about y); the tip is propped in z so the hinged model is stable. Lumped mass: the
+    hinge grid's rotation is then massless, i.e. statically condensed, exactly as the pin flag."""
+    common = ("MAT1,1,7.e10,,0.3,2700.\nPBAR,1,1,0.01,1.e-5,2.e-5,3.e-5\n"
+              "SPC1,1,123456,1\nSPC1,1,3,9\nCONM2,7,5,,2.\n,1.e-3,,1.e-3,,,1.e-3\n" +
+              "".join(f"GRID,{i + 1},,{0.5 * i!r},0.,0.\n" for i in range(8)) +
+              "GRID,9,,4.,0.,0.\n" +
+              "".join(f"CBAR,{i + 1},1,{i + 1},{i + 2},0.,1.,0.\n" for i in range(3)) +
+              "".join(f"CBAR,{i + 1},1,{i + 1},{i + 2},0.,1.,0.\n" for i in range(4, 8)) +
+              "CBAR,9,1,8,9,0.,1.,0.\n")
+    pinned = common + "CBAR,4,1,4,5,0.,1.,0.\n,5\n"
+    hinge = common + "GRID,44,,1.5,0.,0.\nRBE2,50,4,12346,44\nCBAR,4,1,44,5,0.,1.,0.\n"
+    rigid = common + "CBAR,4,1,4,5,0.,1.,0.\n"
+    f_pin = _modes(tmp_path, pinned, 6, "p.bdf")
+    np.testing.assert_allclose(f_pin, _modes(tmp_path, hinge, 6, "h.bdf"), rtol=1e-9)
+    assert np.max(np.abs(f_pin / _modes(tmp_path, rigid, 6, "r.bdf") - 1)) > 0.05
