@@ -409,15 +409,17 @@ def pk_solve(system: ModalSystem, gaf, velocity, *, density, mach, sweep: str = 
     conv = np.array([s.converged & ~s.outside for s in states])
     g = solver.damping(p, V[:, None])
     pts = list(zip(V, rho, M))
-    crossings = []
+    crossings, vectors = [], []
     for r, i in find_brackets(g, g_tol):
         if refine:
             t, s, ok = _refine(solver, states, pts, r, i, g[i, r], g[i + 1, r])
-            pr = s.p[r]
+            pr, ur = s.p[r], s.u[r]
         else:
             t = interpolate_zero(g[i, r], g[i + 1, r])
             pr = p[i, r] + t * (p[i + 1, r] - p[i, r])
+            ur = u[i, r] if t < 0.5 else u[i + 1, r]
             ok = True
+        vectors.append(ur)
         Vc, rc, Mc = (a + t * (b - a) for a, b in zip(pts[i], pts[i + 1]))
         real = abs(pr.imag) <= 1e-9 * max(abs(pr), solver.scale)
         crossings.append(Crossing(root=r + 1, index=i, t=float(t), velocity=float(Vc),
@@ -431,4 +433,4 @@ def pk_solve(system: ModalSystem, gaf, velocity, *, density, mach, sweep: str = 
                     attrs={"interpolation": interpolation, "g_tol": g_tol,
                            "structural_damping": system.structural.kind
                            if not system.structural.is_zero else "none"})
-    return attach_crossings(ds, crossings)
+    return attach_crossings(ds, crossings, np.array(vectors).reshape(len(crossings), system.n))

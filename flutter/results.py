@@ -93,9 +93,22 @@ def vg_dataset(p: np.ndarray, u: np.ndarray, damping: np.ndarray, converged: np.
     return ds
 
 
-def attach_crossings(ds: xr.Dataset, crossings: list[Crossing]) -> xr.Dataset:
-    """Add the crossings of a sweep on a ``crossing`` dimension."""
+def attach_crossings(ds: xr.Dataset, crossings: list[Crossing],
+                     eigenvectors: np.ndarray | None = None) -> xr.Dataset:
+    """Add the crossings of a sweep on a ``crossing`` dimension.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        The sweep Dataset.
+    crossings : list of Crossing
+    eigenvectors : ndarray, shape (ncrossing, nmode), optional
+        Eigenvector of each root at its crossing (stored as ``crossing_eigenvector``).
+    """
     n = len(crossings)
+    if eigenvectors is not None:
+        ds = ds.assign(crossing_eigenvector=(("crossing", "mode"),
+                                             normalise_eigenvectors(eigenvectors)))
     get = lambda name, dtype: np.array([getattr(c, name) for c in crossings], dtype=dtype)  # noqa: E731
     return ds.assign({
         "crossing_root": ("crossing", get("root", int)),
@@ -140,30 +153,42 @@ def stack_cases(sweeps: list[xr.Dataset], labels: list[dict]) -> xr.Dataset:
         flight point of each (case, velocity) (NaN padded when sweeps differ in length).
     """
     npts = max(s.sizes[s.attrs["sweep"]] for s in sweeps)
-    out = []
-    for s in sweeps:
-        dim = s.attrs["sweep"]
-        s2 = s.drop_vars([v for v in s.data_vars if v.startswith("crossing_")])
-        s2 = s2.reset_coords(["velocity", "density", "mach"] if dim == "velocity" else
-                             ["velocity", "mach"])
-        if dim == "density":
-            s2 = s2.reset_index("density").reset_coords("density")
-        else:
-            s2 = s2.reset_index("velocity").reset_coords("velocity")
-        s2 = s2.rename({dim: "point", "velocity": "velocity_value", "density": "density_value",
-                        "mach": "mach_value"})
-        s2 = s2.rename_dims({"point": "velocity"}).reindex(velocity=np.arange(npts))
-        out.append(s2.drop_vars("velocity", errors="ignore"))
-    ds = xr.concat(out, dim="case", combine_attrs="drop_conflicts")
-    ds = ds.assign_coords(velocity=np.arange(npts), case=np.arange(len(sweeps)))
-    ds["converged"] = ds["converged"].fillna(False).astype(bool)
+    nc = len(sweeps)
+    nroot, nmode = sweeps[0].sizes["root"], sweeps[0].sizes["mode"]
+
+    def padded(name, shape, dtype, fill):
+        out = np.full((nc, npts) + shape, fill, dtype=dtype)
+        for c, s in enumerate(sweeps):
+            vals = s[name].transpose(s.attrs["sweep"], ...).values
+            out[c, :vals.shape[0]] = vals
+        return out
+
+    dims3 = ("case", "velocity", "root")
+    ds = xr.Dataset(
+        {name: (dims3, padded(name, (nroot,), dt, fill), sweeps[0][name].attrs)
+         for name, dt, fill in (("damping", float, np.nan), ("frequency", float, np.nan),
+                                ("k", float, np.nan), ("eigenvalue", complex, np.nan),
+                                ("converged", bool, False))},
+        coords={"case": np.arange(nc), "velocity": np.arange(npts),
+                "root": sweeps[0]["root"].values, "mode": sweeps[0]["mode"].values},
+        attrs={"layout": "velocity is the point index of each case's sweep; flight point in "
+                         "velocity_value / density_value / mach_value",
+               "conventions": sweeps[0].attrs.get("conventions", "")},
+    )
+    ds["eigenvector"] = (dims3 + ("mode",), padded("eigenvector", (nroot, nmode), complex, np.nan),
+                         sweeps[0]["eigenvector"].attrs)
+    for name in ("velocity", "density", "mach"):
+        ds[f"{name}_value"] = (("case", "velocity"), padded(name, (), float, np.nan),
+                               sweeps[0][name].attrs)
+    ds["method"] = ("case", np.array([s.attrs.get("method", "") for s in sweeps], dtype=str))
     for key in ("mach", "density", "altitude", "configuration"):
         vals = [lab.get(key) for lab in labels]
         if any(v is not None for v in vals):
-            kind = str if key == "configuration" else float
-            ds = ds.assign_coords({f"case_{key}": ("case", np.array(
-                [kind(v) if v is not None else (np.nan if kind is float else "") for v in vals],
-                dtype=object if kind is str else float))})
+            if key == "configuration":
+                arr = np.array(["" if v is None else str(v) for v in vals], dtype=str)
+            else:
+                arr = np.array([np.nan if v is None else float(v) for v in vals], dtype=float)
+            ds = ds.assign_coords({f"case_{key}": ("case", arr)})
     return ds
 
 
@@ -178,9 +203,6 @@ def write_flutter(out_dir: str | os.PathLike, sweeps: list[xr.Dataset], labels: 
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     ds = stack_cases(sweeps, labels)
-    for name in ("case_configuration",):
-        if name in ds.coords:
-            ds = ds.assign_coords({name: ds[name].astype(str)})
     write_dataset(ds, out_dir / "flutter.nc")
     summary = []
     for c, s in enumerate(sweeps):
