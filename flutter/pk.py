@@ -339,20 +339,33 @@ def warn_out_of_range(states: list[RootState], solver: PKSolver, velocity, mach)
 
 def _refine(solver: PKSolver, states: list[RootState], pts: list[tuple], r: int, i: int,
             g0: float, g1: float) -> tuple[float, RootState, bool]:
-    """Locate the zero of root r's damping between points i and i+1 by Illinois root-finding."""
+    """Locate the zero of root r's damping between points i and i+1 by Illinois root-finding.
+
+    Each evaluation corrects root r alone, started from the linear interpolation of its bracketing
+    eigen-states (the bracket is one accepted continuation step, so the root is unambiguous).
+    """
+    s0, s1 = states[i], states[i + 1]
+    u1 = s1.u[r] * np.exp(-1j * np.angle(np.vdot(s0.u[r], s1.u[r])))
+    w1 = s1.w[r] * np.exp(-1j * np.angle(np.vdot(s0.w[r], s1.w[r])))
     cache = {}
 
     def point(t):
         return tuple(a + t * (b - a) for a, b in zip(pts[i], pts[i + 1]))
 
     def fun(t):
-        s = solver.advance(states[i], pts[i], point(t))
-        cache[t] = s
-        return float(solver.damping(s.p[r:r + 1], point(t)[0])[0])
+        guess = RootState(np.array([s0.p[r] + t * (s1.p[r] - s0.p[r])]),
+                          ((1 - t) * s0.u[r] + t * u1)[None], ((1 - t) * s0.w[r] + t * w1)[None],
+                          np.ones(1, dtype=bool), np.zeros(1, dtype=bool))
+        st = solver.correct(guess, *point(t))
+        cache[t] = st
+        return float(solver.damping(st.p, point(t)[0])[0])
 
     t, ok = illinois(fun, g0, g1)
-    s = cache.get(t) or solver.advance(states[i], pts[i], point(t))
-    return t, s, ok and bool(s.converged[r]) and not bool(s.outside[r])
+    st = cache[t] if t in cache else solver.correct(cache[max(cache)], *point(t))
+    full = RootState(s0.p.copy(), s0.u.copy(), s0.w.copy(), s0.converged.copy(), s0.outside.copy())
+    full.p[r], full.u[r], full.w[r] = st.p[0], st.u[0], st.w[0]
+    full.converged[r], full.outside[r] = st.converged[0], st.outside[0]
+    return t, full, ok and bool(st.converged[0]) and not bool(st.outside[0])
 
 
 def pk_solve(system: ModalSystem, gaf, velocity, *, density, mach, sweep: str = "velocity",
