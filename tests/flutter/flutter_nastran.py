@@ -28,16 +28,21 @@ def f06_modes_used(f06: Path) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 
 def f06_flutter_summaries(f06: Path) -> list[dict]:
-    """Every FLUTTER SUMMARY table: point, mach, density ratio and rows (k, 1/k, V, g, f, Re, Im)."""
+    """Every FLUTTER SUMMARY table of an F06.
+
+    Returns dicts with ``point``, ``mach`` and ``density_ratio`` (PK/KE headers; None for PKNL) and
+    ``rows``: columns (k, 1/k, V, g, f, Re, Im) for PK/K/KE, or (k, 1/k, density, Mach, V, g, f, Re,
+    Im) for PKNL; ``columns`` names them.
+    """
     text = f06.read_text(errors="replace")
     out = []
     for block in text.split("FLUTTER  SUMMARY")[1:]:
-        head = re.search(r"POINT =\s*(\d+)\s+MACH NUMBER =\s*(" + _NUM + r")\s+DENSITY RATIO =\s*("
-                         + _NUM + ")", block)
+        point = int(re.search(r"POINT =\s*(\d+)", block).group(1))
+        head = re.search(r"MACH NUMBER =\s*(" + _NUM + r")\s+DENSITY RATIO =\s*(" + _NUM + ")", block)
         rows = []
         for line in block.splitlines()[5:]:
             parts = line.split()
-            if len(parts) == 7:
+            if len(parts) in (7, 9):
                 try:
                     rows.append([float(x) for x in parts])
                     continue
@@ -45,18 +50,30 @@ def f06_flutter_summaries(f06: Path) -> list[dict]:
                     pass
             if rows:
                 break
-        out.append({"point": int(head.group(1)), "mach": float(head.group(2)),
-                    "density_ratio": float(head.group(3)), "rows": np.array(rows)})
+        rows = np.array(rows)
+        names = (("k", "inv_k", "velocity", "damping", "frequency", "re", "im") if rows.shape[1] == 7
+                 else ("k", "inv_k", "density", "mach", "velocity", "damping", "frequency", "re", "im"))
+        out.append({"point": point, "mach": float(head.group(1)) if head else None,
+                    "density_ratio": float(head.group(2)) if head else None, "rows": rows,
+                    "columns": names})
     return out
 
 
-def first_crossing(rows: np.ndarray, g_tol: float = 1e-6) -> tuple[float, float] | None:
-    """Linear interpolation of an F06 table's first g crossing (velocity, frequency)."""
-    g, V, f = rows[:, 3], rows[:, 2], rows[:, 4]
+def column(summary: dict, name: str) -> np.ndarray:
+    """One named column of a parsed FLUTTER SUMMARY table."""
+    return summary["rows"][:, summary["columns"].index(name)]
+
+
+def first_crossing(summary: dict, along: str = "velocity", g_tol: float = 1e-6) -> dict | None:
+    """Linear interpolation of a table's first g crossing from below 0 to above ``g_tol``, taken in
+    table order; returns the interpolated velocity, frequency (and density for PKNL)."""
+    g = column(summary, "damping")
     for i in range(len(g) - 1):
         if g[i] < 0 and g[i + 1] > g_tol:
             t = g[i] / (g[i] - g[i + 1])
-            return V[i] + t * (V[i + 1] - V[i]), f[i] + t * (f[i + 1] - f[i])
+            return {name: column(summary, name)[i] + t * (column(summary, name)[i + 1]
+                                                          - column(summary, name)[i])
+                    for name in ("velocity", "frequency", "density") if name in summary["columns"]}
     return None
 
 

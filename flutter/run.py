@@ -1,0 +1,238 @@
+"""modes -> GAFs -> flutter for a Nastran deck: the library behind ``pipeline flutter``.
+
+The deck's FLUTTER / FLFACT / MKAERO1 cards (read with pyNastran) are mapped to our solvers:
+PK -> :func:`flutter.pk.pk_solve` (velocity sweep for every density x Mach), PKNL -> one matched
+density sweep (aligned density / Mach / velocity lists), K and KE -> :func:`flutter.kmethod.k_solve`
+over the FLFACT reduced frequencies. FLFACT densities are ratios to AERO RHOREF (1.0 without AERO),
+negative FLFACT velocities (Nastran's "print eigenvectors" flag) are taken by magnitude. SDAMP in the
+case control selects a TABDMP1 (TYPE G, CRIT or Q), applied as Nastran modal damping; PARAM LMODES
+limits the number of modes.
+"""
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import xarray as xr
+
+from flutter.kmethod import k_solve
+from flutter.pk import pk_solve
+from flutter.results import crossings_of, write_flutter
+from flutter.system import ModalSystem, StructuralDamping
+from structures.errors import InputError, UnsupportedCardError, card_message
+from structures.netcdf import write_dataset
+
+METHODS = {"PK": "pk", "PKNL": "pknl", "K": "k", "KE": "k"}
+
+
+@dataclass(frozen=True)
+class FlutterRequest:
+    """One FLUTTER card with its FLFACT values (model units; densities absolute)."""
+
+    sid: int
+    method: str
+    density: tuple
+    mach: tuple
+    values: tuple          # velocities (PK, PKNL) or reduced frequencies (K, KE)
+    sdamp: int | None
+    filename: str
+
+    def __post_init__(self):
+        if self.method not in METHODS:
+            raise UnsupportedCardError(card_message(
+                f"flutter method {self.method!r} is not supported.", card="FLUTTER",
+                card_id=self.sid, filename=self.filename, fix=f"use one of {sorted(METHODS)}."))
+        if self.method == "PKNL" and not (len(self.density) == len(self.mach) == len(self.values)):
+            raise InputError(card_message(
+                f"PKNL needs FLFACT density, Mach and velocity lists of equal length (got "
+                f"{len(self.density)}, {len(self.mach)}, {len(self.values)}).", card="FLUTTER",
+                card_id=self.sid, filename=self.filename, fix="give one value per flight point."))
+
+
+def _param(bdf, name):
+    card = bdf.params.get(name)
+    return None if card is None else card.values[0]
+
+
+def read_flutter_requests(bdf, filename: str = "", flutter_ids=None) -> list[FlutterRequest]:
+    """The FLUTTER cards selected by FMETHOD in the case control (all of them if none is selected).
+
+    Parameters
+    ----------
+    bdf : pyNastran BDF
+    filename : str
+        For messages.
+    flutter_ids : list of int, optional
+        FLUTTER card ids to run instead of the case control's FMETHOD selection.
+
+    Returns
+    -------
+    list of FlutterRequest
+    """
+    if not bdf.flutters:
+        raise InputError(card_message("the deck has no FLUTTER card.", card="FLUTTER",
+                                      filename=filename, fix="add FLUTTER/FLFACT cards and FMETHOD."))
+    selected = []
+    cc = bdf.case_control_deck
+    glob_sdamp = None
+    if cc is not None:
+        for sid, sc in sorted(cc.subcases.items()):
+            sdamp = sc.get_parameter("SDAMP")[0] if "SDAMP" in sc.params else None
+            if sid == 0:
+                glob_sdamp = sdamp
+            if "FMETHOD" in sc.params:
+                selected.append((int(sc.get_parameter("FMETHOD")[0]), sdamp or glob_sdamp))
+    if flutter_ids is not None:
+        selected = [(int(sid), glob_sdamp) for sid in flutter_ids]
+    elif not selected:
+        selected = [(sid, None) for sid in sorted(bdf.flutters)]
+    rhoref = float(bdf.aero.rho_ref) if bdf.aero is not None else 1.0
+    out = []
+    for sid, sdamp in selected:
+        if sid not in bdf.flutters:
+            raise InputError(card_message(f"FMETHOD selects FLUTTER {sid}, which is not defined.",
+                                          card="FLUTTER", card_id=sid, filename=filename,
+                                          fix="add the FLUTTER card or correct FMETHOD."))
+        fl = bdf.flutters[sid]
+        lists = []
+        for what, fid in (("density", fl.density), ("Mach", fl.mach),
+                          ("velocity/k", fl.reduced_freq_velocity)):
+            fid = fid if isinstance(fid, int) else fid.sid
+            if fid not in bdf.flfacts:
+                raise InputError(card_message(f"FLUTTER {sid} refers to FLFACT {fid} ({what}), "
+                                              "which is not defined.", card="FLFACT", card_id=fid,
+                                              filename=filename, fix="add the FLFACT card."))
+            lists.append(np.asarray(bdf.flfacts[fid].factors, dtype=float))
+        dens, mach, vals = lists
+        out.append(FlutterRequest(sid=sid, method=fl.method, density=tuple(dens * rhoref),
+                                  mach=tuple(mach), values=tuple(np.abs(vals)),
+                                  sdamp=None if sdamp is None else int(sdamp), filename=filename))
+    return out
+
+
+def structural_damping(bdf, sdamp: int | None, filename: str = "") -> StructuralDamping:
+    """TABDMP1 ``sdamp`` as modal structural damping in g units (TYPE G, CRIT: g = 2 zeta, Q: 1/Q)."""
+    if sdamp is None:
+        return StructuralDamping()
+    if sdamp not in bdf.tables_sdamping:
+        raise InputError(card_message(f"SDAMP selects TABDMP1 {sdamp}, which is not defined.",
+                                      card="TABDMP1", card_id=sdamp, filename=filename,
+                                      fix="add the TABDMP1 card or correct SDAMP."))
+    tab = bdf.tables_sdamping[sdamp]
+    y = np.asarray(tab.y, dtype=float)
+    kind = str(getattr(tab, "Type", "G")).upper()
+    g = {"G": y, "CRIT": 2.0 * y, "Q": 1.0 / np.where(y == 0, np.inf, y)}.get(kind)
+    if g is None:
+        raise UnsupportedCardError(card_message(f"TABDMP1 TYPE {kind} is not supported.",
+                                                card="TABDMP1", card_id=sdamp, filename=filename,
+                                                fix="use TYPE G, CRIT or Q."))
+    return StructuralDamping(frequency=tuple(np.asarray(tab.x, dtype=float)), table_g=tuple(g),
+                             kind="viscous")
+
+
+def modal_system(modes: xr.Dataset, structural: StructuralDamping) -> ModalSystem:
+    """Diagonal M_hh, K_hh of a modes Dataset (generalized mass, frequency in Hz)."""
+    gm = np.asarray(modes["generalized_mass"].values, dtype=float)
+    w = 2 * np.pi * np.maximum(np.asarray(modes["frequency"].values, dtype=float), 0.0)
+    return ModalSystem(np.diag(gm), np.diag(gm * w * w), structural=structural,
+                       modes=tuple(int(m) for m in modes["mode"].values))
+
+
+def solve_request(system: ModalSystem, gaf, req: FlutterRequest) -> list[tuple[dict, xr.Dataset]]:
+    """Run one FLUTTER request; returns (label, result Dataset) per sweep."""
+    out = []
+    if METHODS[req.method] == "pk":
+        V = np.unique(req.values)
+        for rho in req.density:
+            for m in req.mach:
+                ds = pk_solve(system, gaf, V, density=rho, mach=m)
+                out.append(({"mach": m, "density": rho, "configuration": f"FLUTTER {req.sid}"}, ds))
+    elif METHODS[req.method] == "pknl":
+        rho, mach, V = (np.asarray(x) for x in (req.density, req.mach, req.values))
+        order = np.argsort(rho, kind="stable")
+        ds = pk_solve(system, gaf, V[order], density=rho[order], mach=mach[order], sweep="density")
+        out.append(({"mach": float(mach[0]), "configuration": f"FLUTTER {req.sid}"}, ds))
+    else:
+        for rho in req.density:
+            for m in req.mach:
+                ds = k_solve(system, gaf, np.unique(req.values), density=rho, mach=m)
+                out.append(({"mach": m, "density": rho, "configuration": f"FLUTTER {req.sid}"}, ds))
+    return out
+
+
+def run_flutter(deck: str | os.PathLike, out_dir: str | os.PathLike | None = None, *,
+                modes: xr.Dataset | None = None, gaf: xr.Dataset | None = None,
+                nmodes: int | None = None, kernel: str = "quartic", flutter_ids=None) -> dict:
+    """modes -> GAFs -> flutter for a Nastran deck; writes DIR/flutter.nc and DIR/summary.json.
+
+    Parameters
+    ----------
+    deck : path
+        Nastran deck with structure, aero (CAERO1/SPLINE/AERO/MKAERO1) and FLUTTER/FLFACT cards.
+    out_dir : path, optional
+        Output folder (also gets modes.nc and gaf.nc). Nothing is written when None.
+    modes, gaf : xarray.Dataset, optional
+        Precomputed modes / GAFs (otherwise computed with structures.modal and aero.gaf).
+    nmodes : int, optional
+        Number of modes (default PARAM LMODES, else the deck's EIGR/EIGRL).
+    kernel : str
+        Doublet-lattice kernel integration for the GAFs.
+    flutter_ids : list of int, optional
+        FLUTTER cards to run (default: those selected by FMETHOD).
+
+    Returns
+    -------
+    dict
+        ``summary`` (list of crossings as in summary.json), ``results`` (list of (label, Dataset)),
+        ``modes``, ``gaf``.
+    """
+    from pyNastran.bdf.bdf import read_bdf
+
+    deck = Path(deck)
+    bdf = read_bdf(str(deck), debug=None)
+    requests = read_flutter_requests(bdf, str(deck), flutter_ids)
+    if modes is None:
+        from structures.bdf import read_model
+        from structures.modal import compute_modes
+
+        lmodes = _param(bdf, "LMODES")
+        modes = compute_modes(read_model(deck), nmodes or (int(lmodes) if lmodes else None))
+    if gaf is None:
+        from aero.gaf import generalized_aero_forces
+        from aero.model import read_aero_model
+
+        aero = read_aero_model(deck)
+        # K / KE solve at their FLFACT k values: compute the GAFs there rather than interpolate
+        extra = [v for req in requests if METHODS[req.method] == "k" for v in req.values]
+        ks = np.unique(np.concatenate([aero.ks, np.asarray(extra, dtype=float)]))
+        ks = ks[ks > 0]
+        gaf = generalized_aero_forces(aero, modes, aero.machs, ks, method=kernel)
+    results = []
+    for req in requests:
+        system = modal_system(modes, structural_damping(bdf, req.sdamp, str(deck)))
+        results += solve_request(system, gaf, req)
+    pk_like = [(lab, ds) for lab, ds in results if "sweep" in ds.attrs]
+    summary = []
+    for lab, ds in results:
+        if "sweep" in ds.attrs:
+            summary += crossings_of(ds)
+        else:
+            summary += [{"mach": lab["mach"], "density": lab["density"],
+                         "velocity": float(ds.crossing_velocity[i]),
+                         "frequency": float(ds.crossing_frequency[i]),
+                         "root": int(ds.crossing_root[i]), "kind": "flutter", "method": "K"}
+                        for i in range(ds.sizes.get("crossing", 0))]
+    if out_dir is not None:
+        out_dir = Path(out_dir)
+        if pk_like:
+            write_flutter(out_dir, [ds for _, ds in pk_like], [lab for lab, _ in pk_like])
+        for n, (lab, ds) in enumerate(r for r in results if "sweep" not in r[1].attrs):
+            write_dataset(ds, out_dir / f"flutter_k_{n + 1}.nc")
+        write_dataset(modes, out_dir / "modes.nc")
+        write_dataset(gaf, out_dir / "gaf.nc")
+        if not pk_like:
+            import json
+            (out_dir / "summary.json").write_text(json.dumps(summary, indent=2))
+    return {"summary": summary, "results": results, "modes": modes, "gaf": gaf}
