@@ -65,14 +65,17 @@ def column(summary: dict, name: str) -> np.ndarray:
 
 
 def first_crossing(summary: dict, along: str = "velocity", g_tol: float = 1e-6) -> dict | None:
-    """Linear interpolation of a table's first g crossing from below 0 to above ``g_tol``, taken in
-    table order; returns the interpolated velocity, frequency (and density for PKNL)."""
-    g = column(summary, "damping")
+    """Linear interpolation of a table's first g crossing from below 0 to above ``g_tol`` along
+    increasing velocity (PK, KE) or density (PKNL); returns the interpolated velocity, frequency
+    (and density for PKNL)."""
+    key = "density" if "density" in summary["columns"] else along
+    order = np.argsort(column(summary, key), kind="stable")
+    g = column(summary, "damping")[order]
     for i in range(len(g) - 1):
         if g[i] < 0 and g[i + 1] > g_tol:
             t = g[i] / (g[i] - g[i + 1])
-            return {name: column(summary, name)[i] + t * (column(summary, name)[i + 1]
-                                                          - column(summary, name)[i])
+            return {name: column(summary, name)[order][i] + t * (column(summary, name)[order][i + 1]
+                                                                 - column(summary, name)[order][i])
                     for name in ("velocity", "frequency", "density") if name in summary["columns"]}
     return None
 
