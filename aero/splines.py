@@ -153,7 +153,7 @@ def beam_weights(grid_y: np.ndarray, points_xy: np.ndarray, *, dz: float = 0.0, 
     n, m = y.size, p.shape[0]
     slope, twist = dthx >= 0, dthy >= 0
 
-    def G0(r):
+    def G0(r):  # infinite-beam deflection under a unit load, EI = 1 (EI d4Z/dy4 = delta)
         return np.abs(r) ** 3 / 12.0
 
     def G1(r):
@@ -163,7 +163,7 @@ def beam_weights(grid_y: np.ndarray, points_xy: np.ndarray, *, dz: float = 0.0, 
         return np.abs(r) / 2.0
 
     dyy = y[:, None] - y[None, :]
-    if slope:  # rows: Z_i, Z'_i; unknowns P_j, M_j; polynomial a0 + a1 y
+    if slope:  # rows: Z_i, Z'_i; unknowns P_j, M_j; polynomial a0 + a1 y  (H&D bordered system)
         C = np.block([[G0(dyy), -G1(dyy)], [G1(dyy), -G2(dyy)]])
         C += np.diag(np.r_[np.full(n, dz), np.full(n, dthx)])
         B = np.block([[np.ones((n, 1)), y[:, None]], [np.zeros((n, 1)), np.ones((n, 1))]])
