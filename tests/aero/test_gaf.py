@@ -169,7 +169,7 @@ def half_and_full_decks(tmp_path, symxz: int):
             read_aero_model(write_deck(tmp_path / "full.bdf", full, "AERO,0,1.,2.,1.225,0,0")))
 
 
-def synthetic_modes(am, fields) -> "xr.Dataset":
+def synthetic_modes(am, fields):
     """Modes whose T3 is given by functions of the basic (x, y) of every spline grid."""
     xyz = {int(g): p for s in am.splines for g, p in zip(s.grid_ids, s.grid_xyz)}
     gids = np.array(sorted(xyz))
