@@ -78,6 +78,7 @@ class SubAssembly:
         self.m0_rest = rigid_body_mass(self.system.m_basic, self.xyz) - m0_aff
         rb = rigid_body_basis(model, self.system)
         self.rigid = np.asarray(rb[self.system.a_dofs])
+        self.last_phi = None   # modes of the last design, a Lanczos start for the next one
 
     def _sub_matrices(self, sub, x):
         n = self.tr.shape[1]
@@ -320,12 +321,14 @@ class _DenseShifted:
 DENSE_LIMIT = 1200
 
 
-def eigenpairs(k, m, nmodes: int, *, shift: float = DEFAULT_SHIFT, filename: str = ""):
+def eigenpairs(k, m, nmodes: int, *, shift: float = DEFAULT_SHIFT, filename: str = "", v0=None):
     """Lowest eigenpairs of (K, M) on the shifted pencil, with the factorisation kept for reuse.
 
     Small systems (n <= 1200): Cholesky L L^T = K - sigma M and the largest eigenvalues mu of
     L^-1 M L^-T (lambda = sigma + 1/mu), a subset solve. Larger ones: shift-invert Lanczos on a
     sparse LU of K - sigma M (tol 1e-13).
+
+    v0 : (na,), optional Lanczos start vector (e.g. the sum of the previous design's modes)
 
     Returns
     -------
@@ -349,7 +352,7 @@ def eigenpairs(k, m, nmodes: int, *, shift: float = DEFAULT_SHIFT, filename: str
         ncv = min(n, max(2 * nmodes + 1, nmodes + 20))
         try:
             lam, phi = spla.eigsh(k, k=nmodes, M=m, sigma=shift, which="LM", OPinv=op, ncv=ncv,
-                                  tol=1e-13, v0=np.ones(n))
+                                  tol=1e-13, v0=np.ones(n) if v0 is None else v0)
         except spla.ArpackNoConvergence as exc:
             raise SolverError(card_message(f"the eigensolver did not converge ({exc}).",
                                            filename=filename, fix="ask for fewer modes.")) from None
@@ -368,7 +371,10 @@ def model_modes(sub: SubAssembly, x, nmodes: int, *, shift: float = DEFAULT_SHIF
     lu : SuperLU of K - sigma M (reused by the modal method)
     """
     k, m, m0 = sub.matrices(x)
-    lam, phi, lu = eigenpairs(k, m, nmodes, shift=shift, filename=sub.model.filename)
+    start = sub.last_phi
+    v0 = start.sum(axis=1) if start is not None and start.shape[1] == nmodes else None
+    lam, phi, lu = eigenpairs(k, m, nmodes, shift=shift, filename=sub.model.filename, v0=v0)
+    sub.last_phi = phi
     n_rigid = split_rigid(lam, sub.rigid, filename=sub.model.filename)
     phi = orient(phi)
     if n_rigid:

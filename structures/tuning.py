@@ -119,9 +119,17 @@ class _Configuration:
         rows = (cfg.model.grids.index(gvt["grid"].values, card="GVT") * 6
                 + gvt["component"].values.astype(int) - 1)
         self.rows = self.sub.tr[rows]
+        self._last = None
+
+    def _modes(self, x):
+        """Eigenpairs at x, reused when the optimiser asks for the gradient at the same design."""
+        key = np.asarray(x, float).tobytes()
+        if self._last is None or self._last[0] != key:
+            self._last = (key, model_modes(self.sub, x, self.cfg.nmodes))
+        return self._last[1]
 
     def evaluate(self, x, gradient: bool):
-        k, m, m0, lam, phi, n_rigid, lu = model_modes(self.sub, x, self.cfg.nmodes)
+        k, m, m0, lam, phi, n_rigid, lu = self._modes(x)
         phi_m = self.rows @ phi
         if not gradient:
             mass_v, _ = mass_quantities(m0, self.cfg.model.wtmass)
