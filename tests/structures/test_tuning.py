@@ -311,3 +311,22 @@ limit = 0.01
         "[tuning]", "[tuning]\nmethods = 'slsqp'"))
     with pytest.raises(InputError, match="unknown keys \\['methods'\\]"):
         cmd_tune.read_tuning(tmp_path / "bad.toml")
+
+
+def test_report_tables_follow_the_history(beam):
+    from structures.tuning_report import design_change_table, frequency_table, index_summary
+    problem, gvt, _ = beam
+    hist = tune(problem).history
+    freq = frequency_table(hist)
+    f_test = gvt["frequency"].values
+    np.testing.assert_allclose(freq["test_frequency"].values, f_test)
+    np.testing.assert_allclose(freq["error_after"].values,
+                               100 * (hist["paired_fe_frequency"].values[-1] - f_test) / f_test)
+    np.testing.assert_array_equal(freq["fe_mode_before"].values, [2, 1, 4, 3])   # interchange
+    design = design_change_table(hist)
+    assert design["change"].sel(design_variable="I2").item() == pytest.approx(
+        100 * ((1.03 / 0.98) ** 2 - 1), rel=1e-3)
+    summary = index_summary(hist)
+    assert summary["after"].sel(configuration="beam", kind="frequency").item() < 1e-2   # %
+    assert summary["before"].sel(configuration="beam", kind="frequency").item() == pytest.approx(
+        np.abs(freq["error_before"].values).max(), rel=1e-9)

@@ -68,7 +68,7 @@ def write_aircraft_deck(path, *, n_span: int = 8, n_chord: int = 2, n_fus: int =
     lines.append(f"PELAS,41,{_f(val('PELAS', 41, 'K', PYLON_K))}")
     groups = {"fuselage": [], "spar": [], "skin": [], "tail": [], "engine": []}
     gid = [0]
-    eid = [0]
+    eid = [10000]   # automatic element ids above the CELAS2 (8xx) and CONM2 (9xx) ids
 
     def grid(x, y, z, group):
         gid[0] += 1
