@@ -142,12 +142,13 @@ class PKSolver:
 
     # ----------------------------------------------------------------------------- kernels
     def correct(self, state: RootState, V: float, rho: float, mach: float,
-                p_start: np.ndarray | None = None) -> RootState:
+                p_start: np.ndarray | None = None, secant: bool = True) -> RootState:
         """Converge every root at (V, rho, M) from ``state`` by two-sided Rayleigh-quotient iteration.
 
         The k of each root follows its current eigenvalue at every step, so the fixed point is the
         matched p-k root (k = b Im(p) / V). ``p_start`` (predicted eigenvalues) replaces
-        ``state.p`` as the first guess.
+        ``state.p`` as the first guess. Roots the secant-accelerated k update fails to converge are
+        retried with plain substitution of k (slower, linearly convergent).
         """
         M = self.system.mass
         p = (state.p if p_start is None else p_start).copy()
@@ -155,9 +156,13 @@ class PKSolver:
         R = p.size
         done = np.zeros(R, dtype=bool)
         outside = np.zeros(R, dtype=bool)
+        kk = self.b * np.abs(p.imag) / V          # k at which each root's pencil is evaluated
+        k_old = np.full(R, np.nan)
+        f_old = np.full(R, np.nan)
+        by_secant = np.zeros(R, dtype=bool)    # the pencil's k came from a secant step
         for it in range(self.max_iter):
             act = np.flatnonzero(~done)
-            k = self.b * np.abs(p[act].imag) / V
+            k = kk[act]
             C, Kt, out = self.pencil(k, V, rho, mach)
             outside[act] = out
             ua, wa, pa = u[act], w[act], p[act]
@@ -178,11 +183,31 @@ class PKSolver:
             wn[flip] = wn[flip].conj()
             dp = np.abs(pn - pa)
             p[act], u[act], w[act] = pn, un, wn
-            conv = dp <= self.tol * np.maximum(np.abs(pn), self.scale)
+            # k update: secant on the matching condition f(k) = b Im p(k) / V - k = 0 once the
+            # eigen-iteration has settled, plain substitution otherwise
+            k_new = self.b * np.abs(pn.imag) / V
+            f = k_new - k
+            ko, fo = k_old[act], f_old[act]
+            with np.errstate(divide="ignore", invalid="ignore"):
+                sec = k - f * (k - ko) / (f - fo)
+            use = secant & (2 <= it < 12) & (k_new > 1e-4) & np.isfinite(sec) & (sec >= 0) & (np.abs(sec - k_new) < 0.5 * k_new)
+            k_old[act], f_old[act] = k, f
+            kk[act] = np.where(use, sec, k_new)
+            kscale = self.b * self.scale / V
+            conv = (dp <= self.tol * np.maximum(np.abs(pn), self.scale)) & \
+                   (~by_secant[act] | (np.abs(f) <= 1e3 * self.tol * np.maximum(k_new, kscale)))
+            by_secant[act] = use
             if it > 0:
                 done[act[conv]] = True
             if done.all():
                 break
+        if secant and not done.all():
+            bad = np.flatnonzero(~done)
+            start = state.p if p_start is None else p_start
+            retry = self.correct(RootState(state.p[bad], state.u[bad], state.w[bad], done[bad],
+                                           outside[bad]), V, rho, mach, start[bad], secant=False)
+            p[bad], u[bad], w[bad] = retry.p, retry.u, retry.w
+            done[bad], outside[bad] = retry.converged, retry.outside
         return RootState(p, u, w, done, outside)
 
     def start(self, V: float, rho: float, mach: float) -> RootState:
