@@ -45,7 +45,7 @@ import scipy.sparse.linalg as spla
 from structures.assembly import assemble, assemble_g
 from structures.design import DesignSpace, affected_submodel, apply_design
 from structures.errors import InputError, SolverError, card_message
-from structures.massprops import rigid_body_mass
+from structures.frames import rigid_offset
 from structures.modal import DEFAULT_SHIFT, rigid_body_basis
 from structures.model import FEModel
 
@@ -70,12 +70,14 @@ class SubAssembly:
         self.system = assemble(base, mass)
         self.tr = (self.system.rotation @ self.system.T).tocsr()
         self.xyz = model.grids.xyz
+        # rigid-body motions about the origin, D (ng, 6): M0 = D^T M_gg D (structures.massprops)
+        self.d = rigid_offset(self.xyz).reshape(-1, 6)
         self.sub = affected_submodel(base, space)
         self.var_sub = [affected_submodel(base, space, only=[i]) for i in range(len(space))]
         k_aff, m_aff, m0_aff = self._sub_matrices(self.sub, space.x0)
         self.k_rest = (self.system.K - k_aff).tocsc()
         self.m_rest = (self.system.M - m_aff).tocsc()
-        self.m0_rest = rigid_body_mass(self.system.m_basic, self.xyz) - m0_aff
+        self.m0_rest = self.d.T @ (self.system.m_basic @ self.d) - m0_aff
         rb = rigid_body_basis(model, self.system)
         self.rigid = np.asarray(rb[self.system.a_dofs])
         self.last_phi = None   # modes of the last design, a Lanczos start for the next one
@@ -87,7 +89,7 @@ class SubAssembly:
         k_g, m_g = assemble_g(apply_design(sub, self.space, x), self.mass)
         k = (self.tr.T @ k_g @ self.tr).tocsc()
         m = (self.tr.T @ m_g @ self.tr).tocsc()
-        return k, m, rigid_body_mass(m_g, self.xyz)
+        return k, m, self.d.T @ (m_g @ self.d)
 
     def matrices(self, x):
         """K (na, na), M (na, na) sparse and the rigid-body mass M0 (6, 6) about the origin at x."""
@@ -257,24 +259,31 @@ def mode_shape_derivatives(k, m, lam, phi, dk, dm, dlam, *, n_rigid: int = 0, ri
         z1 = lu.solve(np.asarray(rows.T.todense()))
         z2 = lu.solve(m @ z1)
         phi_rows = rows @ phi
+    phi_el, lam_el = phi[:, n_rigid:], lam[n_rigid:]
+    inv = 1.0 / (lam - shift)[:, None]
     for i in range(nvar):
-        f0 = -(dk[i] @ phi[:, n_rigid:] - (dm[i] @ phi[:, n_rigid:]) * lam[None, n_rigid:])
-        coupling = phi.T @ f0                                              # (m, m_el) phi_k^T F0_j
+        # F0 is non-zero only at the DOFs of the elements variable i touches: work on those rows
+        dk_i, dm_i = dk[i].tocsr(), dm[i].tocsr()
+        touched = np.unique(np.r_[dk[i].tocsc().indices, dm[i].tocsc().indices])
+        dm_phi = dm_i[touched] @ phi_el
+        f0 = -(dk_i[touched] @ phi_el - dm_phi * lam_el[None, :])         # rows ``touched``
+        coupling = phi[touched].T @ f0                                     # (m, m_el) phi_k^T F0_j
         with np.errstate(divide="ignore"):
-            gap = lam[:, None] - lam[n_rigid:][None, :]                    # lambda_k - lambda_j
+            gap = lam[:, None] - lam_el[None, :]                           # lambda_k - lambda_j
             coef = np.where(np.abs(gap) > 0, coupling / np.where(gap == 0, 1.0, gap), 0.0)
-        for jj, j in enumerate(elastic):
-            coef[j, jj] = -0.5 * phi[:, j] @ (dm[i] @ phi[:, j])
+        coef[np.arange(n_rigid, nmode), np.arange(nmode - n_rigid)] = \
+            -0.5 * np.einsum("nj,nj->j", phi_el[touched], dm_phi)          # c_jj
         # 1/(lambda_k - lambda_j) = 1/(lambda_k - s) + (lambda_j - s)/(lambda_k - s)^2 + ... (two terms)
-        inv = 1.0 / (lam - shift)[:, None]
         if rows is None:
-            s_f = lu.solve(f0)
+            full = np.zeros((phi.shape[0], nmode - n_rigid))
+            full[touched] = f0
+            s_f = lu.solve(full)
             s2_f = lu.solve(m @ s_f)
             basis = phi
         else:
-            s_f, s2_f, basis = z1.T @ f0, z2.T @ f0, phi_rows
+            s_f, s2_f, basis = z1[touched].T @ f0, z2[touched].T @ f0, phi_rows
         residual = (s_f - basis @ (coupling * inv)
-                    + (s2_f - basis @ (coupling * inv ** 2)) * (lam[n_rigid:] - shift)[None, :])
+                    + (s2_f - basis @ (coupling * inv ** 2)) * (lam_el - shift)[None, :])
         out[i, :, n_rigid:] = basis @ coef + residual
     return out
 
