@@ -232,11 +232,54 @@ class PKSolver:
         pred = state.p + (state.slope * h if state.slope is not None else 0)
         pred = np.where(pred.imag < 0, pred.real + 0j, pred)
         new = self.correct(state, *to, p_start=pred)
-        if depth < self.max_depth and not self._step_ok(state, new, pred, strict=depth < 3):
-            mid = tuple(0.5 * (a + b) for a, b in zip(frm, to))
-            half = self.advance(state, frm, mid, depth + 1)
-            return self.advance(half, mid, to, depth + 1)
+        if not self._step_ok(state, new, pred, strict=depth < 3):
+            if depth < self.max_depth:
+                mid = tuple(0.5 * (a + b) for a, b in zip(frm, to))
+                half = self.advance(state, frm, mid, depth + 1)
+                return self.advance(half, mid, to, depth + 1)
+            new = self._reseed(new, pred, *to)
         new.slope = (new.p - state.p) / h if h > 0 else None
+        return new
+
+    def _reseed(self, new: RootState, pred: np.ndarray, V: float, rho: float, mach: float) -> RootState:
+        """Restart roots that still jump or collide at the smallest step (e.g. a pair turning real):
+        full eigen-decomposition of the first-order p-k matrix at the root's k, nearest eigenvalue
+        not taken by another root, then the usual correction."""
+        sep = np.abs(pred[:, None] - pred[None, :])
+        np.fill_diagonal(sep, np.inf)
+        jump = np.abs(new.p - pred) / np.maximum(sep.min(axis=1), self.scale)
+        dp = np.abs(new.p[:, None] - new.p[None, :])
+        np.fill_diagonal(dp, np.inf)
+        rel = dp / np.maximum(np.abs(new.p), self.scale)[:, None]
+        dup = rel.min(axis=1) <= 1e-6
+        later = np.any(np.tril(rel <= 1e-9, k=-1), axis=1)  # second of an identical pair
+        bad = np.flatnonzero((jump > 0.5) | (dup & (jump > 0.05)) | later)
+        if bad.size == 0:
+            return new
+        n = self.system.n
+        Minv = np.linalg.inv(self.system.mass)
+        taken = list(new.p[np.setdiff1d(np.arange(new.p.size), bad)])
+        for r in bad:
+            p_r, ok = pred[r], False
+            for _ in range(self.max_iter):  # plain per-root p-k: full eig per iteration
+                k = np.array([self.b * abs(p_r.imag) / V])
+                C, Kt, out = self.pencil(k, V, rho, mach)
+                A = np.block([[np.zeros((n, n)), np.eye(n)], [-Minv @ Kt[0], -Minv @ C[0]]])
+                lam, X = np.linalg.eig(A)
+                neg = lam.imag < 0
+                lam, X = np.where(neg, lam.conj(), lam), np.where(neg[None, :], X.conj(), X)
+                free = [j for j in np.argsort(np.abs(lam - p_r))
+                        if all(abs(lam[j] - t) > 1e-6 * max(abs(t), self.scale) for t in taken)]
+                j = free[0] if free else int(np.argmin(np.abs(lam - p_r)))
+                step = abs(lam[j] - p_r)
+                p_r = lam[j]
+                if step <= self.tol * max(abs(p_r), self.scale):
+                    ok = bool(free)
+                    break
+            taken.append(p_r)
+            u = X[:n, j] / np.linalg.norm(X[:n, j])
+            new.p[r], new.u[r], new.w[r] = p_r, u, u.conj()
+            new.converged[r], new.outside[r] = ok, bool(out[0])
         return new
 
     def _step_ok(self, old: RootState, new: RootState, pred: np.ndarray, strict: bool) -> bool:
@@ -258,7 +301,8 @@ class PKSolver:
         if close.any():
             same = close & (np.abs(new.u.conj() @ new.u.T) ** 2 > 0.99)
             moved = jump > 0.05
-            if np.any(same & (moved[:, None] | moved[None, :])):
+            exact = dp <= 1e-9 * np.maximum(np.abs(new.p)[:, None], self.scale)  # never a real EP
+            if np.any(same & (moved[:, None] | moved[None, :] | exact)):
                 return False
         return True
 
@@ -367,9 +411,14 @@ def _refine(solver: PKSolver, states: list[RootState], pts: list[tuple], r: int,
     """Locate the zero of root r's damping between points i and i+1 by Illinois root-finding.
 
     Each evaluation corrects root r alone, started from the linear interpolation of its bracketing
-    eigen-states (the bracket is one accepted continuation step, so the root is unambiguous).
+    eigen-states (the bracket is one accepted continuation step, so the root is unambiguous). When
+    the root turns from oscillatory to real inside the bracket (divergence), the real branch is
+    followed back from the real end instead, so the zero found is the real root's p = 0.
     """
     s0, s1 = states[i], states[i + 1]
+    real = [abs(s.p[r].imag) <= 1e-9 * max(abs(s.p[r]), solver.scale) for s in (s0, s1)]
+    if real[1] and not real[0]:
+        s0 = s1
     u1 = s1.u[r] * np.exp(-1j * np.angle(np.vdot(s0.u[r], s1.u[r])))
     w1 = s1.w[r] * np.exp(-1j * np.angle(np.vdot(s0.w[r], s1.w[r])))
     cache = {}
@@ -387,6 +436,7 @@ def _refine(solver: PKSolver, states: list[RootState], pts: list[tuple], r: int,
 
     t, ok = illinois(fun, g0, g1)
     st = cache[t] if t in cache else solver.correct(cache[max(cache)], *point(t))
+    s0 = states[i]
     full = RootState(s0.p.copy(), s0.u.copy(), s0.w.copy(), s0.converged.copy(), s0.outside.copy())
     full.p[r], full.u[r], full.w[r] = st.p[0], st.u[0], st.w[0]
     full.converged[r], full.outside[r] = st.converged[0], st.outside[0]
