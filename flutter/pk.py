@@ -23,10 +23,10 @@ from dataclasses import dataclass
 
 import numpy as np
 import xarray as xr
-from scipy.linalg.lapack import zgetrf, zgetrs
 
 from flutter.crossings import G_TOL, Crossing, find_brackets, illinois, interpolate_zero
 from flutter.gafinterp import GafInterpolator
+from flutter.linalg import inverse_iteration, path_length
 from flutter.results import vg_dataset, attach_crossings
 from flutter.system import ModalSystem
 from structures.errors import InputError
@@ -228,7 +228,7 @@ class PKSolver:
         prediction than to its own, loses eigenvector correlation while its eigenvalue jumps, or two
         roots land on the same eigenpair.
         """
-        h = _path_length(frm, to)
+        h = path_length(frm, to)
         pred = state.p + (state.slope * h if state.slope is not None else 0)
         pred = np.where(pred.imag < 0, pred.real + 0j, pred)
         new = self.correct(state, *to, p_start=pred)
@@ -315,43 +315,6 @@ class PKSolver:
             g = np.where(real, p.real * 2 * self.b / (np.asarray(V) * LN2),
                          2.0 * p.real / np.where(real, 1.0, p.imag))
         return g
-
-
-def inverse_iteration(T: np.ndarray, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """One right and one left inverse-iteration step per root with a single LU each.
-
-    Solves T_r u_r = x_r and T_r^H w_r = y_r (LAPACK zgetrf / zgetrs, trans='C') and normalises.
-    A singular T_r (an exactly converged root) is shifted by eps * max|T_r| so the null vector is
-    still returned.
-
-    Parameters
-    ----------
-    T : ndarray, shape (R, n, n)
-    x, y : ndarray, shape (R, n)
-
-    Returns
-    -------
-    u, w : ndarray, shape (R, n), unit 2-norm
-    """
-    R, n, _ = T.shape
-    u = np.empty((R, n), dtype=complex)
-    w = np.empty((R, n), dtype=complex)
-    eye = np.eye(n)
-    for r in range(R):
-        lu, piv, info = zgetrf(T[r])
-        if info > 0:
-            lu, piv, info = zgetrf(T[r] + np.finfo(float).eps * np.abs(T[r]).max() * eye)
-        u[r] = zgetrs(lu, piv, x[r])[0]
-        w[r] = zgetrs(lu, piv, y[r], trans=2)[0]
-    u /= np.linalg.norm(u, axis=1, keepdims=True)
-    w /= np.linalg.norm(w, axis=1, keepdims=True)
-    return u, w
-
-
-def _path_length(frm: tuple, to: tuple) -> float:
-    """Length of a step between flight points (relative V and rho changes, absolute Mach change)."""
-    (V0, r0, m0), (V1, r1, m1) = frm, to
-    return float(np.sqrt(((V1 - V0) / V0) ** 2 + ((r1 - r0) / r0) ** 2 + (m1 - m0) ** 2))
 
 
 def check_sweep(velocity: np.ndarray, density: np.ndarray, mach: np.ndarray, sweep: str):
