@@ -200,7 +200,9 @@ def _nelson(k, m, lam_j, phi_j, dk, dm, dlam_j, filename):
                     for a, b, dl in zip(dk, dm, dlam_j)], axis=1)
     a_mat = (k - lam_j * m).tocsc()[keep][:, keep].tocsc()
     try:
-        lu = spla.splu(a_mat, permc_spec="MMD_AT_PLUS_A")
+        # indefinite but symmetric: symmetric ordering, threshold pivoting that prefers the diagonal
+        lu = spla.splu(a_mat, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.1,
+                       options={"SymmetricMode": True})
     except RuntimeError:
         raise SolverError(card_message(
             f"Nelson's method: K - lambda M is singular beyond one DOF at lambda = {lam_j:.6g} "
