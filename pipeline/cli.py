@@ -11,7 +11,8 @@ import sys
 from structures.errors import PipelineError
 
 #: Subcommand modules, in the order ``pipeline --help`` lists them.
-COMMANDS = ("pipeline.cmd_run", "pipeline.cmd_modes", "pipeline.cmd_correlate")
+COMMANDS = ("pipeline.cmd_run", "pipeline.cmd_modes", "pipeline.cmd_correlate",
+            "pipeline.cmd_flutter", "pipeline.cmd_tune")
 
 
 def build_parser() -> argparse.ArgumentParser:
