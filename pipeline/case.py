@@ -10,6 +10,10 @@ Example (``data/bah_wing/case.toml``)::
     deck = "bah_plane.bdf"   # relative to the case file
     nmodes = 10
 
+    [flutter]                # optional: run the decks' FLUTTER cards
+    kernel = "quartic"       # doublet-lattice kernel integration: quartic or parabolic
+    flutter_ids = [502]      # FLUTTER cards to run (default: the case control's FMETHOD)
+
 Unknown keys raise with the list of valid ones, so a typo never passes silently.
 """
 from __future__ import annotations
@@ -25,7 +29,7 @@ UNIT_SYSTEMS = ("si", "english_in", "english_ft")
 
 
 def _check_keys(table: dict, cls, where: str) -> None:
-    valid = {f.name for f in fields(cls)} - {"case_dir"}
+    valid = {f.name for f in fields(cls)} - {"path"}
     unknown = sorted(set(table) - valid)
     if unknown:
         raise InputError(f"{where}: unknown keys {unknown}; valid: {sorted(valid)}.")
@@ -54,13 +58,30 @@ class Configuration:
             raise InputError(f"configuration {self.name}: nmodes = {self.nmodes} must be >= 1.")
 
 
+KERNELS = ("quartic", "parabolic")
+
+
+@dataclass(frozen=True)
+class FlutterSettings:
+    """``[flutter]``: run each configuration's FLUTTER cards (modes -> GAFs -> p-k / k)."""
+
+    kernel: str = "quartic"
+    flutter_ids: tuple = ()
+
+    def __post_init__(self):
+        if self.kernel not in KERNELS:
+            raise InputError(f"[flutter] kernel = {self.kernel!r}; valid: {', '.join(KERNELS)}.")
+        object.__setattr__(self, "flutter_ids", tuple(int(i) for i in self.flutter_ids))
+
+
 @dataclass(frozen=True)
 class Case:
-    """A whole case: name, unit system and configurations."""
+    """A whole case: name, unit system, configurations and optional stage settings."""
 
     name: str
     configurations: tuple
     units: str = "si"
+    flutter: FlutterSettings | None = None
     path: Path | None = None
 
     def __post_init__(self):
@@ -96,5 +117,9 @@ def read_case(path) -> Case:
         if table.get("gvt"):
             table["gvt"] = (base / table["gvt"]).resolve()
         configs.append(Configuration(**table))
+    flutter = None
+    if "flutter" in data:
+        _check_keys(data["flutter"], FlutterSettings, f"file {path}, [flutter]")
+        flutter = FlutterSettings(**data["flutter"])
     return Case(name=data.get("name", path.stem), configurations=tuple(configs),
-                units=data.get("units", "si"), path=path.resolve())
+                units=data.get("units", "si"), flutter=flutter, path=path.resolve())

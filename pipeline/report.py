@@ -37,10 +37,22 @@ def _modes_section(name, result) -> str:
             _table(("quantity", "value"), mass_rows))
 
 
+def _flutter_section(result) -> str:
+    rows = [(c["kind"], c["root"], f"{c['mach']:.3g}", f"{c['density']:.5g}",
+             f"{c['velocity']:.5g}", f"{c['frequency']:.4g}") for c in result["summary"]]
+    table = (_table(("kind", "root", "Mach", "density", "velocity", "frequency [Hz]"), rows)
+             if rows else "<p>No flutter or divergence crossing in the analysed range.</p>")
+    figures = "".join(f"<img src='{html.escape(str(f))}' alt='V-g / V-f' width='560'>"
+                      for f in result["figures"])
+    return "<h3>Flutter crossings (model units)</h3>" + table + figures
+
+
 def write_report(case, results: dict, out_dir) -> Path:
     """Write ``report.html`` into ``out_dir`` and return its path."""
     out = Path(out_dir) / "report.html"
-    sections = "".join(_modes_section(name, res) for name, res in results.items())
+    sections = "".join(_modes_section(name, res) +
+                       (_flutter_section(res["flutter"]) if "flutter" in res else "")
+                       for name, res in results.items())
     page = (f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>{html.escape(case.name)}"
             f"</title><style>{_STYLE}</style></head><body><h1>Case {html.escape(case.name)}</h1>"
             f"<p>Units: {html.escape(case.units)}. Configurations: "

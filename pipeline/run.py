@@ -12,7 +12,11 @@ import os
 import tempfile
 from pathlib import Path
 
-from pipeline.case import Case, Configuration
+import matplotlib.pyplot as plt
+
+from flutter.plots import plot_vg
+from flutter.run import run_flutter
+from pipeline.case import Case, Configuration, FlutterSettings
 from pipeline.report import write_report
 from structures.assembly import assemble
 from structures.bdf import read_model
@@ -84,10 +88,53 @@ def modes_stage(run: Run, config: Configuration, log=print) -> dict:
             "mass_properties": read_dataset(run.dir / mass_file)}
 
 
+def flutter_stage(run: Run, config: Configuration, settings: FlutterSettings, modes,
+                  log=print) -> dict:
+    """GAFs and flutter of one configuration from its deck's FLUTTER cards (on the stage's modes).
+
+    Writes ``<config>/flutter/{flutter.nc, summary.json, gaf.nc, modes.nc}`` and the V-g / V-f
+    figures ``<config>/flutter/vg_<case>.png``.
+    """
+    stage = f"flutter/{config.name}"
+    fp = hashlib.sha256(json.dumps([_deck_fingerprint(config.deck), config.nmodes, config.mass,
+                                    settings.kernel, list(settings.flutter_ids)]).encode()).hexdigest()
+    folder = Path(config.name) / "flutter"
+    if run.done(stage, fp):
+        log(f"[{stage}] up to date, skipped")
+    else:
+        log(f"[{stage}] GAFs ({settings.kernel} kernel) and flutter")
+        result = run_flutter(config.deck, run.dir / folder, modes=modes, kernel=settings.kernel,
+                             flutter_ids=list(settings.flutter_ids) or None)
+        figures = []
+        for n, (label, ds) in enumerate(result["results"]):
+            if "sweep" not in ds.attrs:
+                continue
+            title = (f"{config.name}: {label.get('configuration', '')} Mach {label['mach']:.3g}, "
+                     f"density {label['density']:.4g}")
+            fig = plot_vg(ds, title=title)
+            figures.append(folder / f"vg_{n + 1}.png")
+            fig.savefig(run.dir / figures[-1], dpi=90)
+            plt.close(fig)
+        outputs = [folder / "summary.json", folder / "gaf.nc", *figures]
+        run.finish(stage, fp, outputs)
+        flutter = [c for c in result["summary"] if c["kind"] == "flutter"]
+        log(f"[{stage}] {len(flutter)} flutter crossing(s)" +
+            (f", lowest {min(c['velocity'] for c in flutter):.5g} at "
+             f"{min(flutter, key=lambda c: c['velocity'])['frequency']:.4g} Hz" if flutter else ""))
+    entry = run.manifest[stage]
+    summary = json.loads((run.dir / folder / "summary.json").read_text())
+    return {"summary": summary, "figures": [f for f in entry["outputs"] if f.endswith(".png")]}
+
+
 def run_case(case: Case, out_dir, log=print) -> Path:
     """Run every stage of a case into ``out_dir``; returns the HTML report's path."""
     run = Run(out_dir)
-    results = {config.name: modes_stage(run, config, log) for config in case.configurations}
+    results = {}
+    for config in case.configurations:
+        results[config.name] = modes_stage(run, config, log)
+        if case.flutter is not None:
+            results[config.name]["flutter"] = flutter_stage(
+                run, config, case.flutter, results[config.name]["modes"], log)
     report = write_report(case, results, run.dir)
     log(f"report: {report}")
     return report

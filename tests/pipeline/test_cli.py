@@ -1,6 +1,7 @@
 """The ``pipeline`` command: modes, run (shipped example, resume) and case-file validation."""
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import numpy as np
@@ -28,6 +29,7 @@ def test_modes_command_prints_table_and_writes_contract(tmp_path, capsys):
     assert ds.attrs["source"] == "our solver"
 
 
+@pytest.mark.filterwarnings("ignore::UserWarning", "ignore::RuntimeWarning")
 def test_run_shipped_example_then_resume(tmp_path, capsys):
     out = tmp_path / "run"
     assert main(["run", "--out", str(out)]) == 0
@@ -43,6 +45,14 @@ def test_run_shipped_example_then_resume(tmp_path, capsys):
     assert freq[2] == pytest.approx(2.454016, rel=1e-5)
     mass = read_dataset(out / "baseline" / "mass_properties.nc")
     assert float(mass["mass"]) == pytest.approx(18947.36, rel=1e-12)
+    # The example's FLUTTER 502 (PK, Mach 0.2): Nastran's F06 has flutter at 394.0 m/s, 3.18 Hz.
+    summary = json.loads((out / "baseline" / "flutter" / "summary.json").read_text())
+    flutter = [c for c in summary if c["kind"] == "flutter"]
+    assert len(flutter) == 1
+    assert flutter[0]["velocity"] == pytest.approx(394.0, rel=0.02)
+    assert flutter[0]["frequency"] == pytest.approx(3.18, rel=0.03)
+    report = (out / "report.html").read_text()
+    assert "Flutter crossings" in report and "vg_1.png" in report
 
 
 def test_case_file_unknown_key_lists_valid_ones(tmp_path):
