@@ -9,6 +9,8 @@ Example (``data/bah_wing/case.toml``)::
     name = "baseline"
     deck = "bah_plane.bdf"   # relative to the case file
     nmodes = 10
+    gvt = "gvt.unv"          # optional: the configuration's GVT (UFF 15/55 or netCDF)
+    measured_mass = { weight = 18950.0, x_cg = 0.10 }   # optional: measured mass properties
 
     [flutter]                # optional: run the decks' FLUTTER cards
     kernel = "quartic"       # doublet-lattice kernel integration: quartic or parabolic
@@ -19,11 +21,14 @@ Unknown keys raise with the list of valid ones, so a typo never passes silently.
 from __future__ import annotations
 
 import tomllib
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, field, fields
 from pathlib import Path
+from types import MappingProxyType
+from typing import Mapping
 
 from structures.assembly import MASS_OPTIONS
 from structures.errors import InputError
+from structures.massprops import check_measured_mass
 
 UNIT_SYSTEMS = ("si", "english_in", "english_ft")
 
@@ -44,8 +49,11 @@ class Configuration:
     nmodes: int | None = None
     mass: str = "deck"
     gvt: Path | None = None
+    measured_mass: Mapping = field(default_factory=dict)
 
     def __post_init__(self):
+        object.__setattr__(self, "measured_mass", MappingProxyType(check_measured_mass(
+            dict(self.measured_mass), f"configuration {self.name}, measured_mass")))
         if not self.name or not self.name.replace("_", "").replace("-", "").isalnum():
             raise InputError(f"configuration name {self.name!r} must be letters, digits, '_' or '-'.")
         if not Path(self.deck).exists():

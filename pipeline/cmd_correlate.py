@@ -80,13 +80,15 @@ def _from_case(args):
     if gvt_path is None:
         raise InputError(f"case {args.model}, configuration {config.name}: no gvt. Fix: give GVT on the "
                          "command line or set gvt = \"...\" in the configuration.")
-    return Path(config.deck), Path(gvt_path), args.nmodes or config.nmodes, config.mass
+    return (Path(config.deck), Path(gvt_path), args.nmodes or config.nmodes, config.mass,
+            dict(config.measured_mass))
 
 
 def run(args) -> int:
     path = Path(args.model)
+    measured = {}
     if path.suffix.lower() == ".toml":
-        deck, gvt_path, nmodes, mass = _from_case(args)
+        deck, gvt_path, nmodes, mass, measured = _from_case(args)
     elif args.gvt is None:
         raise InputError("pipeline correlate: GVT file missing. Fix: pipeline correlate DECK GVT.unv.")
     else:
@@ -96,6 +98,13 @@ def run(args) -> int:
     settings = CorrelationSettings(pair_by=args.pair_by, a_set=args.a_set)
     corr = correlate(modes, gvt, settings, DEFAULT_CRITERIA, primary_modes=args.primary)
     print(correlation_tables(corr))
+    if measured:
+        from structures.bdf import read_model
+        from structures.massprops import compare_mass_properties, mass_properties
+        comparison = compare_mass_properties(mass_properties(read_model(deck)), measured)
+        print("\nMass properties (model vs measured):")
+        print(mass_comparison_table(comparison))
+        corr = corr.merge(comparison.rename({name: f"mass_{name}" for name in comparison.data_vars}))
     if args.out:
         write_dataset(corr, args.out)
         print(f"\ncorrelation written to {args.out}")
@@ -104,6 +113,16 @@ def run(args) -> int:
         for p in save_correlation_figures(corr, args.figures):
             print(f"figure written to {p}")
     return 0
+
+
+def mass_comparison_table(comparison) -> str:
+    """Model vs measured mass properties with the error in %."""
+    lines = [f"{'quantity':>10} {'model':>14} {'measured':>14} {'error %':>9}"]
+    for q in comparison["quantity"].values:
+        c = comparison.sel(quantity=q)
+        lines.append(f"{q:>10} {float(c.model):14.6g} {float(c.measured):14.6g} "
+                     f"{float(c.relative_error):9.3f}")
+    return "\n".join(lines)
 
 
 def _matrix(values, row_labels, col_labels, fmt) -> str:

@@ -11,6 +11,7 @@ sum m x y, so ``product_of_inertia`` holds that sign convention too).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Mapping
 
 import numpy as np
 import xarray as xr
@@ -19,6 +20,10 @@ from structures.assembly import assemble_g
 from structures.errors import InputError, card_message
 from structures.frames import rigid_offset, skew
 from structures.model import FEModel
+
+
+#: The ten measured quantities of the paper's J1..J10 (eqs. 1-10), by name.
+MASS_QUANTITIES = ("weight", "x_cg", "y_cg", "z_cg", "Ixx", "Iyy", "Izz", "Ixy", "Iyz", "Izx")
 
 
 @dataclass(frozen=True)
@@ -56,10 +61,10 @@ class MassProperties:
         return {"Ixy": -i[0, 1], "Iyz": -i[1, 2], "Izx": -i[2, 0]}
 
     def as_dict(self) -> dict:
-        """The ten quantities of the paper's J1..J10, by name."""
-        return {"mass": self.mass, "x_cg": self.cg[0], "y_cg": self.cg[1], "z_cg": self.cg[2],
-                "Ixx": self.inertia[0, 0], "Iyy": self.inertia[1, 1], "Izz": self.inertia[2, 2],
-                **self.product_of_inertia}
+        """The ten quantities of the paper's J1..J10 (``MASS_QUANTITIES``) plus ``mass``."""
+        return {"mass": self.mass, "weight": self.weight, "x_cg": self.cg[0], "y_cg": self.cg[1],
+                "z_cg": self.cg[2], "Ixx": self.inertia[0, 0], "Iyy": self.inertia[1, 1],
+                "Izz": self.inertia[2, 2], **self.product_of_inertia}
 
     def to_dataset(self) -> xr.Dataset:
         """The mass properties as a Dataset (dims ``axis``, ``axis_2``)."""
@@ -124,3 +129,44 @@ def mass_properties(model: FEModel, *, mass: str = "deck", reference=(0.0, 0.0, 
         _, m_basic = assemble_g(model, mass)
     m0 = rigid_body_mass(m_basic, model.grids.xyz, reference)
     return properties_from_rigid_body_mass(m0, reference, model.wtmass, model.filename)
+
+
+def check_measured_mass(measured: Mapping, where: str = "measured mass properties") -> dict:
+    """Validate measured mass properties: names from :data:`MASS_QUANTITIES`, finite numbers."""
+    unknown = sorted(set(measured) - set(MASS_QUANTITIES))
+    if unknown:
+        raise InputError(f"{where}: unknown quantities {unknown}; valid: {list(MASS_QUANTITIES)}.")
+    out = {}
+    for name, value in measured.items():
+        if not isinstance(value, (int, float)) or not np.isfinite(value):
+            raise InputError(f"{where}: {name} = {value!r} is not a finite number.")
+        out[name] = float(value)
+    if "weight" in out and not out["weight"] > 0:
+        raise InputError(f"{where}: weight = {out['weight']} must be positive.")
+    return out
+
+
+def compare_mass_properties(props: MassProperties, measured: Mapping) -> xr.Dataset:
+    """Model against measured mass properties, per quantity (the data of the paper's J1..J10).
+
+    Parameters
+    ----------
+    props : MassProperties of the model.
+    measured : {quantity: value} for some of :data:`MASS_QUANTITIES` (weight in the deck's weight
+        units, i.e. mass / WTMASS).
+
+    Returns
+    -------
+    xarray.Dataset on dim ``quantity``: ``model``, ``measured``, ``error`` (model - measured) and
+    ``relative_error`` in % (eqs. 1-10 before squaring; NaN where the measured value is 0).
+    """
+    measured = check_measured_mass(measured)
+    names = [q for q in MASS_QUANTITIES if q in measured]
+    model = np.array([props.as_dict()[q] for q in names])
+    test = np.array([measured[q] for q in names])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        rel = np.where(test != 0.0, 100.0 * (model - test) / test, np.nan)
+    return xr.Dataset({"model": ("quantity", model), "measured": ("quantity", test),
+                       "error": ("quantity", model - test),
+                       "relative_error": ("quantity", rel, {"units": "%"})},
+                      coords={"quantity": names})
