@@ -19,10 +19,10 @@ def frequency_table(modes: xr.Dataset) -> str:
 def mass_table(props: MassProperties) -> str:
     """Mass, CG and inertias about the CG (the paper's J1..J10 quantities)."""
     values = props.as_dict()
+    if props.wtmass == 1.0:
+        del values["weight"]
     lines = [f"{'quantity':>10} {'value':>16}"]
     lines += [f"{name:>10} {value:16.8g}" for name, value in values.items()]
-    if props.wtmass != 1.0:
-        lines.append(f"{'weight':>10} {props.weight:16.8g}  (mass / WTMASS)")
     return "\n".join(lines)
 
 

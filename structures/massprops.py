@@ -62,9 +62,9 @@ class MassProperties:
 
     def as_dict(self) -> dict:
         """The ten quantities of the paper's J1..J10 (``MASS_QUANTITIES``) plus ``mass``."""
-        return {"mass": self.mass, "weight": self.weight, "x_cg": self.cg[0], "y_cg": self.cg[1],
-                "z_cg": self.cg[2], "Ixx": self.inertia[0, 0], "Iyy": self.inertia[1, 1],
-                "Izz": self.inertia[2, 2], **self.product_of_inertia}
+        return {"mass": self.mass, "x_cg": self.cg[0], "y_cg": self.cg[1], "z_cg": self.cg[2],
+                "Ixx": self.inertia[0, 0], "Iyy": self.inertia[1, 1], "Izz": self.inertia[2, 2],
+                **self.product_of_inertia, "weight": self.weight}
 
     def to_dataset(self) -> xr.Dataset:
         """The mass properties as a Dataset (dims ``axis``, ``axis_2``)."""
