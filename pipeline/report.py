@@ -37,6 +37,30 @@ def _modes_section(name, result) -> str:
             _table(("quantity", "value"), mass_rows))
 
 
+def _correlation_section(result) -> str:
+    corr = result["dataset"]
+    names = corr["test_name"].values if "test_name" in corr else [""] * corr.sizes["test_mode"]
+    rows = []
+    for i, mode in enumerate(corr["test_mode"].values):
+        rows.append((int(mode), names[i], f"{float(corr['test_frequency'][i]):.4g}",
+                     int(corr["paired_fe_mode"][i]), f"{float(corr['paired_fe_frequency'][i]):.4g}",
+                     f"{float(corr['frequency_error'][i]):+.2f}", f"{float(corr['paired_mac'][i]):.3f}",
+                     "yes" if bool(corr["interchanged"][i]) else ""))
+    table = _table(("test mode", "name", "test [Hz]", "FE mode", "FE [Hz]", "error [%]", "MAC",
+                    "interchanged"), rows)
+    mass = ""
+    if "mass_model" in corr:
+        mass_rows = [(q, f"{float(corr['mass_model'].sel(quantity=q)):.6g}",
+                      f"{float(corr['mass_measured'].sel(quantity=q)):.6g}",
+                      f"{float(corr['mass_relative_error'].sel(quantity=q)):+.2f}")
+                     for q in corr["quantity"].values]
+        mass = "<h3>Mass properties, model vs measured</h3>" + _table(
+            ("quantity", "model", "measured", "error [%]"), mass_rows)
+    figures = "".join(f"<img src='{html.escape(str(f))}' alt='correlation' width='420'>"
+                      for f in result["figures"])
+    return "<h3>Test-analysis correlation (paper Tables 1-4)</h3>" + table + mass + figures
+
+
 def _flutter_section(result) -> str:
     rows = [(c["kind"], c["root"], f"{c['mach']:.3g}", f"{c['density']:.5g}",
              f"{c['velocity']:.5g}", f"{c['frequency']:.4g}") for c in result["summary"]]
@@ -51,6 +75,7 @@ def write_report(case, results: dict, out_dir) -> Path:
     """Write ``report.html`` into ``out_dir`` and return its path."""
     out = Path(out_dir) / "report.html"
     sections = "".join(_modes_section(name, res) +
+                       (_correlation_section(res["correlation"]) if "correlation" in res else "") +
                        (_flutter_section(res["flutter"]) if "flutter" in res else "")
                        for name, res in results.items())
     page = (f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>{html.escape(case.name)}"

@@ -13,6 +13,7 @@ import tempfile
 from pathlib import Path
 
 import matplotlib.pyplot as plt
+import numpy as np
 
 from flutter.plots import plot_vg
 from flutter.run import run_flutter
@@ -20,7 +21,10 @@ from pipeline.case import Case, Configuration, FlutterSettings
 from pipeline.report import write_report
 from structures.assembly import assemble
 from structures.bdf import read_model
-from structures.massprops import mass_properties
+from structures.correlation import CorrelationSettings, correlate
+from structures.correlation_plots import save_correlation_figures
+from structures.gvt import load_gvt
+from structures.massprops import compare_mass_properties, mass_properties
 from structures.modal import compute_modes
 from structures.modes import read_modes, write_modes
 from structures.netcdf import read_dataset, write_dataset
@@ -88,6 +92,39 @@ def modes_stage(run: Run, config: Configuration, log=print) -> dict:
             "mass_properties": read_dataset(run.dir / mass_file)}
 
 
+def correlation_stage(run: Run, config: Configuration, modes, log=print) -> dict:
+    """Correlation of one configuration's modes with its GVT (paper Tables 1-4, Figs. 7-8).
+
+    Writes ``<config>/correlation.nc`` and the MAC / orthogonality / cross-orthogonality maps and
+    frequency bars ``<config>/correlation/*.png``.
+    """
+    stage = f"correlation/{config.name}"
+    fp = hashlib.sha256(json.dumps([_deck_fingerprint(config.deck), config.nmodes, config.mass,
+                                    hashlib.sha256(Path(config.gvt).read_bytes()).hexdigest(),
+                                    sorted(config.measured_mass.items())]).encode()).hexdigest()
+    corr_file = Path(config.name) / "correlation.nc"
+    if run.done(stage, fp):
+        log(f"[{stage}] up to date, skipped")
+    else:
+        log(f"[{stage}] {config.gvt}")
+        corr = correlate(modes, load_gvt(config.gvt), CorrelationSettings())
+        if config.measured_mass:
+            props = mass_properties(read_model(config.deck))
+            comparison = compare_mass_properties(props, config.measured_mass)
+            corr = corr.merge(comparison.rename({v: f"mass_{v}" for v in comparison.data_vars}))
+        write_dataset(corr, run.dir / corr_file)
+        figures = save_correlation_figures(corr, run.dir / config.name / "correlation")
+        for fig in plt.get_fignums():
+            plt.close(fig)
+        run.finish(stage, fp, [corr_file, *(f.relative_to(run.dir) for f in figures)])
+        worst = float(np.nanmax(np.abs(corr["frequency_error"].values)))
+        log(f"[{stage}] {corr.sizes['test_mode']} test modes paired, largest frequency error "
+            f"{worst:.2f} %")
+    entry = run.manifest[stage]
+    return {"dataset": read_dataset(run.dir / corr_file),
+            "figures": [f for f in entry["outputs"] if f.endswith(".png")]}
+
+
 def flutter_stage(run: Run, config: Configuration, settings: FlutterSettings, modes,
                   log=print) -> dict:
     """GAFs and flutter of one configuration from its deck's FLUTTER cards (on the stage's modes).
@@ -132,6 +169,9 @@ def run_case(case: Case, out_dir, log=print) -> Path:
     results = {}
     for config in case.configurations:
         results[config.name] = modes_stage(run, config, log)
+        if config.gvt is not None:
+            results[config.name]["correlation"] = correlation_stage(
+                run, config, results[config.name]["modes"], log)
         if case.flutter is not None:
             results[config.name]["flutter"] = flutter_stage(
                 run, config, case.flutter, results[config.name]["modes"], log)

@@ -53,6 +53,13 @@ def test_run_shipped_example_then_resume(tmp_path, capsys):
     assert flutter[0]["frequency"] == pytest.approx(3.18, rel=0.03)
     report = (out / "report.html").read_text()
     assert "Flutter crossings" in report and "vg_1.png" in report
+    # The example's synthetic GVT: six test modes paired, errors from the truth model's changes.
+    corr = read_dataset(out / "baseline" / "correlation.nc")
+    assert corr.sizes["test_mode"] == 6 and not corr["interchanged"].values.any()
+    assert np.all(np.abs(corr["frequency_error"].values) < 5.0)
+    assert float(corr["mass_relative_error"].sel(quantity="weight")) == pytest.approx(
+        100 * (18947.36 / 19177.9 - 1), abs=1e-3)
+    assert "Test-analysis correlation" in report and "mac.png" in report
 
 
 def test_case_file_unknown_key_lists_valid_ones(tmp_path):
