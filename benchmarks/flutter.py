@@ -3,7 +3,8 @@
 Synthetic but realistic aeroelastic model: a uniform cantilever wing (semi-span 8 m, chord 1.5 m,
 elastic axis at 35% chord, CG 10% chord behind it) with 15 bending and 15 torsion modes coupled
 through the static imbalance, and Theodorsen strip GAFs (40 strips, Prandtl-Glauert lift slope per
-Mach) tabulated at 24 reduced frequencies. Prints total seconds, seconds per (velocity x root), peak
+Mach) tabulated at 24 reduced frequencies. Prints total seconds (wall and CPU: the machine is shared, so
+wall time is noisy; the load average is printed beside them), seconds per (velocity x root), peak
 memory, and the agreement of every crossing with a plain per-root p-k (full eigen-decomposition
 per root per iteration, located by bisection).
 
@@ -12,6 +13,7 @@ Run: ``PYTHONPATH=. python benchmarks/flutter.py``
 from __future__ import annotations
 
 import json
+import os
 import sys
 import time
 import tracemalloc
@@ -111,13 +113,15 @@ def main():
     velocities = np.linspace(20.0, 400.0, 200)
     rho = 1.225
     pk_solve(system, gaf.isel(mach=[0]), velocities[:3], density=rho, mach=MACHS[0])  # warm-up
-    t0 = time.perf_counter()
+    load_before = os.getloadavg()
+    t0, c0 = time.perf_counter(), time.process_time()
     results = []
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         for m in MACHS:
             results.append(pk_solve(system, gaf, velocities, density=rho, mach=m))
-    total = time.perf_counter() - t0
+    total, cpu = time.perf_counter() - t0, time.process_time() - c0
+    load_after = os.getloadavg()
     tracemalloc.start()  # separate, untimed pass: tracemalloc slows numpy allocation
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
@@ -132,8 +136,12 @@ def main():
                               "f_fast": ff, "f_plain": fp, "df_rel": ff / fp - 1})
     figures = {
         "modes": n_root, "velocities": velocities.size, "machs": len(MACHS),
-        "total_seconds": round(total, 3),
-        "seconds_per_velocity_root": total / (velocities.size * n_root * len(MACHS)),
+        "total_seconds_wall": round(total, 3),
+        "total_seconds_cpu": round(cpu, 3),
+        "seconds_per_velocity_root_wall": total / (velocities.size * n_root * len(MACHS)),
+        "seconds_per_velocity_root_cpu": cpu / (velocities.size * n_root * len(MACHS)),
+        "load_average_1_5_15_before": [round(x, 2) for x in load_before],
+        "load_average_1_5_15_after": [round(x, 2) for x in load_after],
         "peak_traced_memory_MB_one_mach": round(peak / 2 ** 20, 2),
         "not_converged_points": int(sum((~ds.converged).sum() for ds in results)),
         "warnings": len(caught),

@@ -66,6 +66,16 @@ class GafInterpolator:
                                  "Fix: use interpolation='linear' or add MKAERO k values.")
             self._sR = CubicSpline(k, self._QR, axis=0)
             self._sD = CubicSpline(k, self._D, axis=0)
+            self._dR, self._dD = self._sR.derivative(), self._sD.derivative()
+        else:
+            # per-interval line coefficients, Q(k) = c0[i] + c1[i] k on [k_i, k_i+1]: one gather per
+            # coefficient for a whole batch of roots
+            h = np.diff(k)[:, None, None]
+            self._R1 = np.diff(self._QR, axis=0) / h
+            self._D1 = np.diff(self._D, axis=0) / h
+            self._R0 = self._QR[:-1] - self._R1 * k[:-1, None, None]
+            self._D0 = self._D[:-1] - self._D1 * k[:-1, None, None]
+            self._table = np.ascontiguousarray(np.stack([self._R0, self._R1, self._D0, self._D1], 1))
 
     def __call__(self, k: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Q^R, Q^I/k and an out-of-range flag at reduced frequencies ``k``.
@@ -83,21 +93,91 @@ class GafInterpolator:
             True where k lies above the tabulated range (not covered by the GAFs). Below the
             smallest tabulated k, Q^R and Q^I/k are held constant (quasi-steady limit) and not flagged.
         """
+        QR, D, _, _, outside = self.with_slopes(k, slopes=False)
+        return QR, D, outside
+
+    def with_slopes(self, k: np.ndarray, slopes: bool = True):
+        """Q^R, Q^I/k, their k-derivatives and the out-of-range flag at reduced frequencies ``k``.
+
+        Parameters
+        ----------
+        k : ndarray, shape (r,)
+            Reduced frequencies (>= 0).
+        slopes : bool
+            Compute the derivatives (else they are returned as None).
+
+        Returns
+        -------
+        QR, D : ndarray, shape (r, n, n)
+            As :meth:`__call__`.
+        dQR, dD : ndarray, shape (r, n, n) or None
+            d Q^R / dk and d (Q^I/k) / dk of the interpolant (zero where k is held outside the
+            table; one-sided finite difference, step 1e-6 k, for a callable).
+        outside : ndarray of bool, shape (r,)
+        """
         k = np.asarray(k, dtype=float)
         if self.callable is not None:
             kk = np.maximum(k, _K_EPS)
             Q = np.asarray(self.callable(self.mach, kk), dtype=complex)
-            return Q.real, Q.imag / kk[:, None, None], np.zeros(k.shape, dtype=bool)
+            QR, D = Q.real, Q.imag / kk[:, None, None]
+            dQR = dD = None
+            if slopes:
+                h = 1e-6 * kk
+                Qh = np.asarray(self.callable(self.mach, kk + h), dtype=complex)
+                dQR = (Qh.real - QR) / h[:, None, None]
+                dD = (Qh.imag / (kk + h)[:, None, None] - D) / h[:, None, None]
+            return QR, D, dQR, dD, np.zeros(k.shape, dtype=bool)
         tol = 1e-9
         outside = k > self.k_max * (1 + tol)
         kc = np.clip(k, self.k_min, self.k_max)
+        held = ((k < self.k_min) | outside)[:, None, None]
         if self.interpolation == "cubic":
-            return self._sR(kc), self._sD(kc), outside
+            QR, D = self._sR(kc), self._sD(kc)
+            if not slopes:
+                return QR, D, None, None, outside
+            return QR, D, np.where(held, 0.0, self._dR(kc)), np.where(held, 0.0, self._dD(kc)), outside
         i = np.clip(np.searchsorted(self.k_grid, kc) - 1, 0, self.k_grid.size - 2)
-        t = ((kc - self.k_grid[i]) / (self.k_grid[i + 1] - self.k_grid[i]))[:, None, None]
-        QR = (1 - t) * self._QR[i] + t * self._QR[i + 1]
-        D = (1 - t) * self._D[i] + t * self._D[i + 1]
-        return QR, D, outside
+        R1, D1 = self._R1[i], self._D1[i]
+        kb = kc[:, None, None]
+        QR = self._R0[i] + R1 * kb   # linear interpolation in k, as Nastran's PK
+        D = self._D0[i] + D1 * kb
+        if not slopes:
+            return QR, D, None, None, outside
+        if held.any():
+            R1, D1 = np.where(held, 0.0, R1), np.where(held, 0.0, D1)
+        return QR, D, R1, D1, outside
+
+    def linearised(self, k: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """The interpolant as a line in k about each k: Q^R = G0 + kc G1 and Q^I/k = G2 + kc G3.
+
+        For linear interpolation G holds the coefficients of each root's k interval (one gather
+        from a table, no arithmetic); otherwise the values and slopes at k.
+
+        Parameters
+        ----------
+        k : ndarray, shape (r,)
+
+        Returns
+        -------
+        G : ndarray, shape (r, 4, n, n)
+            G0, G1 = d Q^R / dk, G2, G3 = d (Q^I/k) / dk, where ``sloped``.
+        kc : ndarray, shape (r,)
+            k clipped to the table (where the interpolant is held constant outside).
+        sloped : ndarray of bool, shape (r,)
+            False where k lies outside the table (the k-derivatives there are zero, not G1, G3).
+        outside : ndarray of bool, shape (r,)
+            As :meth:`__call__`.
+        """
+        k = np.asarray(k, dtype=float)
+        if self.callable is None and self.interpolation == "linear":
+            outside = k > self.k_max * (1 + 1e-9)
+            kc = np.clip(k, self.k_min, self.k_max)
+            i = np.clip(np.searchsorted(self.k_grid, kc) - 1, 0, self.k_grid.size - 2)
+            return self._table[i], kc, (k >= self.k_min) & ~outside, outside
+        QR, D, dQR, dD, outside = self.with_slopes(k)
+        kb = k[:, None, None]
+        G = np.stack([QR - kb * dQR, dQR, D - kb * dD, dD], axis=1)
+        return G, k, np.ones(k.shape, dtype=bool), outside
 
 
 def _q_at_mach(gaf: xr.Dataset, mach: float) -> np.ndarray:

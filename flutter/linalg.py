@@ -36,6 +36,24 @@ def inverse_iteration(T: np.ndarray, x: np.ndarray, y: np.ndarray) -> tuple[np.n
     return u, w
 
 
+def real_matvec(A: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """Batched products of real matrices with complex vectors, A_r x_r.
+
+    One real matmul on the (re, im) pairs of x, so A is never copied to complex.
+
+    Parameters
+    ----------
+    A : ndarray, shape (R, n, n), real
+    x : ndarray, shape (R, n), complex
+
+    Returns
+    -------
+    ndarray, shape (R, n), complex
+    """
+    x = np.ascontiguousarray(x, dtype=complex)
+    return np.ascontiguousarray(A @ x.view(float).reshape(*x.shape, 2)).view(complex)[..., 0]
+
+
 def path_length(frm: tuple, to: tuple) -> float:
     """Length of a step between flight points (relative V and rho changes, absolute Mach change)."""
     (V0, r0, m0), (V1, r1, m1) = frm, to

@@ -26,12 +26,13 @@ import xarray as xr
 
 from flutter.crossings import G_TOL, Crossing, find_brackets, illinois, interpolate_zero
 from flutter.gafinterp import GafInterpolator
-from flutter.linalg import inverse_iteration, path_length
+from flutter.linalg import inverse_iteration, path_length, real_matvec
 from flutter.results import vg_dataset, attach_crossings
 from flutter.system import ModalSystem
 from structures.errors import InputError
 
 LN2 = np.log(2.0)
+NEWTON_ITER = 12  # Newton k-matching normally converges in 2-4 iterations; slower roots are retried
 
 
 @dataclass
@@ -114,98 +115,180 @@ class PKSolver:
         return self._interp[key]
 
     # ----------------------------------------------------------------------------- matrices
-    def pencil(self, k: np.ndarray, V: float, rho: float, mach: float):
-        """Damping and stiffness of the p-k pencil at each root's k.
+    def pencil(self, k: np.ndarray, V: float, rho: float, mach: float, slopes: bool = False):
+        """Damping and stiffness of the p-k pencil at each root's k (and their k-derivatives).
 
         Parameters
         ----------
         k : ndarray, shape (R,)
             Reduced frequencies (k = omega b / V).
-        V, rho, mach : float
-            Flight point.
+        V, rho, mach : float or ndarray, shape (R,)
+            Flight point (one for all roots, or one per root).
+        slopes : bool
+            Also return dC/dk and dKt/dk (aerodynamic part; the k-dependence of the hysteretic
+            structural damping is left out of them).
 
         Returns
         -------
         C, Kt : ndarray, shape (R, n, n)
             C = B_hh + B_s - rho b V Q^I/(2k) and Kt = K_hh - q Q^R (Nastran PK equation; b = cbar/2).
         outside : ndarray of bool, shape (R,)
+        dC, dKt : ndarray, shape (R, n, n)
+            Only with ``slopes=True``.
         """
-        QR, D, outside = self.interpolator(mach)(k)
-        C = self.B[None] - (0.5 * rho * self.b * V) * D  # rho cbar V Q^I / (4k), Nastran PK
-        if self._hyst:
-            omega = k * V / self.b
-            g = self.system.structural.at(omega / (2 * np.pi))
-            coef = np.where(omega > 1e-12, g / np.maximum(omega, 1e-300), 0.0)
-            C = C + coef[:, None, None] * self.system.stiffness[None]  # i g K -> (g/omega) K p
-        Kt = self.system.stiffness[None] - (0.5 * rho * V * V) * QR
-        return C, Kt, outside
+        QR, D, dQR, dD, outside = self._gafs(k, mach, slopes)
+        V, rho = np.asarray(V, dtype=float), np.asarray(rho, dtype=float)
+        cd = (0.5 * rho * self.b * V).reshape(-1, 1, 1)
+        q = (0.5 * rho * V * V).reshape(-1, 1, 1)
+        C = self.B[None] - cd * D  # rho cbar V Q^I / (4k), Nastran PK
+        if self._hyst:  # i g K -> (g/omega) K p
+            C = C + self._hysteretic(k, V)[:, None, None] * self.system.stiffness[None]
+        Kt = self.system.stiffness[None] - q * QR
+        if not slopes:
+            return C, Kt, outside
+        return C, Kt, outside, (-cd) * dD, (-q) * dQR
+
+    def _hysteretic(self, k: np.ndarray, V: np.ndarray) -> np.ndarray:
+        """g(omega) / omega per root: hysteretic damping i g K written as (g / omega) K p."""
+        omega = k * V / self.b
+        g = self.system.structural.at(omega / (2 * np.pi))
+        return np.where(omega > 1e-12, g / np.maximum(omega, 1e-300), 0.0)
+
+    def _linearised(self, k: np.ndarray, mach: np.ndarray):
+        """:meth:`GafInterpolator.linearised` for roots at their own Mach numbers."""
+        machs = np.unique(mach)
+        if machs.size == 1:
+            return self.interpolator(machs[0]).linearised(k)
+        n = self.system.n
+        G, kc = np.empty((k.size, 4, n, n)), np.empty(k.size)
+        sloped, outside = np.empty(k.size, dtype=bool), np.empty(k.size, dtype=bool)
+        for m in machs:
+            sel = mach == m
+            G[sel], kc[sel], sloped[sel], outside[sel] = self.interpolator(m).linearised(k[sel])
+        return G, kc, sloped, outside
+
+    def _gafs(self, k: np.ndarray, mach, slopes: bool):
+        """Interpolated Q^R, Q^I/k (and slopes) at each root's k and Mach number."""
+        machs = np.unique(np.asarray(mach, dtype=float))
+        if machs.size == 1:
+            return self.interpolator(machs[0]).with_slopes(k, slopes)
+        mach = np.broadcast_to(np.asarray(mach, dtype=float), k.shape)
+        n = self.system.n
+        out = [np.empty((k.size, n, n)) for _ in range(4 if slopes else 2)]
+        outside = np.zeros(k.shape, dtype=bool)
+        for m in machs:
+            sel = mach == m
+            vals = self.interpolator(m).with_slopes(k[sel], slopes)
+            for arr, v in zip(out, vals[:4] if slopes else vals[:2]):
+                arr[sel] = v
+            outside[sel] = vals[4]
+        return (*out, outside) if slopes else (*out, None, None, outside)
 
     # ----------------------------------------------------------------------------- kernels
     def correct(self, state: RootState, V: float, rho: float, mach: float,
-                p_start: np.ndarray | None = None, secant: bool = True) -> RootState:
+                p_start: np.ndarray | None = None, newton: bool = True,
+                retry: bool = True) -> RootState:
         """Converge every root at (V, rho, M) from ``state`` by two-sided Rayleigh-quotient iteration.
 
-        The k of each root follows its current eigenvalue at every step, so the fixed point is the
-        matched p-k root (k = b Im(p) / V). ``p_start`` (predicted eigenvalues) replaces
-        ``state.p`` as the first guess. Roots the secant-accelerated k update fails to converge are
-        retried with plain substitution of k (slower, linearly convergent).
+        Each iteration, batched over the unconverged roots: the two-sided Rayleigh functional
+        w^H T(p, k) u = 0 (a quadratic in p; Ruhe 1973) gives p at the root's current k, and its
+        derivative dp/dk = -w^H (p dC/dk + dKt/dk) u / w^H (2 M p + C) u gives a Newton step on the
+        matching condition f(k) = b Im p(k) / V - k = 0. A root is converged when p agrees with the
+        linearised prediction of the previous iteration and the k mismatch moves p by less than
+        ``tol``; that test needs no factorisation. Otherwise one LU of T(p) per root gives the next
+        right and left vectors (inverse iteration). ``p_start`` (predicted eigenvalues) replaces
+        ``state.p`` as the first guess. Roots the Newton update fails to converge within
+        ``NEWTON_ITER`` iterations are retried (if ``retry``) with plain substitution of k (slower,
+        linearly convergent, up to ``max_iter`` iterations).
         """
         M = self.system.mass
         p = (state.p if p_start is None else p_start).copy()
         u, w = state.u.copy(), state.w.copy()
         R = p.size
+        V, rho, mach = (np.broadcast_to(np.asarray(a, dtype=float), (R,)) for a in (V, rho, mach))
+        b_V = self.b / V
         done = np.zeros(R, dtype=bool)
+        solved = np.zeros(R, dtype=bool)          # at least one inverse iteration at this point
         outside = np.zeros(R, dtype=bool)
-        kk = self.b * np.abs(p.imag) / V          # k at which each root's pencil is evaluated
-        k_old = np.full(R, np.nan)
-        f_old = np.full(R, np.nan)
-        by_secant = np.zeros(R, dtype=bool)    # the pencil's k came from a secant step
-        for it in range(self.max_iter):
-            act = np.flatnonzero(~done)
-            k = kk[act]
-            C, Kt, out = self.pencil(k, V, rho, mach)
+        kk = b_V * np.abs(p.imag)                 # k at which each root's pencil is evaluated
+        kscale = b_V * self.scale
+        act = np.arange(R)
+        M, K, B, n = self.system.mass, self.system.stiffness, self.B, self.system.n
+        for it in range(min(self.max_iter, NEWTON_ITER) if newton else self.max_iter):
+            k, bv, ks = kk[act], b_V[act], kscale[act]
+            G, kc, sloped, out = self._linearised(k, mach[act])
             outside[act] = out
+            cd = 0.5 * rho[act] * self.b * V[act]  # rho cbar V / 4, Nastran PK damping term
+            q = 0.5 * rho[act] * V[act] ** 2
             ua, wa, pa = u[act], w[act], p[act]
             wc = wa.conj()
-            a2 = np.einsum("ri,ij,rj->r", wc, M, ua)
-            a1 = np.einsum("ri,rij,rj->r", wc, C, ua)
-            a0 = np.einsum("ri,rij,rj->r", wc, Kt, ua)
+            # Q^R u, Q^I/k u and their k-derivatives from one batched product
+            Gu = real_matvec(G.reshape(-1, 4 * n, n), ua).reshape(-1, 4, n)
+            kb, sl = kc[:, None], sloped[:, None]
+            Mu, Ku0 = ua @ M.T, ua @ K.T
+            Ku = Ku0 - q[:, None] * (Gu[:, 0] + kb * Gu[:, 1])      # (K_hh - q Q^R) u
+            Cu = ua @ B.T - cd[:, None] * (Gu[:, 2] + kb * Gu[:, 3])  # (B - rho b V Q^I/(2k)) u
+            hc = self._hysteretic(k, V[act]) if self._hyst else None
+            if hc is not None:
+                Cu = Cu + hc[:, None] * Ku0
+            a2 = np.einsum("ri,ri->r", wc, Mu)
+            a1 = np.einsum("ri,ri->r", wc, Cu)
+            a0 = np.einsum("ri,ri->r", wc, Ku)
             disc = np.sqrt(a1 * a1 - 4 * a2 * a0 + 0j)
             r1, r2 = (-a1 + disc) / (2 * a2), (-a1 - disc) / (2 * a2)
             pn = np.where(np.abs(r1 - pa) <= np.abs(r2 - pa), r1, r2)  # Rayleigh functional root
-            T = M[None] * (pn * pn)[:, None, None] + C * pn[:, None, None] + Kt
-            Tp = 2 * M[None] * pn[:, None, None] + C
-            un, wn = inverse_iteration(T, np.einsum("rij,rj->ri", Tp, ua),
-                                       np.einsum("rji,rj->ri", Tp.conj(), wa))
             flip = pn.imag < 0
-            pn = np.where(flip, pn.conj(), pn)
+            dTu = np.where(sl, -(pn * cd)[:, None] * Gu[:, 3] - q[:, None] * Gu[:, 1], 0.0)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                dpdk = -np.einsum("ri,ri->r", wc, dTu) / (2 * a2 * pn + a1)  # implicit function thm
+            dpdk = np.where(np.isfinite(dpdk), dpdk, 0.0)
+            pc = np.where(flip, pn.conj(), pn)
+            dpc = np.where(flip, dpdk.conj(), dpdk)
+            f = bv * pc.imag - k                    # matching condition, Nastran PK
+            ptol = self.tol * np.maximum(np.abs(pn), self.scale)
+            conv = solved[act] & (np.abs(pc - pa) <= ptol) & (np.abs(dpc * f) <= ptol)
+            done[act[conv]] = True
+            p[act[conv]] = pc[conv]
+            keep = ~conv
+            if not keep.any():
+                break
+            if not keep.all():
+                act = act[keep]
+                pn, pc, dpc, f, k, flip = pn[keep], pc[keep], dpc[keep], f[keep], k[keep], flip[keep]
+                bv, ks, G, kc, cd, q = bv[keep], ks[keep], G[keep], kc[keep], cd[keep], q[keep]
+                ua, wa, Mu, Cu = ua[keep], wa[keep], Mu[keep], Cu[keep]
+                hc = hc[keep] if hc is not None else None
+            # inverse iteration with T(p) = K_t + p C + p^2 M at the current k (eigenvectors of the
+            # pencil at k); right-hand sides T'(p) u and T'(p)^H w with T' = 2 M p + C (C, M real)
+            kb3 = kc[:, None, None]
+            Cm = B - cd[:, None, None] * (G[:, 2] + kb3 * G[:, 3])
+            if hc is not None:
+                Cm = Cm + hc[:, None, None] * K
+            pb = pn[:, None, None]
+            T = (K - q[:, None, None] * (G[:, 0] + kb3 * G[:, 1])) + pb * (Cm + pb * M)
+            x = 2 * pn[:, None] * Mu + Cu
+            y = 2 * pn.conj()[:, None] * (wa @ M) + real_matvec(Cm.transpose(0, 2, 1), wa)
+            un, wn = inverse_iteration(T, x, y)
             un[flip] = un[flip].conj()
             wn[flip] = wn[flip].conj()
-            dp = np.abs(pn - pa)
-            p[act], u[act], w[act] = pn, un, wn
-            # k update: secant on the matching condition f(k) = b Im p(k) / V - k = 0 once the
-            # eigen-iteration has settled, plain substitution otherwise
-            k_new = self.b * np.abs(pn.imag) / V
-            f = k_new - k
-            ko, fo = k_old[act], f_old[act]
+            u[act], w[act] = un, wn
+            solved[act] = True
+            # k update: Newton on f(k) = b Im p(k) / V - k, plain substitution where Newton is unsafe
+            k_sub = bv * pc.imag
+            fp = bv * dpc.imag - 1.0
             with np.errstate(divide="ignore", invalid="ignore"):
-                sec = k - f * (k - ko) / (f - fo)
-            use = secant & (2 <= it < 12) & (k_new > 1e-4) & np.isfinite(sec) & (sec >= 0) & (np.abs(sec - k_new) < 0.5 * k_new)
-            k_old[act], f_old[act] = k, f
-            kk[act] = np.where(use, sec, k_new)
-            kscale = self.b * self.scale / V
-            conv = (dp <= self.tol * np.maximum(np.abs(pn), self.scale)) & \
-                   (~by_secant[act] | (np.abs(f) <= 1e3 * self.tol * np.maximum(k_new, kscale)))
-            by_secant[act] = use
-            if it > 0:
-                done[act[conv]] = True
-            if done.all():
-                break
-        if secant and not done.all():
+                k_new = k - f / fp
+            use = newton & np.isfinite(k_new) & (fp < -0.2) & (k_new >= 0) & \
+                (np.abs(k_new - k_sub) <= 0.5 * np.maximum(k_sub, ks))
+            k_next = np.where(use, k_new, k_sub)
+            kk[act] = k_next
+            p[act] = pc + dpc * (k_next - k)          # linearised prediction at the new k
+        if newton and retry and not done.all():
             bad = np.flatnonzero(~done)
             start = state.p if p_start is None else p_start
             retry = self.correct(RootState(state.p[bad], state.u[bad], state.w[bad], done[bad],
-                                           outside[bad]), V, rho, mach, start[bad], secant=False)
+                                           outside[bad]), V[bad], rho[bad], mach[bad], start[bad],
+                                 newton=False)
             p[bad], u[bad], w[bad] = retry.p, retry.u, retry.w
             done[bad], outside[bad] = retry.converged, retry.outside
         return RootState(p, u, w, done, outside)
@@ -228,23 +311,46 @@ class PKSolver:
         prediction than to its own, loses eigenvector correlation while its eigenvalue jumps, or two
         roots land on the same eigenpair.
         """
+        h, pred = self.predict(state, frm, to)
+        # a not-converged root fails a strict step anyway: bisect rather than retry it slowly
+        new = self.correct(state, *to, p_start=pred, retry=not (depth < 3 and depth < self.max_depth))
+        return self.accept(state, new, pred, frm, to, depth)
+
+    @staticmethod
+    def predict(state: RootState, frm: tuple, to: tuple) -> tuple[float, np.ndarray]:
+        """Path length of the step and the linearly extrapolated eigenvalues, shape (R,)."""
         h = path_length(frm, to)
         pred = state.p + (state.slope * h if state.slope is not None else 0)
-        pred = np.where(pred.imag < 0, pred.real + 0j, pred)
-        new = self.correct(state, *to, p_start=pred)
-        if not self._step_ok(state, new, pred, strict=depth < 3):
+        return h, np.where(pred.imag < 0, pred.real + 0j, pred)
+
+    def accept(self, state: RootState, new: RootState, pred: np.ndarray, frm: tuple, to: tuple,
+               depth: int) -> RootState:
+        """Keep a corrected step if it passes the tracking checks, else bisect it (``advance``) or,
+        at the smallest step, reseed the roots that still jump; sets the predictor slope."""
+        h = path_length(frm, to)
+        strict = depth < 3
+        if not self._step_ok(state, new, pred, strict=strict):
             if depth < self.max_depth:
                 mid = tuple(0.5 * (a + b) for a, b in zip(frm, to))
                 half = self.advance(state, frm, mid, depth + 1)
                 return self.advance(half, mid, to, depth + 1)
-            new = self._reseed(new, pred, *to)
-        new.slope = (new.p - state.p) / h if h > 0 else None
+            new, reseeded = self._reseed(new, pred, *to)
+        else:
+            reseeded = np.zeros(0, dtype=int)
+        if h > 0:
+            # a reseeded root jumped (e.g. a pair turning real): its jump is no slope to predict with
+            new.slope = (new.p - state.p) / h
+            new.slope[reseeded] = 0.0
+        else:
+            new.slope = None
         return new
 
-    def _reseed(self, new: RootState, pred: np.ndarray, V: float, rho: float, mach: float) -> RootState:
+    def _reseed(self, new: RootState, pred: np.ndarray, V: float, rho: float,
+                mach: float) -> tuple[RootState, np.ndarray]:
         """Restart roots that still jump or collide at the smallest step (e.g. a pair turning real):
         full eigen-decomposition of the first-order p-k matrix at the root's k, nearest eigenvalue
-        not taken by another root, then the usual correction."""
+        not taken by another root, then the usual correction. Returns the state and the indices of
+        the restarted roots."""
         sep = np.abs(pred[:, None] - pred[None, :])
         np.fill_diagonal(sep, np.inf)
         jump = np.abs(new.p - pred) / np.maximum(sep.min(axis=1), self.scale)
@@ -255,12 +361,13 @@ class PKSolver:
         later = np.any(np.tril(rel <= 1e-9, k=-1), axis=1)  # second of an identical pair
         bad = np.flatnonzero((jump > 0.5) | (dup & (jump > 0.05)) | later)
         if bad.size == 0:
-            return new
+            return new, bad
         n = self.system.n
         Minv = np.linalg.inv(self.system.mass)
         taken = list(new.p[np.setdiff1d(np.arange(new.p.size), bad)])
         for r in bad:
             p_r, ok = pred[r], False
+            tk = np.asarray(taken, dtype=complex)
             for _ in range(self.max_iter):  # plain per-root p-k: full eig per iteration
                 k = np.array([self.b * abs(p_r.imag) / V])
                 C, Kt, out = self.pencil(k, V, rho, mach)
@@ -268,8 +375,8 @@ class PKSolver:
                 lam, X = np.linalg.eig(A)
                 neg = lam.imag < 0
                 lam, X = np.where(neg, lam.conj(), lam), np.where(neg[None, :], X.conj(), X)
-                free = [j for j in np.argsort(np.abs(lam - p_r))
-                        if all(abs(lam[j] - t) > 1e-6 * max(abs(t), self.scale) for t in taken)]
+                clash = np.abs(lam[:, None] - tk[None, :]) <= 1e-6 * np.maximum(np.abs(tk), self.scale)
+                free = [j for j in np.argsort(np.abs(lam - p_r)) if not clash[j].any()]
                 j = free[0] if free else int(np.argmin(np.abs(lam - p_r)))
                 step = abs(lam[j] - p_r)
                 p_r = lam[j]
@@ -280,7 +387,7 @@ class PKSolver:
             u = X[:n, j] / np.linalg.norm(X[:n, j])
             new.p[r], new.u[r], new.w[r] = p_r, u, u.conj()
             new.converged[r], new.outside[r] = ok, bool(out[0])
-        return new
+        return new, bad
 
     def _step_ok(self, old: RootState, new: RootState, pred: np.ndarray, strict: bool) -> bool:
         """Accept a step by eigenvalue continuity, eigenvector correlation (MAC) and distinctness."""
@@ -347,11 +454,50 @@ def sweep_states(solver: PKSolver, velocity, density, mach) -> list[RootState]:
     -------
     list of RootState, one per point.
     """
-    pts = list(zip(velocity, density, mach))
-    states = [solver.start(*pts[0])]
-    for i in range(1, len(pts)):
-        states.append(solver.advance(states[-1], pts[i - 1], pts[i]))
-    return states
+    return sweep_states_many(solver, [(velocity, density, mach)])[0]
+
+
+def _stack(states: list[RootState]) -> RootState:
+    return RootState(*(np.concatenate([getattr(s, f) for s in states])
+                       for f in ("p", "u", "w", "converged", "outside")))
+
+
+def _part(state: RootState, sl: slice) -> RootState:
+    return RootState(state.p[sl], state.u[sl], state.w[sl], state.converged[sl], state.outside[sl])
+
+
+def sweep_states_many(solver: PKSolver, cases: list[tuple]) -> list[list[RootState]]:
+    """Several sweeps continued in lockstep, their roots corrected together.
+
+    At every sweep index the roots of all cases (e.g. the Mach numbers of a PK analysis) are
+    corrected in one batched call (each root at its own case's flight point); a case whose step
+    fails the tracking checks is then bisected on its own (:meth:`PKSolver.accept`), so each case's
+    result is that of :func:`sweep_states` on it alone.
+
+    Parameters
+    ----------
+    solver : PKSolver
+    cases : list of (velocity, density, mach), each ndarray of shape (npts_c,)
+
+    Returns
+    -------
+    list (one per case) of lists of RootState (one per point).
+    """
+    pts = [list(zip(*case)) for case in cases]
+    out = [[solver.start(*pc[0])] for pc in pts]
+    R = solver.system.n
+    for i in range(1, max(len(pc) for pc in pts)):
+        live = [c for c, pc in enumerate(pts) if i < len(pc)]
+        steps = [solver.predict(out[c][-1], pts[c][i - 1], pts[c][i]) for c in live]
+        flight = np.repeat(np.array([pts[c][i] for c in live]), R, axis=0)  # (R * ncases, 3)
+        start = _stack([out[c][-1] for c in live])
+        new = solver.correct(start, flight[:, 0], flight[:, 1], flight[:, 2],
+                             p_start=np.concatenate([pred for _, pred in steps]),
+                             retry=solver.max_depth == 0)
+        for j, c in enumerate(live):
+            part = _part(new, slice(j * R, (j + 1) * R))
+            out[c].append(solver.accept(out[c][-1], part, steps[j][1], pts[c][i - 1], pts[c][i], 0))
+    return out
 
 
 def warn_out_of_range(states: list[RootState], solver: PKSolver, velocity, mach) -> None:
@@ -443,17 +589,50 @@ def pk_solve(system: ModalSystem, gaf, velocity, *, density, mach, sweep: str = 
         ``eigenvector``, ``converged`` (False where not converged or k outside the GAF table);
         crossings on dim ``crossing`` (``crossing_velocity``, ``crossing_frequency``, ...).
     """
+    return pk_solve_many(system, gaf, [(velocity, density, mach)], sweep=sweep, refc=refc,
+                         interpolation=interpolation, refine=refine, g_tol=g_tol, **options)[0]
+
+
+def pk_solve_many(system: ModalSystem, gaf, cases, *, sweep: str = "velocity",
+                  refc: float | None = None, interpolation: str = "linear", refine: bool = True,
+                  g_tol: float = G_TOL, **options) -> list[xr.Dataset]:
+    """Several p-k sweeps (e.g. one per Mach number or density) solved together.
+
+    The roots of all cases are corrected in one batched call per sweep index
+    (:func:`sweep_states_many`); each result equals ``pk_solve`` on that case alone.
+
+    Parameters
+    ----------
+    system, gaf, sweep, refc, interpolation, refine, g_tol, **options
+        As :func:`pk_solve`.
+    cases : list of (velocity, density, mach)
+        Each an array_like of shape (npts_c,) or a scalar (broadcast), as in :func:`pk_solve`.
+
+    Returns
+    -------
+    list of xarray.Dataset, one per case, as :func:`pk_solve`.
+    """
     if sweep not in ("velocity", "density"):
         raise InputError(f"p-k: unknown sweep {sweep!r}. Fix: use 'velocity' or 'density'.")
-    V, rho, M = np.broadcast_arrays(np.atleast_1d(np.asarray(velocity, dtype=float)),
-                                    np.atleast_1d(np.asarray(density, dtype=float)),
-                                    np.atleast_1d(np.asarray(mach, dtype=float)))
-    V, rho, M = V.copy(), rho.copy(), M.copy()
-    check_sweep(V, rho, M, sweep)
+    flights = []
+    for velocity, density, mach in cases:
+        V, rho, M = np.broadcast_arrays(np.atleast_1d(np.asarray(velocity, dtype=float)),
+                                        np.atleast_1d(np.asarray(density, dtype=float)),
+                                        np.atleast_1d(np.asarray(mach, dtype=float)))
+        check_sweep(V, rho, M, sweep)
+        flights.append((V.copy(), rho.copy(), M.copy()))
     solver = PKSolver(system, gaf, refc=refc, interpolation=interpolation, **options)
-    for m in np.unique(M):
+    for m in np.unique(np.concatenate([M for _, _, M in flights])):
         solver.interpolator(m)
-    states = sweep_states(solver, V, rho, M)
+    all_states = sweep_states_many(solver, flights)
+    return [_case_dataset(solver, states, *flight, sweep=sweep, interpolation=interpolation,
+                          refine=refine, g_tol=g_tol) for states, flight in zip(all_states, flights)]
+
+
+def _case_dataset(solver: PKSolver, states: list[RootState], V, rho, M, *, sweep: str,
+                  interpolation: str, refine: bool, g_tol: float) -> xr.Dataset:
+    """Warnings, crossings and the result Dataset of one solved sweep."""
+    system = solver.system
     warn_out_of_range(states, solver, V, M)
     p = np.array([s.p for s in states])
     u = np.array([s.u for s in states])
