@@ -22,9 +22,12 @@ along the sending box's normal (:mod:`aero.panels`), so D's steady diagonal is n
 from __future__ import annotations
 
 import os
+import threading
 from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
+
+from scipy.sparse import csr_matrix
 
 from aero import dlm_kernel as dk
 from aero.panels import BoxMesh, mirror_xz
@@ -34,11 +37,15 @@ from structures.errors import InputError, card_message
 __all__ = ["dlm_aic", "check_mesh_for_k", "METHODS"]
 
 METHODS = ("quartic", "parabolic")
-_TARGET_POINTS = 1 << 16        # kernel points x frequencies per block (~30 MB of temporaries)
+_TARGET_PAIRS = 1 << 16         # (receiver, distinct sample point) pairs per block
 
 
-def _senders(mesh: BoxMesh, samples: np.ndarray) -> dict:
-    """Sending-box frames: midpoint, semi-width e, unit y_e and normal, sweep, sample x."""
+def _senders(mesh: BoxMesh, samples: np.ndarray, wv: np.ndarray) -> dict:
+    """Sending-box frames: midpoint, semi-width e, unit y_e and normal, sweep, sample points.
+
+    The sample points shared by neighbouring boxes (strip edges) are kept once (``upts``, with
+    ``inv`` mapping box-major sample slots to them), with cos/sin(omega x_q / V) (nk, U).
+    """
     d = mesh.doublet_out - mesh.doublet_in
     e = 0.5 * np.hypot(d[:, 1], d[:, 2])
     ye = np.zeros_like(d)
@@ -47,16 +54,20 @@ def _senders(mesh: BoxMesh, samples: np.ndarray) -> dict:
     tanl = d[:, 0] / (2.0 * e)                                   # tan(sweep of the doublet line)
     eta = e[:, None, None] * samples[None, :, None]              # (n, nq, 1)
     pts = mid[:, None, :] + eta * (ye + np.outer(tanl, [1.0, 0.0, 0.0]))[:, None, :]
-    # sample points shared by neighbouring boxes (strip edges) are evaluated once
     upts, inv = np.unique(pts.reshape(-1, 3), axis=0, return_inverse=True)
+    xq = np.ascontiguousarray(upts[:, 0])
+    cq, sq = dk.sincos(wv[:, None] * xq[None, :])
     return {"mid": mid, "e": e, "ye": ye, "n": np.array(mesh.normal), "tanl": tanl,
-            "chord": np.array(mesh.chord), "upts": upts, "inv": inv.ravel()}
+            "chord": np.array(mesh.chord), "upts": upts, "inv": inv.ravel(), "xq": xq,
+            "cq": cq, "sq": sq}
 
 
-def _strip_setup(yz, nrm, snd, wv, method):
+def _strip_setup(yz, nrm, snd, wv, method, mach):
     """Everything that depends only on a receiving strip's y, z and normal (all its boxes)."""
     sig = dk.SAMPLES[method]
+    nq = sig.size
     e = snd["e"]
+    n = e.size
     dyz = yz[None, :] - snd["mid"][:, 1:]                        # (n, 2) y-z offset to midpoint
     yh = np.einsum("ni,ni->n", dyz, snd["ye"][:, 1:]) / e        # ybar / e, sending frame
     zh = np.einsum("ni,ni->n", dyz, snd["n"][:, 1:]) / e         # zbar / e
@@ -64,10 +75,12 @@ def _strip_setup(yz, nrm, snd, wv, method):
     w1, w2 = dk.span_weights(yh, zh, method)                     # (n, nq)
     upts = snd["upts"]                                           # U distinct sample points
     r1u = np.sqrt((yz[0] - upts[:, 1]) ** 2 + (yz[1] - upts[:, 2]) ** 2)
-    cq, sq = dk.sincos(wv[:, None] * upts[None, :, 0])
-    # P1 = -(K1 e^{-i w x0} - K10) T1 (RTM); A&R eq. 16 with the 1/e of the span weights
-    setup = {"r1u": r1u, "freq": dk.frequency_factors(r1u, wv), "cq": cq, "sq": sq,
-             "om": w1 * ((-snd["chord"] / (8.0 * np.pi * e)) * t1)[:, None]}
+    # P1 = -(K1 e^{-i w x0} - K10) T1 (RTM); A&R eq. 16 with the 1/e of the span weights, as a
+    # sparse (n, U) map from the distinct points to the sending boxes
+    om = w1 * ((-snd["chord"] / (8.0 * np.pi * e)) * t1)[:, None]
+    wmap = csr_matrix((om.ravel(), snd["inv"], np.arange(0, n * nq + 1, nq)),
+                      shape=(n, upts.shape[0]))
+    setup = {"pf": dk.point_factors(r1u, mach, wv), "wmap": wmap}
     js = np.nonzero(np.abs(zh) > dk.NEAR_PLANAR)[0]
     setup["js"] = js
     if js.size:
@@ -77,36 +90,48 @@ def _strip_setup(yz, nrm, snd, wv, method):
         t2 = (zh[js] * es)[:, None] * (dnr[:, None] - es[:, None] * sig * yn[:, None])
         c2 = -snd["chord"][js] / (8.0 * np.pi * es ** 3)         # P2 = -(dK2) T2*, 1/e^3 weights
         setup["om2"] = w2[js] * t2 * c2[:, None]
-        setup["pts"] = snd["inv"][(js[:, None] * sig.size + np.arange(sig.size)).ravel()]
+        pts = snd["inv"][(js[:, None] * nq + np.arange(nq)).ravel()]
+        setup["pts"] = pts
+        setup["pf2"] = {"r1": r1u[pts], "ib": setup["pf"]["ib"][pts]}
     return setup
 
 
-def _increment_rows(xr, setup, snd, mach, wv, nq):
+def _increment_rows(xr, setup, snd, mach, wv, nq, scratch):
     """Unsteady increment for receivers at x = xr (one strip) against all n senders.
 
-    Returns complex (nk, r, n).
+    ``scratch`` is the calling thread's :class:`aero.dlm_kernel.Scratch`. Returns complex
+    (nk, r, n).
     """
-    upts, inv = snd["upts"], snd["inv"]
-    x0u = xr[:, None] - upts[None, :, 0]                         # (r, U), x0 = x_r - x_q
-    geo = dk.kernel_geometry(x0u, setup["r1u"], mach)
+    xq = snd["xq"]
+    nk, r, u = wv.size, xr.size, xq.size
+    x0 = np.subtract(xr[:, None], xq[None, :], out=scratch("x0", (r, u)))   # x0 = x_r - x_q
+    pf = setup["pf"]
+    geo = dk.block_geometry(x0, pf, mach, scratch)
     # cos/sin(omega x0/V) as separable products of receiver and sender terms
     cr, sr = dk.sincos(wv[:, None] * xr[None, :])
     cr, sr = cr[:, :, None], sr[:, :, None]
-    cq, sq = setup["cq"][:, None, :], setup["sq"][:, None, :]
-    cosx = cr * cq + sr * sq
-    sinx = sr * cq - cr * sq
-    re, im = dk.incremental_k1(geo, setup["freq"], wv, cosx, sinx)   # (nk, r, U)
-    nk, r, n = wv.size, xr.size, snd["e"].size
-    re, im = re.take(inv, axis=-1), im.take(inv, axis=-1)        # (nk, r, n*nq)
-    om = setup["om"]
-    out = (np.einsum("krnq,nq->krn", re.reshape(nk, r, n, nq), om)
-           + 1j * np.einsum("krnq,nq->krn", im.reshape(nk, r, n, nq), om))
+    buf = scratch("buf", (nk, 2, r, u))
+    cosx, sinx, tmp = (scratch(name, (r, u)) for name in ("cosx", "sinx", "tmp"))
+    for kk in range(nk):
+        cq, sq = snd["cq"][kk], snd["sq"][kk]
+        np.multiply(cr[kk], cq, out=cosx)
+        cosx += np.multiply(sr[kk], sq, out=tmp)
+        np.multiply(sr[kk], cq, out=sinx)
+        sinx -= np.multiply(cr[kk], sq, out=tmp)
+        dk.incremental_k1(geo, pf, kk, wv[kk], mach, cosx, sinx, buf[kk, 0], buf[kk, 1],
+                          scratch)
+    # span integration: sparse (n, U) weights times the points' values (one product for all k)
+    cols = scratch("cols", (u, nk * 2 * r))
+    np.copyto(cols, buf.reshape(-1, u).T)
+    wmap = setup["wmap"]
+    res = (wmap @ cols).T.reshape(nk, 2, r, wmap.shape[0])
+    out = res[:, 0] + 1j * res[:, 1]
     js = setup["js"]
     if js.size:
         pts = setup["pts"]
-        geo2 = {key: (val[..., pts] if np.ndim(val) else val) for key, val in geo.items()}
-        ex = cosx[..., pts] - 1j * sinx[..., pts]
-        dk2 = dk.incremental_k2(geo2, mach, wv, ex).reshape(nk, r, js.size, nq)
+        geo2 = {key: geo[key][:, pts] for key in ("x0", "R", "rmx", "v", "f", "A")}
+        geo2["en"] = geo["en"][:, :, pts]
+        dk2 = dk.incremental_k2(geo2, setup["pf2"], mach, wv).reshape(nk, r, js.size, nq)
         out[..., js] += np.einsum("krpq,pq->krp", dk2, setup["om2"])
     return out
 
@@ -140,13 +165,15 @@ def dlm_aic(mesh: BoxMesh, mach: float, k, *, refc: float, method: str = "quarti
     symxz : {0, +1, -1}
         No symmetry, symmetric or antisymmetric about y = 0.
     chunk_size : int, optional
-        Receiving boxes per block (blocks never mix strips). A block's temporaries take about
-        0.5 kB per (receiver, sample point, k); the default sizes blocks to ~2^16 such entries
-        (~30 MB per thread) whatever n and nk; the peak is that, the (nk, n, n) complex result
-        and the (n, n) steady matrix.
+        Receiving boxes per block (blocks never mix strips). A block's work arrays take about
+        (27 + 4 nk) * 8 bytes per (receiver, distinct sample point) pair and are reused from
+        block to block (one set per thread); the default sizes blocks to ~2^16 pairs, i.e.
+        ~15 MB + 2 MB per k per thread whatever n. The peak is that, the (nk, n, n) complex
+        result and the (n, n) steady matrix.
     workers : int, optional
         Threads over receiving strips (default: the number of CPUs); each thread holds one
-        block's temporaries.
+        block's work arrays. With more than one thread the steady matrix is computed
+        concurrently with the first strips.
 
     Returns
     -------
@@ -175,40 +202,48 @@ def dlm_aic(mesh: BoxMesh, mach: float, k, *, refc: float, method: str = "quarti
     if not np.isfinite(refc) or refc <= 0.0:
         raise InputError(card_message(f"reference chord REFC={refc} must be > 0.",
                                       card="AERO/AEROS", fix="give the reference chord."))
+    if chunk_size is not None and int(chunk_size) < 1:
+        raise InputError(card_message(f"chunk_size={chunk_size} must be >= 1.",
+                                      fix="give a positive number of receiving boxes."))
+    rows = None if chunk_size is None else int(chunk_size)
     n, nk = mesh.n, kk.size
     nq = dk.SAMPLES[method].size
-    if chunk_size is None:
-        rows = max(1, _TARGET_POINTS // max(1, n * nq * nk))
-    else:
-        rows = int(chunk_size)
-        if rows < 1:
-            raise InputError(card_message(f"chunk_size={chunk_size} must be >= 1.",
-                                          fix="give a positive number of receiving boxes."))
     wv = kk / (0.5 * refc)                                       # omega / V = k / b
-    senders = [(1.0, _senders(mesh, dk.SAMPLES[method]))]
+    senders = [(1.0, _senders(mesh, dk.SAMPLES[method], wv))]
     if s:
-        senders.append((-float(s), _senders(mirror_xz(mesh), dk.SAMPLES[method])))
-    out = np.empty((nk, n, n), dtype=complex)
-    out[:] = steady_aic(mesh, m, symxz=s)[None]
+        senders.append((-float(s), _senders(mirror_xz(mesh), dk.SAMPLES[method], wv)))
+    if chunk_size is None:                       # ~_TARGET_PAIRS (receiver, point) pairs per block
+        rows = max(1, _TARGET_PAIRS // max(1, senders[0][1]["xq"].size))
+    out = np.zeros((nk, n, n), dtype=complex)
     strips = _strips(mesh)
+
+    local = threading.local()
 
     def run(idx):
         """One receiving strip: shared set-up once, then blocks of at most `rows` boxes."""
+        if not hasattr(local, "scratch"):
+            local.scratch = dk.Scratch()                         # per-thread work arrays
         yz, nrm = mesh.collocation[idx[0], 1:], mesh.normal[idx[0]]
         for factor, snd in senders:
-            setup = _strip_setup(yz, nrm, snd, wv, method)
+            setup = _strip_setup(yz, nrm, snd, wv, method, m)
             for i0 in range(0, idx.size, rows):                  # strips' rows are disjoint
                 sub = idx[i0:i0 + rows]
-                out[:, sub] += factor * _increment_rows(mesh.collocation[sub, 0], setup, snd,
-                                                        m, wv, nq)
+                inc = _increment_rows(mesh.collocation[sub, 0], setup, snd, m, wv, nq,
+                                      local.scratch)
+                if factor != 1.0:
+                    inc *= factor
+                out[:, sub] += inc
 
     nthreads = min(len(strips), os.cpu_count() or 1) if workers is None else int(workers)
     if nthreads > 1:                                             # numpy releases the GIL
         with ThreadPoolExecutor(max_workers=nthreads) as pool:
+            steady = pool.submit(steady_aic, mesh, m, symxz=s)
             list(pool.map(run, strips))
+            out += steady.result()[None]
     else:
         for idx in strips:
             run(idx)
+        out += steady_aic(mesh, m, symxz=s)[None]
     bad = ~np.isfinite(out)
     if bad.any():
         _, i, j = (int(v[0]) for v in np.nonzero(bad))

@@ -42,11 +42,12 @@ cancellation of the closed form.
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
-__all__ = ["DESMARAIS_A", "DESMARAIS_P", "SAMPLES", "FIT", "NEAR_PLANAR", "FAR2", "sincos",
-           "kernel_geometry", "frequency_factors", "incremental_k1", "incremental_k2",
-           "span_weights"]
+__all__ = ["DESMARAIS_A", "DESMARAIS_P", "SAMPLES", "FIT", "NEAR_PLANAR", "FAR2", "Scratch", "sincos",
+           "point_factors", "block_geometry", "incremental_k1", "incremental_k2", "span_weights"]
 
 # Desmarais (1982) 12-term coefficients of 1 - u/sqrt(1+u^2) ~ sum a_n exp(-p_n u), p_n = b 2^n.
 DESMARAIS_A = np.array([0.000319759140, -0.000055461471, 0.002726074362, 0.005749551566,
@@ -64,160 +65,239 @@ NEAR_PLANAR = 1e-3         # |zbar| / e at or below which a pair is planar
 FAR2 = 16.0                # (ybar^2 + zbar^2) / e^2 from which the 1/r^4 term uses Gauss-Legendre
 _GL_X, _GL_W = np.polynomial.legendre.leggauss(10)
 
-
-def sincos(x: np.ndarray):
-    """cos(x) and sin(x) to ~1 ulp of |x|, about 3x faster than np.cos + np.sin here.
-
-    x = j h + d with h = 2 pi / 16384 and |d| <= h/2: table values of cos/sin(j h) rotated by d
-    through cos d = 1 - d^2/2, sin d = d - d^3/6 (truncation below 6e-17 for |d| <= 1.9e-4).
-    """
-    t = x * (1.0 / _H)
-    j = np.rint(t)
-    d = t - j
-    d *= _H
-    idx = j.astype(np.int64)
-    idx &= _NTAB - 1
-    ct, st = _COS_TAB.take(idx), _SIN_TAB.take(idx)
-    d2 = d * d
-    cd = 1.0 - 0.5 * d2
-    d2 *= -1.0 / 6.0
-    d2 += 1.0
-    d2 *= d                                             # sin d
-    return ct * cd - st * d2, st * cd + ct * d2
-
-
 _NTAB = 16384
 _H = 2.0 * np.pi / _NTAB
 _COS_TAB, _SIN_TAB = np.cos(_H * np.arange(_NTAB)), np.sin(_H * np.arange(_NTAB))
+_ROUND = 1.5 * 2.0 ** 52   # t + _ROUND - _ROUND rounds t to an integer (|t| < 2^51)
 
 
-def kernel_geometry(x0: np.ndarray, r1: np.ndarray, mach: float) -> dict:
-    """Geometry-only factors of the kernel (shared by all reduced frequencies).
+def _new(name, shape, dtype=float):
+    """Default scratch provider: a fresh array (see :class:`Scratch`)."""
+    return np.empty(shape, dtype=dtype)
 
-    Parameters
-    ----------
-    x0 : (r, m) float
-        Streamwise offsets from the m sending points to r receivers.
-    r1 : (m,) float
-        y-z distances, shared by the r receivers (receivers of one strip); r1 >= 0 and
-        x0 != 0 where r1 == 0.
-    mach : float
-        0 <= M < 1.
 
-    Returns
-    -------
-    dict
-        (r, m) arrays ``R, rmx, u, f, neg, sgn, negf, A, K10, theta``, ``en`` (12, r, m) =
-        exp(-p_n |u1|), and ``x0``, ``r1``; used by :func:`incremental_k1`, :func:`incremental_k2`.
+class Scratch:
+    """Reusable named work arrays (one instance per thread).
+
+    ``scratch(name, shape, dtype)`` returns a C-contiguous view of a cached buffer, so that the
+    kernel's per-block temporaries are allocated once instead of once per block (fresh large
+    arrays cost page faults that took more time than the arithmetic). An array obtained under a
+    name is valid until the same name is requested again.
     """
-    b2 = 1.0 - mach * mach
-    R = np.sqrt(x0 * x0 + b2 * r1 * r1)
-    rmx = R - mach * x0                                 # = beta^2 r1 sqrt(1 + u1^2) > 0
-    with np.errstate(divide="ignore", invalid="ignore"):
-        u1 = (mach * R - x0) / (b2 * r1)                # A&R eq. 11 (+-inf where r1 == 0)
-    u = np.abs(u1)
-    with np.errstate(over="ignore", invalid="ignore"):
-        s = np.sqrt(1.0 + u * u)                        # (np.hypot is ~10x slower)
-        f = 1.0 / (s * (s + u))                         # 1 - u/sqrt(1+u^2), cancellation-free
-    # Desmarais terms exp(-p_n u) with p_{n+1} = 2 p_n: one exp, then squares (relative error
-    # <= 2^11 eps); clamping at 1e-150 keeps the squares out of the slow subnormal range, terms
-    # below that are negligible against the others (|a_n| / p_n^2 < 1e4).
-    en = np.empty((12,) + u.shape)
-    np.exp(-DESMARAIS_P[0] * u, out=en[0])
-    for n in range(1, 12):
-        np.maximum(en[n - 1], 1e-150, out=en[n])
-        en[n] *= en[n]
-    sgn = np.copysign(1.0, -u1)                         # +1 where u1 < 0 (I(u) symmetry branch)
-    negf = 0.5 * sgn + 0.5
-    return {"x0": x0, "r1": r1, "R": R, "rmx": rmx, "u": u, "f": f, "neg": sgn > 0.0,
-            "sgn": sgn, "negf": negf, "en": en,
-            "A": mach * b2 * r1 * r1 / (R * rmx),       # M r1/R / sqrt(1+u1^2)
-            "K10": -1.0 - x0 / R,                       # A&R eq. 12
-            "theta": mach * rmx / b2}                   # k1 u1 + omega x0/V = (omega/V) theta
+
+    def __init__(self):
+        self._buf = {}
+
+    def __call__(self, name, shape, dtype=float):
+        size = math.prod(shape)
+        buf = self._buf.get((name, np.dtype(dtype).str))
+        if buf is None or buf.size < size:
+            buf = np.empty(max(size, 1), dtype=dtype)
+            self._buf[(name, np.dtype(dtype).str)] = buf
+        return buf[:size].reshape(shape)
+
+
+def sincos(x: np.ndarray, scratch=_new):
+    """cos(x) and sin(x) to ~1 ulp of |x| (|x| < 1e15), several times faster than np.cos + np.sin.
+
+    x = j h + d with h = 2 pi / 16384 and |d| <= h/2: table values of cos/sin(j h) rotated by d
+    through cos d = 1 - d^2/2, sin d = d - d^3/6 (truncation below 6e-17 for |d| <= 1.9e-4).
+    j is rounded with the 1.5 * 2^52 shift, whose low mantissa bits are j mod 16384.
+    ``scratch`` (see :class:`Scratch`) provides the work and result arrays.
+    """
+    shape = np.shape(x)
+    t = np.multiply(x, 1.0 / _H, out=scratch("sc_t", shape))
+    big = np.add(t, _ROUND, out=scratch("sc_b", shape))
+    idx = np.bitwise_and(big.view(np.int64), _NTAB - 1, out=scratch("sc_i", shape, np.int64))
+    big -= _ROUND                                       # j
+    t -= big
+    t *= _H                                             # d
+    ct = np.take(_COS_TAB, idx, out=scratch("sc_cos", shape), mode="clip")
+    st = np.take(_SIN_TAB, idx, out=scratch("sc_sin", shape), mode="clip")
+    d2 = np.multiply(t, t, out=big)
+    cd = np.multiply(d2, -0.5, out=scratch("sc_cd", shape))
+    cd += 1.0                                           # cos d
+    d2 *= -1.0 / 6.0
+    d2 += 1.0
+    d2 *= t                                             # sin d
+    c = np.multiply(ct, cd, out=scratch("sc_c", shape))
+    c -= np.multiply(st, d2, out=t)
+    st *= cd
+    ct *= d2
+    st += ct
+    return c, st
 
 
 _AP = DESMARAIS_A * DESMARAIS_P
 _P2 = DESMARAIS_P ** 2
 
 
-def frequency_factors(r1: np.ndarray, wv: np.ndarray) -> dict:
-    """Reduced-frequency factors that depend on r1 only (shared by a strip's receivers).
+def point_factors(r1: np.ndarray, mach: float, wv: np.ndarray) -> dict:
+    """Factors of the kernel that depend only on a sample point's y-z distance r1 to a strip.
 
-    With c_n = 1/(p_n^2 + k1^2), k1 = (omega/V) r1: ``k1``, ``kappa`` = k1^2 (nk, m),
-    ``ac`` = a_n c_n and ``apc`` = a_n p_n c_n (nk, 12, m), ``s0`` = sum_n a_n c_n (nk, m).
+    With b2 = 1 - M^2, k1 = (omega/V) r1, kappa = k1^2 and c_n = 1/(p_n^2 + kappa):
+
+    ``c1`` = b2 r1^2, ``ib`` = 1/(b2 r1) (inf where r1 = 0), ``fn`` = (b2 r1)^2,
+    ``am`` = M b2 r1^2, ``mp1`` = -p_1 ib, and per frequency ``w2`` = kappa a_n c_n,
+    ``w1`` = k1 a_n p_n c_n (nk, 12, m) and ``c0`` = 2 (1 - kappa sum_n a_n c_n) (nk, m)
+    = 2 Re I1(0).
+
+    Parameters
+    ----------
+    r1 : (m,) float, >= 0
+    mach : float
+    wv : (nk,) float
+        omega / V = k / b.
     """
+    b2 = 1.0 - mach * mach
     k1 = wv[:, None] * r1[None, :]
     kappa = k1 * k1
-    c = np.reciprocal(kappa[:, None, :] + _P2[None, :, None])
-    return {"k1": k1, "kappa": kappa, "ac": c * DESMARAIS_A[None, :, None],
-            "apc": c * _AP[None, :, None], "s0": np.matmul(DESMARAIS_A, c)}
+    c = np.reciprocal(kappa[:, None, :] + _P2[None, :, None])     # (nk, 12, m)
+    with np.errstate(divide="ignore"):
+        ib = 1.0 / (b2 * r1)
+    return {"r1": r1, "c1": b2 * r1 * r1, "ib": ib, "fn": (b2 * r1) ** 2,
+            "am": mach * b2 * r1 * r1, "mp1": -DESMARAIS_P[0] * ib,
+            "w2": np.ascontiguousarray(c * (DESMARAIS_A[None, :, None] * kappa[:, None, :])),
+            "w1": np.ascontiguousarray(c * (_AP[None, :, None] * k1[:, None, :])),
+            "c0": 2.0 - 2.0 * kappa * np.matmul(DESMARAIS_A, c)}
 
 
-def incremental_k1(geo: dict, freq: dict, wv: np.ndarray, cosx: np.ndarray, sinx: np.ndarray):
-    """Real and imaginary parts of K1 exp(-i omega x0/V) - K10 at every point and frequency.
+def block_geometry(x0: np.ndarray, pf: dict, mach: float, scratch=_new) -> dict:
+    """Geometry-only factors of the kernel for r receivers and m points (shared by all k).
 
-    With c_n = 1/(p_n^2 + k1^2): S0 = sum a_n c_n, S1 = sum a_n p_n e_n c_n,
-    S2 = sum a_n e_n c_n, so that 1 - u/sqrt(1+u^2) - i k1 I0 = f - k1^2 S2 - i k1 S1 and
-    Re I1(0) = 1 - k1^2 S0.
+    Parameters
+    ----------
+    x0 : (r, m) float
+        Streamwise offsets (receiver minus sending point); x0 != 0 where r1 == 0.
+    pf : dict
+        :func:`point_factors` of the m points (r1 shared by the r receivers of one strip).
+    mach : float
+        0 <= M < 1.
+
+    Returns
+    -------
+    dict of (r, m) arrays
+        ``x0``; ``R`` = sqrt(x0^2 + b2 r1^2); ``q1`` = 1 + x0/R = -K10 (A&R eq. 12);
+        ``rmx`` = R - M x0 = b2 r1 sqrt(1 + u1^2) > 0; ``v`` = M R - x0 = b2 r1 u1 (A&R eq. 11);
+        ``f`` = 1 - |u1|/sqrt(1 + u1^2) = (b2 r1)^2 / (rmx (rmx + |v|)) (cancellation-free);
+        ``A`` = M r1/R / sqrt(1 + u1^2) = M b2 r1^2 / (R rmx); and ``en`` (12, r, m) =
+        exp(-p_n |u1|); ``sv`` = sign(v) and ``neg`` = (v < 0). The arrays come from
+        ``scratch`` (:class:`Scratch`).
+    """
+    sh = x0.shape
+    R = np.multiply(x0, x0, out=scratch("g_R", sh))
+    R += pf["c1"]
+    np.sqrt(R, out=R)
+    q1 = np.divide(x0, R, out=scratch("g_q1", sh))
+    q1 += 1.0
+    rmx = np.multiply(x0, -mach, out=scratch("g_rmx", sh))
+    rmx += R
+    v = np.multiply(R, mach, out=scratch("g_v", sh))
+    v -= x0
+    av = np.abs(v, out=scratch("g_sv", sh))
+    f = np.add(av, rmx, out=scratch("g_f", sh))
+    f *= rmx
+    np.divide(pf["fn"], f, out=f)
+    A = np.multiply(R, rmx, out=scratch("g_A", sh))
+    np.divide(pf["am"], A, out=A)
+    # Desmarais terms exp(-p_n |u1|) with p_{n+1} = 2 p_n: one exp, then squares (relative error
+    # <= 2^11 eps); clamping at 1e-150 keeps the squares out of the slow subnormal range, terms
+    # below that are negligible against the others (|a_n| / p_n^2 < 1e4).
+    en = scratch("g_en", (12,) + sh)
+    np.multiply(av, pf["mp1"], out=en[0])
+    np.exp(en[0], out=en[0])
+    for n in range(1, 12):
+        np.maximum(en[n - 1], 1e-150, out=en[n])
+        en[n] *= en[n]
+    sv = np.copysign(1.0, v, out=av)                    # -sgn of the I(u) symmetry branch
+    neg = np.less(v, 0.0, out=scratch("g_neg", sh, bool))
+    return {"x0": x0, "R": R, "q1": q1, "rmx": rmx, "v": v, "f": f, "A": A, "en": en, "sv": sv,
+            "neg": neg}
+
+
+def incremental_k1(geo: dict, pf: dict, kk: int, wv: float, mach: float, cosx: np.ndarray,
+                   sinx: np.ndarray, re: np.ndarray, im: np.ndarray, scratch=_new) -> None:
+    """Real and imaginary parts of K1 exp(-i omega x0/V) - K10 (A&R eq. 11) for one frequency.
+
+    With S1 = sum a_n p_n c_n e_n and S2 = sum a_n c_n e_n (c_n = 1/(p_n^2 + k1^2)),
+    1 - u/sqrt(1+u^2) - i k1 I0 = f - k1^2 S2 - i k1 S1 and Re I1(0) = 1 - k1^2 S0, so that
+    K1 exp(-i omega x0/V) = -[sgn (f - k1^2 S2) - A - i k1 S1] exp(-i (k1 u1 + omega x0/V))
+    - 2 Re I1(0) [u1 < 0] exp(-i omega x0/V), sgn = -sign(u1) (the I(u) symmetry branch), and
+    k1 u1 + omega x0/V = (omega/V) M rmx / b2.
 
     Parameters
     ----------
     geo : dict
-        From :func:`kernel_geometry` (r receivers, m points).
-    freq : dict
-        From :func:`frequency_factors` of the same m points.
-    wv : (nk,) float
-        omega / V = k / b for each reduced frequency.
-    cosx, sinx : (nk, r, m) float
-        cos and sin of omega x0 / V (computed by the caller, often as separable products).
-
-    Returns
-    -------
-    (re, im) : two (nk, r, m) float arrays
+        From :func:`block_geometry` (r receivers, m points).
+    pf : dict
+        From :func:`point_factors` of the same m points.
+    kk : int
+        Index of the frequency in ``pf``; ``wv`` its omega / V.
+    cosx, sinx : (r, m) float
+        cos and sin of omega x0 / V (the caller forms them as separable products); they are
+        used as scratch space and overwritten.
+    re, im : (r, m) float
+        Output arrays (may be strided views).
+    scratch : callable, optional
+        Work-array provider (:class:`Scratch`).
     """
-    s1 = np.einsum("nrm,knm->krm", geo["en"], freq["apc"])
-    s2 = np.einsum("nrm,knm->krm", geo["en"], freq["ac"])
-    k1, kappa = freq["k1"][:, None, :], freq["kappa"][:, None, :]
-    ar = geo["f"] - kappa * s2                          # Re of [1 - u/sqrt(1+u^2) - i k1 I0]
-    bi = k1 * s1                                        # minus its imaginary part
-    alpha = geo["sgn"] * ar - geo["A"]
-    if np.any(geo["theta"]):
-        ct, st = sincos(wv[:, None, None] * geo["theta"][None])
-    else:                                               # M = 0: no phase
-        ct, st = np.ones_like(ar), np.zeros_like(ar)
-    # 2 Re I1(0) = 2 (1 - k1^2 S0), only where u1 < 0
-    two_re0 = geo["negf"] * (2.0 - 2.0 * kappa * freq["s0"][:, None, :])
-    re = ct * alpha + st * bi - two_re0 * cosx - geo["K10"]
-    im = ct * bi - st * alpha + two_re0 * sinx
-    return re, im
+    sh = cosx.shape
+    s2 = np.einsum("nrm,nm->rm", geo["en"], pf["w2"][kk], out=scratch("k_s2", sh))  # k1^2 S2
+    s1 = np.einsum("nrm,nm->rm", geo["en"], pf["w1"][kk], out=scratch("k_s1", sh))  # k1 S1
+    np.subtract(geo["f"], s2, out=s2)                                 # f - k1^2 S2
+    s2 *= geo["sv"]
+    s2 += geo["A"]                                                    # -alpha
+    if mach > 0.0:                                                    # exp(-i (k1 u1 + w x0))
+        ph = np.multiply(geo["rmx"], wv * mach / (1.0 - mach * mach), out=scratch("k_ph", sh))
+        ct, st = sincos(ph, scratch)
+        np.multiply(st, s1, out=re)
+        np.multiply(ct, s1, out=im)
+        ct *= s2
+        re -= ct
+        st *= s2
+        im += st
+    else:                                                             # M = 0: no phase
+        np.negative(s2, out=re)
+        im[...] = s1
+    re += geo["q1"]                                                   # - K10
+    # - 2 Re I1(0) exp(-i omega x0/V) where u1 < 0 (v < 0); cosx, sinx are overwritten
+    g = np.multiply(geo["neg"], pf["c0"][kk], out=s1)
+    cosx *= g
+    sinx *= g
+    re -= cosx
+    im += sinx
 
 
-def incremental_k2(geo: dict, mach: float, wv: np.ndarray, ex: np.ndarray) -> np.ndarray:
-    """K2 exp(-i omega x0/V) - K20 at every point (r1 > 0) and frequency, complex (nk, r, m).
+def incremental_k2(geo: dict, pf: dict, mach: float, wv: np.ndarray) -> np.ndarray:
+    """K2 exp(-i omega x0/V) - K20 (A&R eqs. 11-12) at every point (r1 > 0), complex (nk, r, m).
 
-    ``geo`` as from :func:`kernel_geometry`; ``ex`` is exp(-i omega x0 / V), (nk, r, m).
+    ``geo`` as from :func:`block_geometry` and ``pf`` from :func:`point_factors`, restricted to
+    the m points needed.
     """
     b2 = 1.0 - mach * mach
-    x0, r1, R, rmx, u, f = geo["x0"], geo["r1"], geo["R"], geo["rmx"], geo["u"], geo["f"]
-    k1 = wv[:, None] * r1[None, :]                               # (nk, m)
+    x0, R, rmx, v, f = geo["x0"], geo["R"], geo["rmx"], geo["v"], geo["f"]
+    r1 = pf["r1"]
+    u = np.abs(v) * pf["ib"]
+    k1 = wv[:, None] * r1[None, :]                                   # (nk, m)
     inv = 1.0 / (DESMARAIS_P[None, :, None] + 1j * k1[:, None, :])   # 1/(p_n + i k1)
     ea = geo["en"] * DESMARAIS_A[:, None, None]
     i0 = np.einsum("nrm,knm->krm", ea, inv)
     j0 = np.einsum("nrm,knm->krm", ea, inv * inv) + u * i0
-    i00 = np.matmul(DESMARAIS_A, inv)[:, None, :]                # I0(u = 0)
-    j00 = np.matmul(DESMARAIS_A, inv * inv)[:, None, :]          # J0(u = 0)
+    i00 = np.matmul(DESMARAIS_A, inv)[:, None, :]                    # I0(u = 0)
+    j00 = np.matmul(DESMARAIS_A, inv * inv)[:, None, :]              # J0(u = 0)
     k1 = k1[:, None, :]
-    with np.errstate(over="ignore"):
-        s3 = np.sqrt(1.0 + u * u) ** 3
-    phi = (2.0 + 1j * k1 * u) * f - u / s3 - 1j * k1 * i0 + k1 * k1 * j0
-    two_re0 = geo["negf"] * 2.0 * (2.0 - 1j * k1 * i00 + k1 * k1 * j00).real
-    ph = np.exp(-1j * wv[:, None, None] * geo["theta"][None])   # exp(-i (k1 u1 + omega x0/V))
+    inv_s2 = (b2 * r1 / rmx) ** 2                                    # 1 / (1 + u1^2)
+    phi = (2.0 + 1j * k1 * u) * f - u * inv_s2 * (b2 * r1 / rmx) - 1j * k1 * i0 + k1 * k1 * j0
+    neg = v < 0.0
+    two_re0 = neg * 2.0 * (2.0 - 1j * k1 * i00 + k1 * k1 * j00).real
+    theta = mach * rmx / b2                                          # k1 u1 + omega x0/V
+    ph = np.exp(-1j * wv[:, None, None] * theta[None])
+    ex = np.exp(-1j * wv[:, None, None] * x0[None])
     a = geo["A"]
-    mru = mach * (mach * R - x0) / (b2 * R)                      # M r1 u1 / R
-    inv_s2 = (b2 * r1 / rmx) ** 2                                # 1 / (1 + u1^2)
+    mru = mach * v / (b2 * R)                                        # M r1 u1 / R
     extra = 1j * k1 * a * mach * r1 / R + a * (b2 * r1 * r1 / (R * R) + (2.0 + mru) * inv_s2)
-    k2e = np.where(geo["neg"], -np.conj(phi), phi) * ph + two_re0 * ex + extra * ph
-    k20 = 2.0 + x0 / R * (2.0 + b2 * r1 * r1 / (R * R))         # A&R eq. 12
+    k2e = np.where(neg, -np.conj(phi), phi) * ph + two_re0 * ex + extra * ph
+    k20 = 2.0 + x0 / R * (2.0 + b2 * r1 * r1 / (R * R))             # A&R eq. 12
     return k2e - k20
 
 
