@@ -45,6 +45,8 @@ class RootState:
     converged: np.ndarray  # (R,) bool
     outside: np.ndarray    # (R,) bool, k outside the tabulated range
     slope: np.ndarray | None = None  # (R,) dp per unit path length of the last step (predictor)
+    du: np.ndarray | None = None     # (R, n) du per unit path length (phase-aligned vectors)
+    dw: np.ndarray | None = None     # (R, n) dw per unit path length
 
 
 class PKSolver:
@@ -278,7 +280,7 @@ class PKSolver:
             fp = bv * dpc.imag - 1.0
             with np.errstate(divide="ignore", invalid="ignore"):
                 k_new = k - f / fp
-            use = newton & np.isfinite(k_new) & (fp < -0.2) & (k_new >= 0) & \
+            use = newton & np.isfinite(k_new) & (fp < 0) & (k_new >= 0) & \
                 (np.abs(k_new - k_sub) <= 0.5 * np.maximum(k_sub, ks))
             k_next = np.where(use, k_new, k_sub)
             kk[act] = k_next
@@ -311,17 +313,25 @@ class PKSolver:
         prediction than to its own, loses eigenvector correlation while its eigenvalue jumps, or two
         roots land on the same eigenpair.
         """
-        h, pred = self.predict(state, frm, to)
+        guess = self.predict(state, frm, to)
         # a not-converged root fails a strict step anyway: bisect rather than retry it slowly
-        new = self.correct(state, *to, p_start=pred, retry=not (depth < 3 and depth < self.max_depth))
-        return self.accept(state, new, pred, frm, to, depth)
+        new = self.correct(guess, *to, retry=not (depth < 3 and depth < self.max_depth))
+        return self.accept(state, new, guess.p, frm, to, depth)
 
     @staticmethod
-    def predict(state: RootState, frm: tuple, to: tuple) -> tuple[float, np.ndarray]:
-        """Path length of the step and the linearly extrapolated eigenvalues, shape (R,)."""
+    def predict(state: RootState, frm: tuple, to: tuple) -> RootState:
+        """First guess at ``to``: eigenvalues and (phase-aligned) eigenvectors extrapolated linearly
+        along the path from the last step."""
         h = path_length(frm, to)
         pred = state.p + (state.slope * h if state.slope is not None else 0)
-        return h, np.where(pred.imag < 0, pred.real + 0j, pred)
+        pred = np.where(pred.imag < 0, pred.real + 0j, pred)
+        u, w = state.u, state.w
+        if state.du is not None:
+            u = u + state.du * h
+            w = w + state.dw * h
+            u = u / np.linalg.norm(u, axis=1, keepdims=True)
+            w = w / np.linalg.norm(w, axis=1, keepdims=True)
+        return RootState(pred, u, w, state.converged, state.outside)
 
     def accept(self, state: RootState, new: RootState, pred: np.ndarray, frm: tuple, to: tuple,
                depth: int) -> RootState:
@@ -341,6 +351,10 @@ class PKSolver:
             # a reseeded root jumped (e.g. a pair turning real): its jump is no slope to predict with
             new.slope = (new.p - state.p) / h
             new.slope[reseeded] = 0.0
+            new.u, new.w = _aligned(new.u, state.u), _aligned(new.w, state.w)
+            new.du, new.dw = (new.u - state.u) / h, (new.w - state.w) / h
+            new.du[reseeded] = 0.0
+            new.dw[reseeded] = 0.0
         else:
             new.slope = None
         return new
@@ -457,6 +471,12 @@ def sweep_states(solver: PKSolver, velocity, density, mach) -> list[RootState]:
     return sweep_states_many(solver, [(velocity, density, mach)])[0]
 
 
+def _aligned(u: np.ndarray, ref: np.ndarray) -> np.ndarray:
+    """Vectors u (R, n) rotated in phase so that ref_r^H u_r is real and >= 0."""
+    c = np.einsum("ri,ri->r", ref.conj(), u)
+    return u * np.exp(-1j * np.angle(c))[:, None]
+
+
 def _stack(states: list[RootState]) -> RootState:
     return RootState(*(np.concatenate([getattr(s, f) for s in states])
                        for f in ("p", "u", "w", "converged", "outside")))
@@ -488,15 +508,13 @@ def sweep_states_many(solver: PKSolver, cases: list[tuple]) -> list[list[RootSta
     R = solver.system.n
     for i in range(1, max(len(pc) for pc in pts)):
         live = [c for c, pc in enumerate(pts) if i < len(pc)]
-        steps = [solver.predict(out[c][-1], pts[c][i - 1], pts[c][i]) for c in live]
+        guesses = [solver.predict(out[c][-1], pts[c][i - 1], pts[c][i]) for c in live]
         flight = np.repeat(np.array([pts[c][i] for c in live]), R, axis=0)  # (R * ncases, 3)
-        start = _stack([out[c][-1] for c in live])
-        new = solver.correct(start, flight[:, 0], flight[:, 1], flight[:, 2],
-                             p_start=np.concatenate([pred for _, pred in steps]),
+        new = solver.correct(_stack(guesses), flight[:, 0], flight[:, 1], flight[:, 2],
                              retry=solver.max_depth == 0)
         for j, c in enumerate(live):
             part = _part(new, slice(j * R, (j + 1) * R))
-            out[c].append(solver.accept(out[c][-1], part, steps[j][1], pts[c][i - 1], pts[c][i], 0))
+            out[c].append(solver.accept(out[c][-1], part, guesses[j].p, pts[c][i - 1], pts[c][i], 0))
     return out
 
 
