@@ -71,7 +71,7 @@ def _strip_setup(yz, nrm, snd, wv, method, mach):
     dyz = yz[None, :] - snd["mid"][:, 1:]                        # (n, 2) y-z offset to midpoint
     yh = np.einsum("ni,ni->n", dyz, snd["ye"][:, 1:]) / e        # ybar / e, sending frame
     zh = np.einsum("ni,ni->n", dyz, snd["n"][:, 1:]) / e         # zbar / e
-    t1 = snd["n"] @ nrm                                          # T1 = n_r . n_s (A&R eq. 8)
+    t1 = np.einsum("ni,i->n", snd["n"], nrm)                    # T1 = n_r . n_s (A&R eq. 8)
     w1, w2 = dk.span_weights(yh, zh, method)                     # (n, nq)
     upts = snd["upts"]                                           # U distinct sample points
     r1u = np.sqrt((yz[0] - upts[:, 1]) ** 2 + (yz[1] - upts[:, 2]) ** 2)
@@ -85,8 +85,8 @@ def _strip_setup(yz, nrm, snd, wv, method, mach):
     setup["js"] = js
     if js.size:
         es = e[js]
-        dnr = dyz[js] @ nrm[1:]                                  # d . n_r at the midpoint
-        yn = snd["ye"][js] @ nrm                                 # y_e(sender) . n_r
+        dnr = np.einsum("ni,i->n", dyz[js], nrm[1:])            # d . n_r at the midpoint
+        yn = np.einsum("ni,i->n", snd["ye"][js], nrm)           # y_e(sender) . n_r
         t2 = (zh[js] * es)[:, None] * (dnr[:, None] - es[:, None] * sig * yn[:, None])
         c2 = -snd["chord"][js] / (8.0 * np.pi * es ** 3)         # P2 = -(dK2) T2*, 1/e^3 weights
         setup["om2"] = w2[js] * t2 * c2[:, None]
@@ -167,8 +167,9 @@ def dlm_aic(mesh: BoxMesh, mach: float, k, *, refc: float, method: str = "quarti
     chunk_size : int, optional
         Receiving boxes per block (blocks never mix strips). A block's work arrays take about
         (27 + 4 nk) * 8 bytes per (receiver, distinct sample point) pair and are reused from
-        block to block (one set per thread); the default sizes blocks to ~2^16 pairs, i.e.
-        ~15 MB + 2 MB per k per thread whatever n. The peak is that, the (nk, n, n) complex
+        block to block (one set per thread); the default sizes blocks to ~2^16 pairs for one k
+        (~2^16 * 9 / (8 + nk) pairs for nk), i.e. ~15 MB per thread with one k, ~17 MB with 8,
+        whatever n. The peak is that, the (nk, n, n) complex
         result and the (n, n) steady matrix.
     workers : int, optional
         Threads over receiving strips (default: the number of CPUs); each thread holds one
@@ -213,7 +214,7 @@ def dlm_aic(mesh: BoxMesh, mach: float, k, *, refc: float, method: str = "quarti
     if s:
         senders.append((-float(s), _senders(mirror_xz(mesh), dk.SAMPLES[method], wv)))
     if chunk_size is None:                       # ~_TARGET_PAIRS (receiver, point) pairs per block
-        rows = max(1, _TARGET_PAIRS // max(1, senders[0][1]["xq"].size))
+        rows = max(1, (9 * _TARGET_PAIRS) // max(1, senders[0][1]["xq"].size * (8 + nk)))
     out = np.zeros((nk, n, n), dtype=complex)
     strips = _strips(mesh)
 
@@ -232,21 +233,27 @@ def dlm_aic(mesh: BoxMesh, mach: float, k, *, refc: float, method: str = "quarti
                                       local.scratch)
                 if factor != 1.0:
                     inc *= factor
+                if not np.isfinite(inc).all():                   # singular pair: report it
+                    bad.extend((int(a), int(sub[b]), int(c)) for a, b, c in
+                               np.argwhere(~np.isfinite(inc))[:1])
                 out[:, sub] += inc
 
     nthreads = min(len(strips), os.cpu_count() or 1) if workers is None else int(workers)
+    bad = []                                                     # (k, i, j) of non-finite D
     if nthreads > 1:                                             # numpy releases the GIL
         with ThreadPoolExecutor(max_workers=nthreads) as pool:
             steady = pool.submit(steady_aic, mesh, m, symxz=s)
             list(pool.map(run, strips))
-            out += steady.result()[None]
+            steady = steady.result()
     else:
         for idx in strips:
             run(idx)
-        out += steady_aic(mesh, m, symxz=s)[None]
-    bad = ~np.isfinite(out)
-    if bad.any():
-        _, i, j = (int(v[0]) for v in np.nonzero(bad))
+        steady = steady_aic(mesh, m, symxz=s)
+    out += steady[None]
+    if not np.isfinite(steady).all():
+        bad.extend((0, int(i), int(j)) for i, j in np.argwhere(~np.isfinite(steady))[:1])
+    if bad:
+        _, i, j = min(bad)
         raise InputError(card_message(
             f"the doublet-lattice AIC is singular for receiving box {mesh.box_id[i]} and sending "
             f"box {mesh.box_id[j]} (or its XZ image): the collocation point lies on the "

@@ -46,8 +46,8 @@ import math
 
 import numpy as np
 
-__all__ = ["DESMARAIS_A", "DESMARAIS_P", "SAMPLES", "FIT", "NEAR_PLANAR", "FAR2", "Scratch", "sincos",
-           "point_factors", "block_geometry", "incremental_k1", "incremental_k2", "span_weights"]
+__all__ = ["DESMARAIS_A", "DESMARAIS_P", "SAMPLES", "FIT", "NEAR_PLANAR", "FAR2", "Scratch",
+           "sincos", "point_factors", "block_geometry", "incremental_k1", "incremental_k2", "span_weights"]
 
 # Desmarais (1982) 12-term coefficients of 1 - u/sqrt(1+u^2) ~ sum a_n exp(-p_n u), p_n = b 2^n.
 DESMARAIS_A = np.array([0.000319759140, -0.000055461471, 0.002726074362, 0.005749551566,
@@ -150,16 +150,22 @@ def point_factors(r1: np.ndarray, mach: float, wv: np.ndarray) -> dict:
         omega / V = k / b.
     """
     b2 = 1.0 - mach * mach
-    k1 = wv[:, None] * r1[None, :]
+    # the frequency factors depend on r1 alone: evaluate them once per distinct value (a strip's
+    # sample points at one spanwise station share it) and gather
+    r1d, back = np.unique(r1, return_inverse=True)
+    back = back.ravel()
+    k1 = wv[:, None] * r1d[None, :]
     kappa = k1 * k1
-    c = np.reciprocal(kappa[:, None, :] + _P2[None, :, None])     # (nk, 12, m)
+    c = np.reciprocal(kappa[:, None, :] + _P2[None, :, None])     # (nk, 12, D)
+    # (einsum rather than matmul: no BLAS threads spinning for these small products)
+    c0 = 2.0 - 2.0 * kappa * np.einsum("n,knd->kd", DESMARAIS_A, c)
     with np.errstate(divide="ignore"):
         ib = 1.0 / (b2 * r1)
+    w2 = (c * (DESMARAIS_A[None, :, None] * kappa[:, None, :])).take(back, axis=-1)
+    w1 = (c * (_AP[None, :, None] * k1[:, None, :])).take(back, axis=-1)
     return {"r1": r1, "c1": b2 * r1 * r1, "ib": ib, "fn": (b2 * r1) ** 2,
-            "am": mach * b2 * r1 * r1, "mp1": -DESMARAIS_P[0] * ib,
-            "w2": np.ascontiguousarray(c * (DESMARAIS_A[None, :, None] * kappa[:, None, :])),
-            "w1": np.ascontiguousarray(c * (_AP[None, :, None] * k1[:, None, :])),
-            "c0": 2.0 - 2.0 * kappa * np.matmul(DESMARAIS_A, c)}
+            "am": mach * b2 * r1 * r1, "mp1": -DESMARAIS_P[0] * ib, "w2": w2, "w1": w1,
+            "c0": c0.take(back, axis=-1)}
 
 
 def block_geometry(x0: np.ndarray, pf: dict, mach: float, scratch=_new) -> dict:
@@ -283,8 +289,8 @@ def incremental_k2(geo: dict, pf: dict, mach: float, wv: np.ndarray) -> np.ndarr
     ea = geo["en"] * DESMARAIS_A[:, None, None]
     i0 = np.einsum("nrm,knm->krm", ea, inv)
     j0 = np.einsum("nrm,knm->krm", ea, inv * inv) + u * i0
-    i00 = np.matmul(DESMARAIS_A, inv)[:, None, :]                    # I0(u = 0)
-    j00 = np.matmul(DESMARAIS_A, inv * inv)[:, None, :]              # J0(u = 0)
+    i00 = np.einsum("n,knm->km", DESMARAIS_A, inv)[:, None, :]       # I0(u = 0)
+    j00 = np.einsum("n,knm->km", DESMARAIS_A, inv * inv)[:, None, :]  # J0(u = 0)
     k1 = k1[:, None, :]
     inv_s2 = (b2 * r1 / rmx) ** 2                                    # 1 / (1 + u1^2)
     phi = (2.0 + 1j * k1 * u) * f - u * inv_s2 * (b2 * r1 / rmx) - 1j * k1 * i0 + k1 * k1 * j0
@@ -338,7 +344,7 @@ def span_weights(yh: np.ndarray, zh: np.ndarray, method: str):
             even = 2.0 / (m - 1) if (m - 2) % 2 == 0 else 0.0     # int_-1^1 sigma^(m-2)
             mu.append(even + 2.0 * yh * mu[m - 1] - rho2 * mu[m - 2])
         mu = np.stack(mu, axis=-1)
-        w1 = mu @ fit
+        w1 = np.einsum("mi,ij->mj", mu, fit)
     nonplanar = ~planar
     w2 = np.zeros_like(w1)
     if np.any(nonplanar):
@@ -356,6 +362,6 @@ def span_weights(yh: np.ndarray, zh: np.ndarray, method: str):
         if np.any(far):
             den = (_GL_X[None, :] - y[far, None]) ** 2 + zz[far, None] ** 2
             g = _GL_W[None, :] / (den * den)
-            nu[far] = g @ np.vander(_GL_X, nq, increasing=True)
-        w2[nonplanar] = nu @ fit
+            nu[far] = np.einsum("mi,ij->mj", g, np.vander(_GL_X, nq, increasing=True))
+        w2[nonplanar] = np.einsum("mi,ij->mj", nu, fit)
     return w1, w2
