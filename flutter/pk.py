@@ -285,15 +285,27 @@ class PKSolver:
             k_next = np.where(use, k_new, k_sub)
             kk[act] = k_next
             p[act] = pc + dpc * (k_next - k)          # linearised prediction at the new k
+        new = RootState(p, u, w, done, outside)
         if newton and retry and not done.all():
-            bad = np.flatnonzero(~done)
-            start = state.p if p_start is None else p_start
-            retry = self.correct(RootState(state.p[bad], state.u[bad], state.w[bad], done[bad],
-                                           outside[bad]), V[bad], rho[bad], mach[bad], start[bad],
-                                 newton=False)
-            p[bad], u[bad], w[bad] = retry.p, retry.u, retry.w
-            done[bad], outside[bad] = retry.converged, retry.outside
-        return RootState(p, u, w, done, outside)
+            start = state if p_start is None else RootState(p_start, state.u, state.w,
+                                                            state.converged, state.outside)
+            new = self.retry(new, start, V, rho, mach)
+        return new
+
+    def retry(self, new: RootState, start: RootState, V, rho, mach) -> RootState:
+        """Re-solve the not-converged roots of ``new`` from their first guess in ``start`` with plain
+        substitution of k (:meth:`correct` with ``newton=False``)."""
+        bad = np.flatnonzero(~new.converged)
+        R = new.p.size
+        V, rho, mach = (np.broadcast_to(np.asarray(a, dtype=float), (R,))[bad] for a in (V, rho, mach))
+        again = self.correct(RootState(start.p[bad], start.u[bad], start.w[bad],
+                                       new.converged[bad], new.outside[bad]),
+                             V, rho, mach, newton=False)
+        out = RootState(new.p.copy(), new.u.copy(), new.w.copy(), new.converged.copy(),
+                        new.outside.copy())
+        out.p[bad], out.u[bad], out.w[bad] = again.p, again.u, again.w
+        out.converged[bad], out.outside[bad] = again.converged, again.outside
+        return out
 
     def start(self, V: float, rho: float, mach: float) -> RootState:
         """Roots at the first flight point, followed up from in-vacuo modes at a tiny speed."""
@@ -314,8 +326,13 @@ class PKSolver:
         roots land on the same eigenpair.
         """
         guess = self.predict(state, frm, to)
-        # a not-converged root fails a strict step anyway: bisect rather than retry it slowly
-        new = self.correct(guess, *to, retry=not (depth < 3 and depth < self.max_depth))
+        # the slow retry of a root Newton failed is spent only on a step that would be kept: a
+        # strict step fails on it anyway, and a step whose roots jump is bisected anyway
+        last = depth >= self.max_depth
+        new = self.correct(guess, *to, retry=last)
+        if not last and depth >= 3 and not new.converged.all() and \
+                self._step_ok(state, new, guess.p, strict=False):
+            new = self.retry(new, guess, *to)
         return self.accept(state, new, guess.p, frm, to, depth)
 
     @staticmethod
