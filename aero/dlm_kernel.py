@@ -47,7 +47,8 @@ import math
 import numpy as np
 
 __all__ = ["DESMARAIS_A", "DESMARAIS_P", "SAMPLES", "FIT", "NEAR_PLANAR", "FAR2", "Scratch",
-           "sincos", "point_factors", "block_geometry", "incremental_k1", "incremental_k2", "span_weights"]
+           "sincos", "point_factors", "block_geometry", "incremental_k1", "incremental_k2",
+           "span_weights"]
 
 # Desmarais (1982) 12-term coefficients of 1 - u/sqrt(1+u^2) ~ sum a_n exp(-p_n u), p_n = b 2^n.
 DESMARAIS_A = np.array([0.000319759140, -0.000055461471, 0.002726074362, 0.005749551566,
@@ -207,14 +208,18 @@ def block_geometry(x0: np.ndarray, pf: dict, mach: float, scratch=_new) -> dict:
     A = np.multiply(R, rmx, out=scratch("g_A", sh))
     np.divide(pf["am"], A, out=A)
     # Desmarais terms exp(-p_n |u1|) with p_{n+1} = 2 p_n: one exp, then squares (relative error
-    # <= 2^11 eps); clamping at 1e-150 keeps the squares out of the slow subnormal range, terms
-    # below that are negligible against the others (|a_n| / p_n^2 < 1e4).
+    # <= 2^11 eps). Every third square starts from max(e, 1e-37), so that three squares stay
+    # above 1e-296, out of the slow subnormal range; this raises terms below 1e-74 to at most
+    # 1e-74, negligible against the others (weights |a_n| k1^2 / (p_n^2 + k1^2) < 1).
     en = scratch("g_en", (12,) + sh)
     np.multiply(av, pf["mp1"], out=en[0])
     np.exp(en[0], out=en[0])
     for n in range(1, 12):
-        np.maximum(en[n - 1], 1e-150, out=en[n])
-        en[n] *= en[n]
+        if n % 3 == 1:
+            np.maximum(en[n - 1], 1e-37, out=en[n])
+            en[n] *= en[n]
+        else:
+            np.multiply(en[n - 1], en[n - 1], out=en[n])
     sv = np.copysign(1.0, v, out=av)                    # -sgn of the I(u) symmetry branch
     neg = np.less(v, 0.0, out=scratch("g_neg", sh, bool))
     return {"x0": x0, "R": R, "q1": q1, "rmx": rmx, "v": v, "f": f, "A": A, "en": en, "sv": sv,
