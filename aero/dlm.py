@@ -18,6 +18,13 @@ The minus sign makes the kernel consistent with the horseshoe lattice: at k = 0,
 Conventions: k = omega b / V with b = refc / 2 (Nastran), time dependence exp(i omega t),
 w the induced velocity along the receiving box's normal, dCp = (p_lower - p_upper)/q positive
 along the sending box's normal (:mod:`aero.panels`), so D's steady diagonal is negative.
+
+Evaluation: receivers are processed by strips (same collocation y, z and normal), so that the
+y-z distance r1 to every distinct sending sample point, the span weights and the frequency
+factors are set up once per strip; blocks of a strip's receivers then evaluate the kernel on
+(receiver, distinct point) pairs with reused per-thread work arrays, and a sparse (n, points)
+matrix of span weights integrates all frequencies at once. Threads work on strips; the steady
+matrix is computed alongside.
 """
 from __future__ import annotations
 
