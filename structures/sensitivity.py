@@ -200,8 +200,10 @@ def _nelson(k, m, lam_j, phi_j, dk, dm, dlam_j, filename):
                     for a, b, dl in zip(dk, dm, dlam_j)], axis=1)
     a_mat = (k - lam_j * m).tocsc()[keep][:, keep].tocsc()
     try:
-        # indefinite but symmetric: symmetric ordering, threshold pivoting that prefers the diagonal
-        lu = spla.splu(a_mat, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.1,
+        # indefinite but symmetric: symmetric ordering on the diagonal (no pivoting keeps the fill
+        # of the positive-definite shifted matrix; threshold pivoting multiplied it by 20 on the
+        # 20,000-DOF benchmark), then one step of iterative refinement below
+        lu = spla.splu(a_mat, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
                        options={"SymmetricMode": True})
     except RuntimeError:
         raise SolverError(card_message(
@@ -209,7 +211,8 @@ def _nelson(k, m, lam_j, phi_j, dk, dm, dlam_j, filename):
             "(a repeated eigenvalue).", filename=filename,
             fix="use shape_method='modal' or break the symmetry that repeats the eigenvalue.")) from None
     v = np.zeros((n, len(dk)))
-    v[keep] = lu.solve(rhs[keep])
+    sol = lu.solve(rhs[keep])
+    v[keep] = sol + lu.solve(rhs[keep] - a_mat @ sol)                     # iterative refinement
     c = -(mphi @ v) - 0.5 * np.array([phi_j @ (b @ phi_j) for b in dm])
     return (v + phi_j[:, None] * c[None, :]).T
 
