@@ -64,13 +64,25 @@ def _senders(mesh: BoxMesh, samples: np.ndarray, wv: np.ndarray) -> dict:
     upts, inv = np.unique(pts.reshape(-1, 3), axis=0, return_inverse=True)
     xq = np.ascontiguousarray(upts[:, 0])
     cq, sq = dk.sincos(wv[:, None] * xq[None, :])
+    # exact mirror image y -> -y of the point set (a full-span mesh): upts[mirror[m]] is the
+    # image of point m; None unless every image is bitwise one of the points
+    mir = upts * np.array([1.0, -1.0, 1.0])
+    order = np.lexsort((mir[:, 2], mir[:, 1], mir[:, 0]))
+    mirror = None
+    if np.array_equal(mir[order], upts):
+        mirror = np.empty(order.size, dtype=np.intp)
+        mirror[order] = np.arange(order.size)
     return {"mid": mid, "e": e, "ye": ye, "n": np.array(mesh.normal), "tanl": tanl,
             "chord": np.array(mesh.chord), "upts": upts, "inv": inv.ravel(), "xq": xq,
-            "cq": cq, "sq": sq}
+            "cq": cq, "sq": sq, "mirror": mirror}
 
 
-def _strip_setup(yz, nrm, snd, wv, method, mach):
-    """Everything that depends only on a receiving strip's y, z and normal (all its boxes)."""
+def _strip_setup(yz, nrm, snd, wv, method, mach, kernel=True):
+    """Everything that depends only on a receiving strip's y, z and normal (all its boxes).
+
+    ``kernel=False`` leaves out the frequency factors of the kernel (for a strip whose kernel
+    values are those of its mirror strip, permuted).
+    """
     sig = dk.SAMPLES[method]
     nq = sig.size
     e = snd["e"]
@@ -87,7 +99,7 @@ def _strip_setup(yz, nrm, snd, wv, method, mach):
     om = w1 * ((-snd["chord"] / (8.0 * np.pi * e)) * t1)[:, None]
     wmap = csr_matrix((om.ravel(), snd["inv"], np.arange(0, n * nq + 1, nq)),
                       shape=(n, upts.shape[0]))
-    setup = {"pf": dk.point_factors(r1u, mach, wv), "wmap": wmap}
+    setup = {"pf": dk.point_factors(r1u, mach, wv) if kernel else None, "wmap": wmap}
     js = np.nonzero(np.abs(zh) > dk.NEAR_PLANAR)[0]
     setup["js"] = js
     if js.size:
@@ -99,20 +111,23 @@ def _strip_setup(yz, nrm, snd, wv, method, mach):
         setup["om2"] = w2[js] * t2 * c2[:, None]
         pts = snd["inv"][(js[:, None] * nq + np.arange(nq)).ravel()]
         setup["pts"] = pts
-        setup["pf2"] = {"r1": r1u[pts], "ib": setup["pf"]["ib"][pts]}
+        setup["pf2"] = {"r1": r1u[pts], "ib": 1.0 / ((1.0 - mach * mach) * r1u[pts])}
     return setup
 
 
-def _increment_rows(xr, setup, snd, mach, wv, nq, scratch):
-    """Unsteady increment for receivers at x = xr (one strip) against all n senders.
+def _increment_rows(xr, setups, snd, mach, wv, nq, scratch):
+    """Unsteady increments for receivers at x = xr of one strip (and of its mirror strip).
 
-    ``scratch`` is the calling thread's :class:`aero.dlm_kernel.Scratch`. Returns complex
-    (nk, r, n).
+    ``setups`` lists (strip set-up, point permutation): the first has no permutation and its
+    kernel factors are used; a second one, for the mirror-image strip (same x, y -> -y), takes
+    the same kernel values at the mirrored points (``snd["mirror"]``), which is exact: r1 and
+    x0, hence every kernel factor, are bitwise the same. ``scratch`` is the calling thread's
+    :class:`aero.dlm_kernel.Scratch`. Returns one complex (nk, r, n) array per set-up.
     """
     xq = snd["xq"]
     nk, r, u = wv.size, xr.size, xq.size
     x0 = np.subtract(xr[:, None], xq[None, :], out=scratch("x0", (r, u)))   # x0 = x_r - x_q
-    pf = setup["pf"]
+    pf = setups[0][0]["pf"]
     geo = dk.block_geometry(x0, pf, mach, scratch)
     # cos/sin(omega x0/V) as separable products of receiver and sender terms
     cr, sr = dk.sincos(wv[:, None] * xr[None, :])
@@ -128,19 +143,51 @@ def _increment_rows(xr, setup, snd, mach, wv, nq, scratch):
         dk.incremental_k1(geo, pf, kk, wv[kk], mach, cosx, sinx, buf[kk, 0], buf[kk, 1],
                           scratch)
     # span integration: sparse (n, U) weights times the points' values (one product for all k)
-    cols = scratch("cols", (u, nk * 2 * r))
-    np.copyto(cols, buf.reshape(-1, u).T)
-    wmap = setup["wmap"]
-    res = (wmap @ cols).T.reshape(nk, 2, r, wmap.shape[0])
-    out = res[:, 0] + 1j * res[:, 1]
-    js = setup["js"]
-    if js.size:
-        pts = setup["pts"]
-        geo2 = {key: geo[key][:, pts] for key in ("x0", "R", "rmx", "v", "f", "A")}
-        geo2["en"] = geo["en"][:, :, pts]
-        dk2 = dk.incremental_k2(geo2, setup["pf2"], mach, wv).reshape(nk, r, js.size, nq)
-        out[..., js] += np.einsum("krpq,pq->krp", dk2, setup["om2"])
-    return out
+    cols0 = scratch("cols", (u, nk * 2 * r))
+    np.copyto(cols0, buf.reshape(-1, u).T)
+    outs = []
+    for setup, perm in setups:
+        cols = cols0 if perm is None else np.take(cols0, perm, axis=0,
+                                                  out=scratch("cols_m", cols0.shape))
+        wmap = setup["wmap"]
+        res = (wmap @ cols).T.reshape(nk, 2, r, wmap.shape[0])
+        out = res[:, 0] + 1j * res[:, 1]
+        js = setup["js"]
+        if js.size:
+            pts = setup["pts"] if perm is None else perm[setup["pts"]]
+            geo2 = {key: geo[key][:, pts] for key in ("x0", "R", "rmx", "v", "f", "A")}
+            geo2["en"] = geo["en"][:, :, pts]
+            dk2 = dk.incremental_k2(geo2, setup["pf2"], mach, wv).reshape(nk, r, js.size, nq)
+            out[..., js] += np.einsum("krpq,pq->krp", dk2, setup["om2"])
+        outs.append(out)
+    return outs
+
+
+def _mirror_pairs(mesh: BoxMesh, strips, senders):
+    """Receiving strips grouped with their exact mirror strip (y -> -y, same z and box x).
+
+    Returns a list of tuples of strip indices: (s,) or (s, s_mirror). Pairs only when every
+    sender set is itself mirror-symmetric (``mirror`` permutation found).
+    """
+    if any(snd["mirror"] is None for _, snd in senders):
+        return [(i,) for i in range(len(strips))]
+    key = {}
+    for i, idx in enumerate(strips):
+        y, z = mesh.collocation[idx[0], 1:]
+        key[(float(y), float(z), mesh.collocation[idx, 0].tobytes())] = i
+    groups, used = [], set()
+    for i, idx in enumerate(strips):
+        if i in used:
+            continue
+        y, z = mesh.collocation[idx[0], 1:]
+        j = key.get((-float(y), float(z), mesh.collocation[idx, 0].tobytes())) if y else None
+        if j is None or j in used or j == i:
+            groups.append((i,))
+        else:
+            groups.append((i, j))
+            used.add(j)
+        used.add(i)
+    return groups
 
 
 def _strips(mesh: BoxMesh):
@@ -224,37 +271,42 @@ def dlm_aic(mesh: BoxMesh, mach: float, k, *, refc: float, method: str = "quarti
         rows = max(1, (9 * _TARGET_PAIRS) // max(1, senders[0][1]["xq"].size * (8 + nk)))
     out = np.zeros((nk, n, n), dtype=complex)
     strips = _strips(mesh)
-
+    groups = _mirror_pairs(mesh, strips, senders)
     local = threading.local()
 
-    def run(idx):
-        """One receiving strip: shared set-up once, then blocks of at most `rows` boxes."""
+    def run(group):
+        """One receiving strip (and its mirror strip): set-up once, then blocks of `rows`."""
         if not hasattr(local, "scratch"):
             local.scratch = dk.Scratch()                         # per-thread work arrays
-        yz, nrm = mesh.collocation[idx[0], 1:], mesh.normal[idx[0]]
+        idxs = [strips[i] for i in group]
         for factor, snd in senders:
-            setup = _strip_setup(yz, nrm, snd, wv, method, m)
-            for i0 in range(0, idx.size, rows):                  # strips' rows are disjoint
-                sub = idx[i0:i0 + rows]
-                inc = _increment_rows(mesh.collocation[sub, 0], setup, snd, m, wv, nq,
-                                      local.scratch)
-                if factor != 1.0:
-                    inc *= factor
-                if not np.isfinite(inc).all():                   # singular pair: report it
-                    bad.extend((int(a), int(sub[b]), int(c)) for a, b, c in
-                               np.argwhere(~np.isfinite(inc))[:1])
-                out[:, sub] += inc
+            setups = []
+            for g, idx in enumerate(idxs):
+                yz, nrm = mesh.collocation[idx[0], 1:], mesh.normal[idx[0]]
+                setups.append((_strip_setup(yz, nrm, snd, wv, method, m, kernel=g == 0),
+                               None if g == 0 else snd["mirror"]))
+            for i0 in range(0, idxs[0].size, rows):              # strips' rows are disjoint
+                incs = _increment_rows(mesh.collocation[idxs[0][i0:i0 + rows], 0], setups, snd,
+                                       m, wv, nq, local.scratch)
+                for idx, inc in zip(idxs, incs):
+                    sub = idx[i0:i0 + rows]
+                    if factor != 1.0:
+                        inc *= factor
+                    if not np.isfinite(inc).all():               # singular pair: report it
+                        bad.extend((int(a), int(sub[b]), int(c)) for a, b, c in
+                                   np.argwhere(~np.isfinite(inc))[:1])
+                    out[:, sub] += inc
 
-    nthreads = min(len(strips), os.cpu_count() or 1) if workers is None else int(workers)
+    nthreads = min(len(groups), os.cpu_count() or 1) if workers is None else int(workers)
     bad = []                                                     # (k, i, j) of non-finite D
     if nthreads > 1:                                             # numpy releases the GIL
         with ThreadPoolExecutor(max_workers=nthreads) as pool:
             steady = pool.submit(steady_aic, mesh, m, symxz=s)
-            list(pool.map(run, strips))
+            list(pool.map(run, groups))
             steady = steady.result()
     else:
-        for idx in strips:
-            run(idx)
+        for group in groups:
+            run(group)
         steady = steady_aic(mesh, m, symxz=s)
     out += steady[None]
     if not np.isfinite(steady).all():

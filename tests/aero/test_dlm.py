@@ -469,3 +469,31 @@ def test_block_geometry_matches_direct_formulas():
     # on the line's extension: Desmarais terms 0 (<= 1e-74), f = 0, u1 < 0 downstream only
     assert np.all(geo["en"][:, :, ~ok] <= 1.01e-74) and np.all(geo["f"][:, ~ok] == 0.0)
     np.testing.assert_array_equal(geo["neg"][:, ~ok], x0[:, ~ok] > 0.0)
+
+
+def test_mirror_strips_share_kernel_values_exactly():
+    """A full-span model (left half defined right-to-left, dihedral, and a pair of canted fins):
+    receiving strips whose mirror strip exists reuse its kernel values at the mirrored sending
+    points (aero.dlm._mirror_pairs). The AIC still equals the loop reference to 1e-10 (planar and
+    non-planar pairs, three k), and equals the evaluation of the same mesh with the pairing
+    disabled to 1e-14 (the reuse is exact: r1 and x0 are bitwise the same)."""
+    from aero import dlm as dlm_module
+    fs, fc = [0.0, 0.4, 1.0], [0.0, 0.5, 1.0]
+    right = caero1_boxes(100, [0, 0.0, 0], 1.2, [0.5, 2.0, 0.3], 0.7, fs, fc)
+    left = caero1_boxes(200, [0, 0.0, 0], 1.2, [0.5, -2.0, 0.3], 0.7, fs, fc)
+    fin_r = caero1_boxes(300, [1.5, 0.8, 0.05], 0.6, [1.8, 1.0, 0.9], 0.4, [0, 0.5, 1], [0, 1])
+    fin_l = caero1_boxes(400, [1.5, -0.8, 0.05], 0.6, [1.8, -1.0, 0.9], 0.4, [0, 0.5, 1], [0, 1])
+    mesh = concat([right, left, fin_r, fin_l])
+    ks = [0.1, 0.7, 1.6]
+    strips = dlm_module._strips(mesh)
+    snd = dlm_module._senders(mesh, np.array(SAMPLES["quartic"]), np.array(ks))
+    assert len(dlm_module._mirror_pairs(mesh, strips, [(1.0, snd)])) == len(strips) // 2
+    fast = dlm_aic(mesh, 0.6, ks, refc=1.2)
+    assert rel_err(fast, ref_dlm(mesh, 0.6, ks, 1.2, "quartic")) < 1e-10
+    original = dlm_module._mirror_pairs
+    try:
+        dlm_module._mirror_pairs = lambda mesh, strips, senders: [(i,) for i in range(len(strips))]
+        unpaired = dlm_aic(mesh, 0.6, ks, refc=1.2)
+    finally:
+        dlm_module._mirror_pairs = original
+    assert rel_err(fast, unpaired) < 1e-14
