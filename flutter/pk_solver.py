@@ -175,7 +175,6 @@ class PKSolver:
         ``NEWTON_ITER`` iterations are retried (if ``retry``) with plain substitution of k (slower,
         linearly convergent, up to ``max_iter`` iterations).
         """
-        M = self.system.mass
         p = (state.p if p_start is None else p_start).copy()
         u, w = state.u.copy(), state.w.copy()
         R = p.size
@@ -292,7 +291,8 @@ class PKSolver:
     def advance(self, state: RootState, frm: tuple, to: tuple, depth: int = 0) -> RootState:
         """Continue all roots from flight point ``frm`` to ``to`` (V, rho, M), bisecting bad steps.
 
-        Predictor: linear extrapolation of each eigenvalue along the path (slope of the last step).
+        Predictor: linear extrapolation of each eigenvalue and of its phase-aligned right and left
+        eigenvectors along the path (slopes of the last step, :meth:`predict`).
         A step is bisected (up to ``max_depth`` times) when a root lands closer to another root's
         prediction than to its own, loses eigenvector correlation while its eigenvalue jumps, or two
         roots land on the same eigenpair.
