@@ -23,8 +23,11 @@ Evaluation: receivers are processed by strips (same collocation y, z and normal)
 y-z distance r1 to every distinct sending sample point, the span weights and the frequency
 factors are set up once per strip; blocks of a strip's receivers then evaluate the kernel on
 (receiver, distinct point) pairs with reused per-thread work arrays, and a sparse (n, points)
-matrix of span weights integrates all frequencies at once. Threads work on strips; the steady
-matrix is computed alongside.
+matrix of span weights integrates all frequencies at once. A strip whose exact mirror image
+(y -> -y, same z and box x) is also a receiving strip, with a mirror-symmetric set of sending
+points (full-span models), passes its kernel values, permuted, to that strip: the pair
+quantities r1 and x0 are bitwise equal there, so this changes no digit. Threads work on strips
+(or mirror pairs of strips); the steady matrix is computed alongside.
 """
 from __future__ import annotations
 
