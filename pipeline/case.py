@@ -90,6 +90,7 @@ class Case:
     configurations: tuple
     units: str = "si"
     flutter: FlutterSettings | None = None
+    tuning: Mapping | None = None  # the raw [tuning] table, validated by pipeline.cmd_tune
     path: Path | None = None
 
     def __post_init__(self):
@@ -129,5 +130,9 @@ def read_case(path) -> Case:
     if "flutter" in data:
         _check_keys(data["flutter"], FlutterSettings, f"file {path}, [flutter]")
         flutter = FlutterSettings(**data["flutter"])
+    tuning = data.get("tuning")
+    if tuning is not None and not isinstance(tuning, dict):
+        raise InputError(f"file {path}: 'tuning' must be a table ([tuning]).")
     return Case(name=data.get("name", path.stem), configurations=tuple(configs),
-                units=data.get("units", "si"), flutter=flutter, path=path.resolve())
+                units=data.get("units", "si"), flutter=flutter,
+                tuning=None if tuning is None else MappingProxyType(tuning), path=path.resolve())

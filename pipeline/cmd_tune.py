@@ -28,7 +28,7 @@ The case file's ``[[configurations]]`` (name, deck, gvt, nmodes, mass) are read 
 
     [tuning.configurations.empty] # optional, per configuration
     test_modes = [7, 8, 9]
-    mass_targets = { weight = 1500.0, x_cg = 4.2 }
+    mass_targets = { weight = 1500.0, x_cg = 4.2 }  # default: the configuration's measured_mass
     mass_references = { y_cg = 1.0 }
 
 Writes ``history.nc`` (every evaluation), ``<config>_tuned.bdf`` per configuration and
@@ -37,7 +37,6 @@ progress line per optimiser iteration.
 """
 from __future__ import annotations
 
-import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -78,30 +77,15 @@ def read_tuning(path) -> tuple:
     -------
     (pipeline.case.Case, TuningSettings)
     """
-    from pipeline.case import Case, Configuration
+    from pipeline.case import read_case
     from structures.design import DesignVariable
 
-    path = Path(path)
-    if not path.exists():
-        raise InputError(f"file {path}: no such case file. Fix: check the path.")
-    try:
-        data = tomllib.loads(path.read_text())
-    except tomllib.TOMLDecodeError as exc:
-        raise InputError(f"file {path}: not valid TOML ({exc}).") from None
+    case = read_case(path)
+    path = case.path
     base = path.parent
-    configs = []
-    for i, table in enumerate(data.get("configurations", [])):
-        table = dict(table)
-        if "name" not in table or "deck" not in table:
-            raise InputError(f"file {path}, [[configurations]] #{i + 1}: 'name' and 'deck' are required.")
-        table["deck"] = (base / table["deck"]).resolve()
-        if table.get("gvt"):
-            table["gvt"] = (base / table["gvt"]).resolve()
-        configs.append(Configuration(**table))
-    case = Case(name=data.get("name", path.stem), configurations=tuple(configs),
-                units=data.get("units", "si"), path=path.resolve())
-    tun = data.get("tuning")
-    if not isinstance(tun, dict):
+    configs = case.configurations
+    tun = case.tuning
+    if tun is None:
         raise InputError(f"file {path}: no [tuning] section. Fix: add [tuning] with variables and "
                          "objective (see pipeline/cmd_tune.py).")
     _unknown(tun, _TUNING_KEYS, f"file {path}, [tuning]")
@@ -148,7 +132,8 @@ def build_problem(case, settings):
         configs.append(TuningConfiguration(
             c.name, read_model(c.deck), load_gvt(c.gvt), nmodes=c.nmodes or 30, mass=c.mass,
             test_modes=tuple(more["test_modes"]) if "test_modes" in more else None,
-            mass_targets=more.get("mass_targets", {}), mass_references=more.get("mass_references", {})))
+            mass_targets=more.get("mass_targets", dict(c.measured_mass)),
+            mass_references=more.get("mass_references", {})))
     return TuningProblem(tuple(configs), settings.variables, settings.objective,
                          settings.constraints, shape_method=settings.shape_method)
 
