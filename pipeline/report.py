@@ -4,7 +4,6 @@ from __future__ import annotations
 import html
 from pathlib import Path
 
-import numpy as np
 
 _STYLE = """body{font-family:sans-serif;margin:2em;max-width:70em}
 table{border-collapse:collapse;margin:0.5em 0 1.5em}td,th{border:1px solid #bbb;padding:2px 8px;

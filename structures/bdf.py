@@ -100,7 +100,7 @@ def _check_cards(model, filename: str) -> None:
                 if card.type in unsupported:
                     ids.setdefault(card.type, []).append(key)
         listing = "; ".join(
-            f"{name} ({', '.join(map(str, sorted(ids.get(name, []))[:10])) or count} )".replace(" )", ")")
+            f"{name} ({', '.join(map(str, sorted(ids.get(name, []))[:10])) or count})"
             for name, count in sorted(unsupported.items()))
         raise UnsupportedCardError(card_message(
             f"unsupported structural cards: {listing}.", filename=filename,
@@ -367,8 +367,8 @@ def _case_id(model, name: str):
         return None
     for sub_id in sorted(cc.subcases, reverse=True):
         sub = cc.subcases[sub_id]
-        if sub.has_parameter(name)[0] if isinstance(sub.has_parameter(name), list) else \
-                sub.has_parameter(name):
+        found = sub.has_parameter(name)  # pyNastran returns [bool] for one name
+        if found[0] if isinstance(found, list) else found:
             return int(sub.get_parameter(name)[0])
     return None
 

@@ -5,8 +5,6 @@ early and nothing is half-written.
 """
 from __future__ import annotations
 
-import numpy as np
-
 from structures.errors import InputError, card_message
 from structures.model import FEModel
 
@@ -62,7 +60,3 @@ def validate_model(model: FEModel) -> None:
         if rho is not None and rho < 0:
             raise InputError(card_message(f"RHO = {rho} is negative.", card=mat.card, card_id=mid,
                                           filename=model.filename, fix="give RHO >= 0."))
-    if len(model.masses) and np.any(model.masses.mass < 0):
-        bad = model.masses.eids[model.masses.mass < 0][0]
-        raise InputError(card_message("negative mass.", card="CONM2", card_id=bad,
-                                      filename=model.filename, fix="give a positive mass."))

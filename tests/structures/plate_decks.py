@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from structures.bulk_text import card, field  # noqa: F401  (re-exported for the tests)
+from structures.bulk_text import card
 
 
 def plate_deck(path: Path, *, a: float = 1.0, b: float = 0.6, t: float = 0.005, nx: int = 20,

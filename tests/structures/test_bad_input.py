@@ -1,7 +1,6 @@
 """Bad decks fail early with the project's own errors naming the card, the id and the fix."""
 from __future__ import annotations
 
-import numpy as np
 import pytest
 
 from pipeline.cli import main

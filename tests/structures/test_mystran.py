@@ -29,9 +29,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from plate_decks import card, plate_deck
+from plate_decks import plate_deck
 from structures.bdf import read_model
 from structures.modal import compute_modes
+from structures.bulk_text import card
 from structures.mystran import mystran_executable
 
 DATA = Path(__file__).resolve().parents[1] / "data"
