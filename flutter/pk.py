@@ -23,6 +23,7 @@ from __future__ import annotations
 import warnings
 import numpy as np
 import xarray as xr
+from threadpoolctl import threadpool_limits
 
 from flutter.crossings import G_TOL, Crossing, find_brackets, illinois, interpolate_zero
 from flutter.pk_solver import PKSolver, RootState
@@ -228,9 +229,13 @@ def pk_solve_many(system: ModalSystem, gaf, cases, *, sweep: str = "velocity",
     solver = PKSolver(system, gaf, refc=refc, interpolation=interpolation, **options)
     for m in np.unique(np.concatenate([M for _, _, M in flights])):
         solver.interpolator(m)
-    all_states = sweep_states_many(solver, flights)
-    return [_case_dataset(solver, states, *flight, sweep=sweep, interpolation=interpolation,
-                          refine=refine, g_tol=g_tol) for states, flight in zip(all_states, flights)]
+    # the kernels' products and factorisations are small (n x n per root): BLAS threads only spin
+    # on them, and lose a lot when the cores are shared, so the solve runs on one thread
+    with threadpool_limits(limits=1, user_api="blas"):
+        all_states = sweep_states_many(solver, flights)
+        return [_case_dataset(solver, states, *flight, sweep=sweep, interpolation=interpolation,
+                              refine=refine, g_tol=g_tol)
+                for states, flight in zip(all_states, flights)]
 
 
 def _case_dataset(solver: PKSolver, states: list[RootState], V, rho, M, *, sweep: str,

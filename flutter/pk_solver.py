@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from flutter.gafinterp import GafInterpolator
-from flutter.linalg import inverse_iteration, path_length, real_matvec
+from flutter.linalg import inverse_iteration, path_length, pencil_system, real_matvec
 from flutter.system import ModalSystem
 from structures.errors import InputError
 
@@ -92,6 +92,7 @@ class PKSolver:
         if (not sd.is_zero) and sd.kind == "viscous":
             B = B + system.viscous_structural()
         self.B = B
+        self._MKB = np.concatenate([system.mass.T, system.stiffness.T, B.T], axis=1).astype(complex)
         n = system.n
         if GafInterpolator(gaf, self._any_mach(gaf), interpolation).n != n:
             raise InputError(f"p-k: the GAFs have a different number of modes than the system ({n}). "
@@ -145,8 +146,11 @@ class PKSolver:
         g = self.system.structural.at(omega / (2 * np.pi))
         return np.where(omega > 1e-12, g / np.maximum(omega, 1e-300), 0.0)
 
-    def _linearised(self, k: np.ndarray, mach: np.ndarray):
-        """:meth:`GafInterpolator.linearised` for roots at their own Mach numbers."""
+    def _linearised(self, k: np.ndarray, mach: np.ndarray, one_mach: float | None = None):
+        """:meth:`GafInterpolator.linearised` for roots at their own Mach numbers (all at
+        ``one_mach`` when given)."""
+        if one_mach is not None:
+            return self.interpolator(one_mach).linearised(k)
         machs = np.unique(mach)
         if machs.size == 1:
             return self.interpolator(machs[0]).linearised(k)
@@ -164,98 +168,88 @@ class PKSolver:
                 retry: bool = True) -> RootState:
         """Converge every root at (V, rho, M) from ``state`` by two-sided Rayleigh-quotient iteration.
 
-        Each iteration, batched over the unconverged roots: the two-sided Rayleigh functional
-        w^H T(p, k) u = 0 (a quadratic in p; Ruhe 1973) gives p at the root's current k, and its
-        derivative dp/dk = -w^H (p dC/dk + dKt/dk) u / w^H (2 M p + C) u gives a Newton step on the
-        matching condition f(k) = b Im p(k) / V - k = 0. A root is converged when p agrees with the
-        linearised prediction of the previous iteration and the k mismatch moves p by less than
-        ``tol``; that test needs no factorisation. Otherwise one LU of T(p) per root gives the next
-        right and left vectors (inverse iteration). ``p_start`` (predicted eigenvalues) replaces
+        Each pass, batched over the unconverged roots and with one gather of the GAF interpolant at
+        each root's current k: except on the first pass (which uses the predicted vectors), one LU of
+        T(p, k) = K_t + p C + p^2 M per root at the root's current eigenvalue estimate p and k gives
+        new right and left vectors (inverse iteration with right-hand sides T'(p) u and T'(p)^H w,
+        T' = 2 M p + C); the two-sided Rayleigh functional w^H T(p, k) u = 0 (a quadratic in p; Ruhe
+        1973) then gives p at that k, and its derivative
+        dp/dk = -w^H (p dC/dk + dKt/dk) u / w^H (2 M p + C) u a Newton step on the matching condition
+        f(k) = b Im p(k) / V - k = 0. A root is converged when its Rayleigh value agrees with the
+        estimate p the pass started from (the linearised prediction of the previous pass) and the k
+        mismatch moves p by less than ``tol``. ``p_start`` (predicted eigenvalues) replaces
         ``state.p`` as the first guess. Roots the Newton update fails to converge within
-        ``NEWTON_ITER`` iterations are retried (if ``retry``) with plain substitution of k (slower,
-        linearly convergent, up to ``max_iter`` iterations).
+        ``NEWTON_ITER`` passes are retried (if ``retry``) with plain substitution of k (slower,
+        linearly convergent, up to ``max_iter`` passes).
         """
         p = (state.p if p_start is None else p_start).copy()
         u, w = state.u.copy(), state.w.copy()
         R = p.size
         V, rho, mach = (np.broadcast_to(np.asarray(a, dtype=float), (R,)) for a in (V, rho, mach))
         b_V = self.b / V
+        cd_all = 0.5 * rho * self.b * V           # rho cbar V / 4, Nastran PK damping term
+        q_all = 0.5 * rho * V * V
+        one_mach = mach[0] if np.all(mach == mach[0]) else None
         done = np.zeros(R, dtype=bool)
-        solved = np.zeros(R, dtype=bool)          # at least one inverse iteration at this point
         outside = np.zeros(R, dtype=bool)
         kk = b_V * np.abs(p.imag)                 # k at which each root's pencil is evaluated
-        kscale = b_V * self.scale
         act = np.arange(R)
-        M, K, B, n = self.system.mass, self.system.stiffness, self.B, self.system.n
-        for it in range(min(self.max_iter, NEWTON_ITER) if newton else self.max_iter):
-            k, bv, ks = kk[act], b_V[act], kscale[act]
-            G, kc, sloped, out = self._linearised(k, mach[act])
-            outside[act] = out
-            cd = 0.5 * rho[act] * self.b * V[act]  # rho cbar V / 4, Nastran PK damping term
-            q = 0.5 * rho[act] * V[act] ** 2
-            ua, wa, pa = u[act], w[act], p[act]
-            wc = wa.conj()
-            # Q^R u, Q^I/k u and their k-derivatives from one batched product
-            Gu = real_matvec(G.reshape(-1, 4 * n, n), ua).reshape(-1, 4, n)
-            kb, sl = kc[:, None], sloped[:, None]
-            Mu, Ku0 = ua @ M.T, ua @ K.T
-            Ku = Ku0 - q[:, None] * (Gu[:, 0] + kb * Gu[:, 1])      # (K_hh - q Q^R) u
-            Cu = ua @ B.T - cd[:, None] * (Gu[:, 2] + kb * Gu[:, 3])  # (B - rho b V Q^I/(2k)) u
-            hc = self._hysteretic(k, V[act]) if self._hyst else None
-            if hc is not None:
-                Cu = Cu + hc[:, None] * Ku0
-            a2 = np.einsum("ri,ri->r", wc, Mu)
-            a1 = np.einsum("ri,ri->r", wc, Cu)
-            a0 = np.einsum("ri,ri->r", wc, Ku)
-            disc = np.sqrt(a1 * a1 - 4 * a2 * a0 + 0j)
-            r1, r2 = (-a1 + disc) / (2 * a2), (-a1 - disc) / (2 * a2)
-            pn = np.where(np.abs(r1 - pa) <= np.abs(r2 - pa), r1, r2)  # Rayleigh functional root
-            flip = pn.imag < 0
-            dTu = np.where(sl, -(pn * cd)[:, None] * Gu[:, 3] - q[:, None] * Gu[:, 1], 0.0)
-            with np.errstate(divide="ignore", invalid="ignore"):
+        MKB = self._MKB
+        n_pass = min(self.max_iter, NEWTON_ITER) if newton else self.max_iter
+        with np.errstate(divide="ignore", invalid="ignore"):
+            for it in range(n_pass):
+                k, bv, Va = kk[act], b_V[act], V[act]
+                G, kc, sloped, out = self._linearised(k, mach[act], one_mach)
+                outside[act] = out
+                cd, q, pa = cd_all[act], q_all[act], p[act]
+                hc = self._hysteretic(k, Va) if self._hyst else None
+                if it:  # inverse iteration at the current (p, k): eigenvectors of the pencil at k
+                    u[act], w[act] = inverse_iteration(*pencil_system(
+                        G, kc, cd, q, hc, pa, self.system.mass, self.system.stiffness, self.B,
+                        u[act], w[act]))
+                ua, wc = u[act], w[act].conj()
+                # Q^R u, Q^I/k u and their k-derivatives from one batched product
+                Gu = real_matvec(G.reshape(-1, 4 * self.system.n, self.system.n), ua)
+                Gu = Gu.reshape(-1, 4, self.system.n)
+                MKBu = (ua @ MKB).reshape(-1, 3, self.system.n)  # M u, K u, B u
+                kb = kc[:, None]
+                Ku = MKBu[:, 1] - q[:, None] * (Gu[:, 0] + kb * Gu[:, 1])    # (K_hh - q Q^R) u
+                Cu = MKBu[:, 2] - cd[:, None] * (Gu[:, 2] + kb * Gu[:, 3])  # (B - rho b V Q^I/(2k)) u
+                if hc is not None:
+                    Cu += hc[:, None] * MKBu[:, 1]
+                a2 = np.einsum("ri,ri->r", wc, MKBu[:, 0])
+                a1 = np.einsum("ri,ri->r", wc, Cu)
+                a0 = np.einsum("ri,ri->r", wc, Ku)
+                disc = np.sqrt(a1 * a1 - 4 * a2 * a0 + 0j)
+                r1, r2 = (-a1 + disc) / (2 * a2), (-a1 - disc) / (2 * a2)
+                pn = np.where(np.abs(r1 - pa) <= np.abs(r2 - pa), r1, r2)  # Rayleigh functional root
+                dTu = np.where(sloped[:, None], -(pn * cd)[:, None] * Gu[:, 3] - q[:, None] * Gu[:, 1], 0.0)
                 dpdk = -np.einsum("ri,ri->r", wc, dTu) / (2 * a2 * pn + a1)  # implicit function thm
-            dpdk = np.where(np.isfinite(dpdk), dpdk, 0.0)
-            pc = np.where(flip, pn.conj(), pn)
-            dpc = np.where(flip, dpdk.conj(), dpdk)
-            f = bv * pc.imag - k                    # matching condition, Nastran PK
-            ptol = self.tol * np.maximum(np.abs(pn), self.scale)
-            conv = solved[act] & (np.abs(pc - pa) <= ptol) & (np.abs(dpc * f) <= ptol)
-            done[act[conv]] = True
-            p[act[conv]] = pc[conv]
-            keep = ~conv
-            if not keep.any():
-                break
-            if not keep.all():
-                act = act[keep]
-                pn, pc, dpc, f, k, flip = pn[keep], pc[keep], dpc[keep], f[keep], k[keep], flip[keep]
-                bv, ks, G, kc, cd, q = bv[keep], ks[keep], G[keep], kc[keep], cd[keep], q[keep]
-                ua, wa, Mu, Cu = ua[keep], wa[keep], Mu[keep], Cu[keep]
-                hc = hc[keep] if hc is not None else None
-            # inverse iteration with T(p) = K_t + p C + p^2 M at the current k (eigenvectors of the
-            # pencil at k); right-hand sides T'(p) u and T'(p)^H w with T' = 2 M p + C (C, M real)
-            kb3 = kc[:, None, None]
-            Cm = B - cd[:, None, None] * (G[:, 2] + kb3 * G[:, 3])
-            if hc is not None:
-                Cm = Cm + hc[:, None, None] * K
-            pb = pn[:, None, None]
-            T = (K - q[:, None, None] * (G[:, 0] + kb3 * G[:, 1])) + pb * (Cm + pb * M)
-            x = 2 * pn[:, None] * Mu + Cu
-            y = 2 * pn.conj()[:, None] * (wa @ M) + real_matvec(Cm.transpose(0, 2, 1), wa)
-            un, wn = inverse_iteration(T, x, y)
-            un[flip] = un[flip].conj()
-            wn[flip] = wn[flip].conj()
-            u[act], w[act] = un, wn
-            solved[act] = True
-            # k update: Newton on f(k) = b Im p(k) / V - k, plain substitution where Newton is unsafe
-            k_sub = bv * pc.imag
-            fp = bv * dpc.imag - 1.0
-            with np.errstate(divide="ignore", invalid="ignore"):
+                dpdk = np.where(np.isfinite(dpdk), dpdk, 0.0)
+                flip = pn.imag < 0                  # report the root with Im p >= 0 (conjugate pair)
+                if flip.any():
+                    pn, dpdk = np.where(flip, pn.conj(), pn), np.where(flip, dpdk.conj(), dpdk)
+                    fl = act[flip]
+                    u[fl], w[fl] = u[fl].conj(), w[fl].conj()
+                f = bv * pn.imag - k                # matching condition, Nastran PK
+                ptol = self.tol * np.maximum(np.abs(pn), self.scale)
+                conv = (np.abs(pn - pa) <= ptol) & (np.abs(dpdk * f) <= ptol) if it else \
+                    np.zeros(act.size, dtype=bool)
+                done[act[conv]] = True
+                p[act[conv]] = pn[conv]
+                keep = ~conv
+                if not keep.any():
+                    break
+                act, pn, dpdk, f, k, bv = act[keep], pn[keep], dpdk[keep], f[keep], k[keep], bv[keep]
+                # k update: Newton on f(k) = b Im p(k) / V - k, plain substitution where Newton is unsafe
+                k_sub = bv * pn.imag
+                fp = bv * dpdk.imag - 1.0
                 k_new = k - f / fp
-            use = newton & np.isfinite(k_new) & (fp < 0) & (k_new >= 0) & \
-                (np.abs(k_new - k_sub) <= 0.5 * np.maximum(k_sub, ks))
-            k_next = np.where(use, k_new, k_sub)
-            kk[act] = k_next
-            p[act] = pc + dpc * (k_next - k)          # linearised prediction at the new k
+                use = newton & np.isfinite(k_new) & (fp < 0) & (k_new >= 0) & \
+                    (np.abs(k_new - k_sub) <= 0.5 * np.maximum(k_sub, bv * self.scale))
+                k_next = np.where(use, k_new, k_sub)
+                kk[act] = k_next
+                p[act] = pn + dpdk * (k_next - k)    # linearised prediction at the new k
         new = RootState(p, u, w, done, outside)
         if newton and retry and not done.all():
             start = state if p_start is None else RootState(p_start, state.u, state.w,
