@@ -171,8 +171,8 @@ class GafInterpolator:
         k = np.asarray(k, dtype=float)
         if self.callable is None and self.interpolation == "linear":
             outside = k > self.k_max * (1 + 1e-9)
-            kc = np.clip(k, self.k_min, self.k_max)
-            i = np.clip(np.searchsorted(self.k_grid, kc) - 1, 0, self.k_grid.size - 2)
+            kc = np.minimum(np.maximum(k, self.k_min), self.k_max)  # (np.clip: same, slower)
+            i = np.minimum(np.maximum(np.searchsorted(self.k_grid, kc) - 1, 0), self.k_grid.size - 2)
             return self._table[i], kc, (k >= self.k_min) & ~outside, outside
         QR, D, dQR, dD, outside = self.with_slopes(k)
         kb = k[:, None, None]

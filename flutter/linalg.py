@@ -30,8 +30,8 @@ def inverse_iteration(T: np.ndarray, x: np.ndarray, y: np.ndarray) -> tuple[np.n
             lu, piv, info = zgetrf(T[r] + np.finfo(float).eps * np.abs(T[r]).max() * np.eye(n))
         u[r] = zgetrs(lu, piv, x[r])[0]
         w[r] = zgetrs(lu, piv, y[r], trans=2)[0]
-    u /= np.linalg.norm(u, axis=1, keepdims=True)
-    w /= np.linalg.norm(w, axis=1, keepdims=True)
+    u /= np.sqrt(np.einsum("ri,ri->r", u, u.conj()).real)[:, None]
+    w /= np.sqrt(np.einsum("ri,ri->r", w, w.conj()).real)[:, None]
     return u, w
 
 
@@ -44,8 +44,8 @@ def pencil_system(G: np.ndarray, kc: np.ndarray, cd: np.ndarray, q: np.ndarray,
     linearly in k) and C = B_hh - cd (G2 + kc G3) + hc K_hh (cd = rho cbar V / 4, Q^I/k interpolated;
     hc = g / omega for hysteretic structural damping) (MSC Nastran Aeroelastic Analysis User's Guide,
     PK method); x = T'(p) u and y = T'(p)^H w with T' = 2 M p + C (Ruhe, SIAM J. Numer. Anal. 10(4),
-    1973, nonlinear inverse iteration). Every matrix product is taken on the flattened (n * n)
-    matrices so the per-root scalings broadcast along rows of length n * n.
+    1973, nonlinear inverse iteration). Re T, Im T and C are each one weighted sum of the root's
+    G0..G3 (einsum) plus one of K, B, M (gemm), on the flattened (n * n) matrices.
 
     Parameters
     ----------
@@ -69,28 +69,77 @@ def pencil_system(G: np.ndarray, kc: np.ndarray, cd: np.ndarray, q: np.ndarray,
     """
     R, n = u.shape
     Gf = G.reshape(R, 4, n * n)
-    C = Gf[:, 3] * kc[:, None]
-    C += Gf[:, 2]
-    C *= -cd[:, None]
+    p2 = p * p
+    # each matrix as a weighted sum of G0..G3 (one einsum) and of K, B, M (one gemm)
+    cC = np.stack([-cd, -cd * kc], axis=1)
+    C = np.einsum("rj,rjk->rk", cC, Gf[:, 2:])
     C += B.ravel()
+    cT = np.empty((R, 4))                   # Re T on G0..G3; Im T needs G2, G3 only
+    cT[:, 0] = -q
+    cT[:, 1] = -q * kc
+    cT[:, 2:] = p.real[:, None] * cC
+    cK = np.zeros((2, R, 3))                # Re T and Im T on K, B, M
+    cK[0, :, 0] = 1.0
+    cK[0, :, 1], cK[0, :, 2] = p.real, p2.real
+    cK[1, :, 1], cK[1, :, 2] = p.imag, p2.imag
     if hc is not None:
         C += hc[:, None] * K.ravel()
-    Kt = Gf[:, 1] * kc[:, None]
-    Kt += Gf[:, 0]
-    Kt *= -q[:, None]
-    Kt += K.ravel()
-    p2 = p * p
+        cK[0, :, 0] += p.real * hc
+        cK[1, :, 0] += p.imag * hc
+    KBM = np.stack([K.ravel(), B.ravel(), M.ravel()])
     T = np.empty((R, n * n), dtype=complex)
-    Tr, Ti = T.real, T.imag
-    np.multiply(C, p.real[:, None], out=Tr)
-    Tr += Kt
-    Tr += p2.real[:, None] * M.ravel()
-    np.multiply(C, p.imag[:, None], out=Ti)
-    Ti += p2.imag[:, None] * M.ravel()
+    np.add(np.einsum("rj,rjk->rk", cT, Gf), cK[0] @ KBM, out=T.real)
+    np.add(np.einsum("rj,rjk->rk", p.imag[:, None] * cC, Gf[:, 2:]), cK[1] @ KBM, out=T.imag)
     C = C.reshape(R, n, n)
     x = 2 * p[:, None] * (u @ M.T) + real_matvec(C, u)
     y = 2 * p.conj()[:, None] * (w @ M) + real_matvec(C.transpose(0, 2, 1), w)
     return T.reshape(R, n, n), x, y
+
+
+def rayleigh(G: np.ndarray, kc: np.ndarray, sloped: np.ndarray, cd: np.ndarray, q: np.ndarray,
+             hc: np.ndarray | None, MKB: np.ndarray, u: np.ndarray, w: np.ndarray,
+             p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Two-sided Rayleigh functional of each root at its k, and its k-derivative.
+
+    The root of w^H T(p, k) u = a2 p^2 + a1 p + a0 = 0 nearest ``p`` (Ruhe, SIAM J. Numer. Anal.
+    10(4), 1973), with a2 = w^H M u, a1 = w^H C u, a0 = w^H K_t u (C and K_t as in
+    :func:`pencil_system`), and dp/dk = -w^H (p dC/dk + dK_t/dk) u / w^H (2 M p + C) u (implicit
+    function theorem; zero where the interpolant is held constant in k). All the bilinear forms
+    come from two batched products: the four G_j u and M u, K u, B u.
+
+    Parameters
+    ----------
+    G : ndarray, shape (R, 4, n, n)
+    kc, cd, q : ndarray, shape (R,)
+    sloped : ndarray of bool, shape (R,)
+        False where k is held outside the table (d/dk = 0).
+    hc : ndarray, shape (R,), or None
+    MKB : ndarray, shape (n, 3 n), complex
+        [M^T, K^T, B^T] side by side.
+    u, w : ndarray, shape (R, n), complex
+    p : ndarray, shape (R,), complex
+        Current estimates (the nearer root of the quadratic is taken).
+
+    Returns
+    -------
+    pn, dpdk : ndarray, shape (R,), complex
+        Rayleigh functional root and its k-derivative (0 where not finite).
+    """
+    R, n = u.shape
+    wc = w.conj()
+    g = np.einsum("rji,ri->rj", real_matvec(G.reshape(R, 4 * n, n), u).reshape(R, 4, n), wc)
+    s = np.einsum("rji,ri->rj", (u @ MKB).reshape(R, 3, n), wc)   # w^H M u, w^H K u, w^H B u
+    a2 = s[:, 0]
+    a0 = s[:, 1] - q * (g[:, 0] + kc * g[:, 1])   # w^H (K_hh - q Q^R) u
+    a1 = s[:, 2] - cd * (g[:, 2] + kc * g[:, 3])  # w^H (B_hh - rho b V Q^I/(2k)) u
+    if hc is not None:
+        a1 = a1 + hc * s[:, 1]
+    disc = np.sqrt(a1 * a1 - 4 * a2 * a0 + 0j)
+    r1, r2 = (-a1 + disc) / (2 * a2), (-a1 - disc) / (2 * a2)
+    pn = np.where(np.abs(r1 - p) <= np.abs(r2 - p), r1, r2)
+    dT = np.where(sloped, -pn * cd * g[:, 3] - q * g[:, 1], 0.0)  # w^H (p dC/dk + dK_t/dk) u
+    dpdk = -dT / (2 * a2 * pn + a1)
+    return pn, np.where(np.isfinite(dpdk), dpdk, 0.0)
 
 
 def real_matvec(A: np.ndarray, x: np.ndarray) -> np.ndarray:

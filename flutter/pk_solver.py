@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from flutter.gafinterp import GafInterpolator
-from flutter.linalg import inverse_iteration, path_length, pencil_system, real_matvec
+from flutter.linalg import inverse_iteration, path_length, pencil_system, rayleigh
 from flutter.system import ModalSystem
 from structures.errors import InputError
 
@@ -194,7 +194,6 @@ class PKSolver:
         outside = np.zeros(R, dtype=bool)
         kk = b_V * np.abs(p.imag)                 # k at which each root's pencil is evaluated
         act = np.arange(R)
-        MKB = self._MKB
         n_pass = min(self.max_iter, NEWTON_ITER) if newton else self.max_iter
         with np.errstate(divide="ignore", invalid="ignore"):
             for it in range(n_pass):
@@ -207,25 +206,7 @@ class PKSolver:
                     u[act], w[act] = inverse_iteration(*pencil_system(
                         G, kc, cd, q, hc, pa, self.system.mass, self.system.stiffness, self.B,
                         u[act], w[act]))
-                ua, wc = u[act], w[act].conj()
-                # Q^R u, Q^I/k u and their k-derivatives from one batched product
-                Gu = real_matvec(G.reshape(-1, 4 * self.system.n, self.system.n), ua)
-                Gu = Gu.reshape(-1, 4, self.system.n)
-                MKBu = (ua @ MKB).reshape(-1, 3, self.system.n)  # M u, K u, B u
-                kb = kc[:, None]
-                Ku = MKBu[:, 1] - q[:, None] * (Gu[:, 0] + kb * Gu[:, 1])    # (K_hh - q Q^R) u
-                Cu = MKBu[:, 2] - cd[:, None] * (Gu[:, 2] + kb * Gu[:, 3])  # (B - rho b V Q^I/(2k)) u
-                if hc is not None:
-                    Cu += hc[:, None] * MKBu[:, 1]
-                a2 = np.einsum("ri,ri->r", wc, MKBu[:, 0])
-                a1 = np.einsum("ri,ri->r", wc, Cu)
-                a0 = np.einsum("ri,ri->r", wc, Ku)
-                disc = np.sqrt(a1 * a1 - 4 * a2 * a0 + 0j)
-                r1, r2 = (-a1 + disc) / (2 * a2), (-a1 - disc) / (2 * a2)
-                pn = np.where(np.abs(r1 - pa) <= np.abs(r2 - pa), r1, r2)  # Rayleigh functional root
-                dTu = np.where(sloped[:, None], -(pn * cd)[:, None] * Gu[:, 3] - q[:, None] * Gu[:, 1], 0.0)
-                dpdk = -np.einsum("ri,ri->r", wc, dTu) / (2 * a2 * pn + a1)  # implicit function thm
-                dpdk = np.where(np.isfinite(dpdk), dpdk, 0.0)
+                pn, dpdk = rayleigh(G, kc, sloped, cd, q, hc, self._MKB, u[act], w[act], pa)
                 flip = pn.imag < 0                  # report the root with Im p >= 0 (conjugate pair)
                 if flip.any():
                     pn, dpdk = np.where(flip, pn.conj(), pn), np.where(flip, dpdk.conj(), dpdk)
@@ -365,13 +346,12 @@ class PKSolver:
         for r in bad:
             p_r, ok = pred[r], False
             tk = np.asarray(taken, dtype=complex)
-            for _ in range(self.max_iter):  # plain per-root p-k: full eig per iteration
+            for _ in range(self.max_iter):  # plain per-root p-k: all eigenvalues per iteration
                 k = np.array([self.b * abs(p_r.imag) / V])
                 C, Kt, out = self.pencil(k, V, rho, mach)
                 A = np.block([[np.zeros((n, n)), np.eye(n)], [-Minv @ Kt[0], -Minv @ C[0]]])
-                lam, X = np.linalg.eig(A)
-                neg = lam.imag < 0
-                lam, X = np.where(neg, lam.conj(), lam), np.where(neg[None, :], X.conj(), X)
+                lam = np.linalg.eigvals(A)
+                lam = np.where(lam.imag < 0, lam.conj(), lam)
                 clash = np.abs(lam[:, None] - tk[None, :]) <= 1e-6 * np.maximum(np.abs(tk), self.scale)
                 free = [j for j in np.argsort(np.abs(lam - p_r)) if not clash[j].any()]
                 j = free[0] if free else int(np.argmin(np.abs(lam - p_r)))
@@ -381,7 +361,11 @@ class PKSolver:
                     ok = bool(free)
                     break
             taken.append(p_r)
-            u = X[:n, j] / np.linalg.norm(X[:n, j])
+            # the eigenvector of the last matrix, at its eigenvalue p_r (or its conjugate)
+            lam, X = np.linalg.eig(A)
+            j = int(np.argmin(np.abs(np.where(lam.imag < 0, lam.conj(), lam) - p_r)))
+            u = X[:n, j] if lam[j].imag >= 0 else X[:n, j].conj()
+            u = u / np.linalg.norm(u)
             new.p[r], new.u[r], new.w[r] = p_r, u, u.conj()
             new.converged[r], new.outside[r] = ok, bool(out[0])
         return new, bad
