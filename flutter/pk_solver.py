@@ -41,6 +41,9 @@ class RootState:
     slope: np.ndarray | None = None  # (R,) dp per unit path length of the last step (predictor)
     du: np.ndarray | None = None     # (R, n) du per unit path length (phase-aligned vectors)
     dw: np.ndarray | None = None     # (R, n) dw per unit path length
+    h: float | None = None           # length of the last step
+    d2u: np.ndarray | None = None    # (R, n) second divided differences of u along the path
+    d2w: np.ndarray | None = None    # (R, n) second divided differences of w
 
 
 class PKSolver:
@@ -266,8 +269,9 @@ class PKSolver:
     def advance(self, state: RootState, frm: tuple, to: tuple, depth: int = 0) -> RootState:
         """Continue all roots from flight point ``frm`` to ``to`` (V, rho, M), bisecting bad steps.
 
-        Predictor: linear extrapolation of each eigenvalue and of its phase-aligned right and left
-        eigenvectors along the path (slopes of the last step, :meth:`predict`).
+        Predictor: linear extrapolation of each eigenvalue along the path (slope of the last
+        step), quadratic extrapolation of its phase-aligned right and left eigenvectors
+        (:meth:`predict`).
         A step is bisected (up to ``max_depth`` times) when a root lands closer to another root's
         prediction than to its own, loses eigenvector correlation while its eigenvalue jumps, or two
         roots land on the same eigenpair.
@@ -284,8 +288,9 @@ class PKSolver:
 
     @staticmethod
     def predict(state: RootState, frm: tuple, to: tuple) -> RootState:
-        """First guess at ``to``: eigenvalues and (phase-aligned) eigenvectors extrapolated linearly
-        along the path from the last step."""
+        """First guess at ``to``: eigenvalues extrapolated linearly along the path from the last
+        step (the tracking checks measure jumps from this prediction), the phase-aligned eigenvectors
+        quadratically through the last three points (the start vectors of the correction)."""
         h = path_length(frm, to)
         pred = state.p + (state.slope * h if state.slope is not None else 0)
         pred = np.where(pred.imag < 0, pred.real + 0j, pred)
@@ -293,6 +298,9 @@ class PKSolver:
         if state.du is not None:
             u = u + state.du * h
             w = w + state.dw * h
+            if state.d2u is not None:  # quadratic through the last three points (Newton form)
+                u = u + state.d2u * (h * (h + state.h))
+                w = w + state.d2w * (h * (h + state.h))
             u = u / np.linalg.norm(u, axis=1, keepdims=True)
             w = w / np.linalg.norm(w, axis=1, keepdims=True)
         return RootState(pred, u, w, state.converged, state.outside)
@@ -319,6 +327,13 @@ class PKSolver:
             new.du, new.dw = (new.u - state.u) / h, (new.w - state.w) / h
             new.du[reseeded] = 0.0
             new.dw[reseeded] = 0.0
+            new.h = h
+            if state.du is not None and state.h:
+                # no curvature where the last slope was reset (a reseeded root) or is being reset
+                fresh = ~np.any(state.du != 0, axis=1)
+                fresh[reseeded] = True
+                new.d2u = np.where(fresh[:, None], 0.0, (new.du - state.du) / (h + state.h))
+                new.d2w = np.where(fresh[:, None], 0.0, (new.dw - state.dw) / (h + state.h))
         else:
             new.slope = None
         return new
