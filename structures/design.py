@@ -338,6 +338,48 @@ def affected_submodel(model: FEModel, space: DesignSpace, only=None) -> FEModel 
     return replace(model, elements=elements, masses=masses)
 
 
+def element_groups(model: FEModel, space: DesignSpace) -> list:
+    """The affected elements and CONM2s partitioned by the set of variables that change them.
+
+    Two elements belong to one group when exactly the same design variables change their matrices
+    (e.g. every skin CQUAD4 is changed by the skin thickness and the skin modulus), so each group's
+    matrices are a function of its own variables only.
+
+    Returns
+    -------
+    list of (variables, submodel): variables a tuple of variable indices (sorted), submodel the
+    FEModel restricted to the group's elements and CONM2s; groups in a fixed order.
+    """
+    owners = {}
+    for i in range(len(space)):
+        sub = affected_submodel(model, space, only=[i])
+        if sub is None:
+            continue
+        for kind, es in sub.elements.items():
+            for eid in es.eids.tolist():
+                owners.setdefault((kind, eid), set()).add(i)
+        for eid in sub.masses.eids.tolist():
+            owners.setdefault(("", eid), set()).add(i)
+    by_vars = {}
+    for key, own in owners.items():
+        by_vars.setdefault(tuple(sorted(own)), []).append(key)
+    groups = []
+    for variables in sorted(by_vars):
+        keys = by_vars[variables]
+        elements = {}
+        for kind, es in model.elements.items():
+            sel = np.isin(es.eids, [eid for k, eid in keys if k == kind])
+            if np.any(sel):
+                elements[kind] = ElementSet(kind, es.eids[sel], es.pids[sel], es.nodes[sel],
+                                            {k: np.asarray(v)[sel] for k, v in es.data.items()})
+        cm = model.masses
+        msel = np.isin(cm.eids, [eid for k, eid in keys if k == ""])
+        masses = replace(cm, eids=cm.eids[msel], grid=cm.grid[msel], mass=cm.mass[msel],
+                         offset=cm.offset[msel], inertia=cm.inertia[msel])
+        groups.append((variables, replace(model, elements=elements, masses=masses)))
+    return groups
+
+
 # ------------------------------------------------------------------------------ writing bulk data
 _PYNASTRAN_ATTR = {("PBAR", "A"): "A", ("PBAR", "I1"): "i1", ("PBAR", "I2"): "i2",
                    ("PBAR", "J"): "j", ("PBEAM", "A"): "A", ("PBEAM", "I1"): "i1",

@@ -1,15 +1,8 @@
-"""Sensitivities for model tuning: dK/dp, dM/dp by sub-assembly; eigenvalue and mode-shape derivatives.
+"""Sensitivities for model tuning: eigenvalue and mode-shape derivatives.
 
-**Sub-assembly.** Only the elements a design variable touches are re-assembled. With the a-set map
-of the start design (u_basic = R T u_a, ``TR``), K(x) = K_rest + TR^T K_aff(x) TR where K_aff is the
-g-set matrix of the affected elements and K_rest = K(x0) - TR^T K_aff(x0) TR is built once (same for
-M and the rigid-body mass M0 = D^T M_gg D of the mass properties). The a-set partition (SPC, rigid
-elements, AUTOSPC) is the start design's; a design that changed it would need a full re-assembly.
-
-**Matrix derivatives.** dK/dx_i and dM/dx_i are central differences of the sub-assembled matrices of
-the elements variable i touches, step h_i = 1e-4 |x_i|: exact to round-off for fields that enter
-linearly (A, I1, I2, J, K, E, G, CONM2 values), truncation (h_i/x_i)^2 ~ 1e-8 relative for PSHELL T
-(t^3 bending) and Timoshenko shear terms.
+**Matrices and their derivatives** K(x), M(x), dK/dx_i, dM/dx_i come from
+:class:`structures.subassembly.SubAssembly` (sub-assembly of the elements the variables change;
+exact polynomial derivatives where the fields enter polynomially).
 
 **Eigenvalue derivatives** (Fox & Kapoor 1968, mass-normalised phi_j):
 d lambda_j = phi_j^T (dK - lambda_j dM) phi_j.
@@ -39,81 +32,13 @@ from __future__ import annotations
 
 import numpy as np
 import scipy.linalg as sla
-import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from structures.assembly import assemble, assemble_g
-from structures.design import DesignSpace, affected_submodel, apply_design
 from structures.errors import InputError, SolverError, card_message
-from structures.frames import rigid_offset
-from structures.modal import DEFAULT_SHIFT, rigid_body_basis
-from structures.model import FEModel
+from structures.modal import DEFAULT_SHIFT
+from structures.subassembly import SubAssembly
 
-STEP = 1e-4
 SHAPE_METHODS = ("nelson", "modal")
-
-
-class SubAssembly:
-    """K(x), M(x), M0(x) of one configuration by sub-assembly, and their derivatives.
-
-    Parameters
-    ----------
-    model : FEModel
-        The configuration's model at the start design.
-    space : DesignSpace
-    mass : {'deck', 'consistent', 'lumped'}
-    """
-
-    def __init__(self, model: FEModel, space: DesignSpace, mass: str = "deck"):
-        self.model, self.space, self.mass = model, space, mass
-        base = apply_design(model, space, space.x0)
-        self.system = assemble(base, mass)
-        self.tr = (self.system.rotation @ self.system.T).tocsr()
-        self.xyz = model.grids.xyz
-        # rigid-body motions about the origin, D (ng, 6): M0 = D^T M_gg D (structures.massprops)
-        self.d = rigid_offset(self.xyz).reshape(-1, 6)
-        self.sub = affected_submodel(base, space)
-        self.var_sub = [affected_submodel(base, space, only=[i]) for i in range(len(space))]
-        k_aff, m_aff, m0_aff = self._sub_matrices(self.sub, space.x0)
-        self.k_rest = (self.system.K - k_aff).tocsc()
-        self.m_rest = (self.system.M - m_aff).tocsc()
-        self.m0_rest = self.d.T @ (self.system.m_basic @ self.d) - m0_aff
-        rb = rigid_body_basis(model, self.system)
-        self.rigid = np.asarray(rb[self.system.a_dofs])
-        self.last_phi = None   # modes of the last design, a Lanczos start for the next one
-
-    def _sub_matrices(self, sub, x):
-        n = self.tr.shape[1]
-        if sub is None:
-            return sp.csc_matrix((n, n)), sp.csc_matrix((n, n)), np.zeros((6, 6))
-        k_g, m_g = assemble_g(apply_design(sub, self.space, x), self.mass)
-        k = (self.tr.T @ k_g @ self.tr).tocsc()
-        m = (self.tr.T @ m_g @ self.tr).tocsc()
-        return k, m, self.d.T @ (m_g @ self.d)
-
-    def matrices(self, x):
-        """K (na, na), M (na, na) sparse and the rigid-body mass M0 (6, 6) about the origin at x."""
-        k_aff, m_aff, m0_aff = self._sub_matrices(self.sub, x)
-        return (self.k_rest + k_aff).tocsc(), (self.m_rest + m_aff).tocsc(), self.m0_rest + m0_aff
-
-    def derivatives(self, x):
-        """dK/dx_i, dM/dx_i (lists of sparse (na, na)) and dM0/dx_i (nvar, 6, 6).
-
-        Central differences of the sub-assembled matrices, step 1e-4 |x_i| (module docstring).
-        """
-        x = np.asarray(x, float)
-        dk, dm, dm0 = [], [], np.zeros((len(x), 6, 6))
-        for i, sub in enumerate(self.var_sub):
-            h = STEP * abs(x[i])
-            xp, xm = x.copy(), x.copy()
-            xp[i] += h
-            xm[i] -= h
-            kp, mp, m0p = self._sub_matrices(sub, xp)
-            km, mm, m0m = self._sub_matrices(sub, xm)
-            dk.append(((kp - km) / (2 * h)).tocsc())
-            dm.append(((mp - mm) / (2 * h)).tocsc())
-            dm0[i] = (m0p - m0m) / (2 * h)
-        return dk, dm, dm0
 
 
 # ---------------------------------------------------------------------------------- rigid modes

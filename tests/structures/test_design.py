@@ -13,7 +13,7 @@ from tuning_decks import PROPS, PSHELL_T, write_aircraft_deck  # noqa: E402
 from structures.assembly import assemble  # noqa: E402
 from structures.bdf import read_model  # noqa: E402
 from structures.design import (DesignVariable, FieldRef, affected_submodel, apply_design, bind,  # noqa: E402
-                               get_field, write_tuned_bdf)
+                               element_groups, get_field, write_tuned_bdf)
 from structures.errors import InputError, MissingReferenceError  # noqa: E402
 
 
@@ -142,3 +142,35 @@ def test_write_tuned_bdf_round_trip(decks, tmp_path):
         PSHELL_T[21] * x[space.names.index("skin_T")] / space.x0[space.names.index("skin_T")], rel=1e-7)
     with pytest.raises(InputError, match="outside its bounds"):
         write_tuned_bdf(empty_path, tmp_path / "bad.bdf", space, space.upper * 2)
+
+
+def test_element_groups_partition_the_affected_elements_by_their_variables(decks):
+    """Every affected element and CONM2 is in exactly one group, and a group's elements are
+    changed by exactly its variables (checked against affected_submodel per variable)."""
+    _, _, empty, _ = decks
+    space = bind(ALL_KINDS, [empty])
+    groups = element_groups(empty, space)
+    seen = {}
+    for variables, sub in groups:
+        for kind, es in sub.elements.items():
+            for eid in es.eids.tolist():
+                assert (kind, eid) not in seen
+                seen[(kind, eid)] = variables
+        for eid in sub.masses.eids.tolist():
+            assert ("CONM2", eid) not in seen
+            seen[("CONM2", eid)] = variables
+    everything = affected_submodel(empty, space)
+    expected = {(k, e) for k, es in everything.elements.items() for e in es.eids.tolist()}
+    expected |= {("CONM2", e) for e in everything.masses.eids.tolist()}
+    assert set(seen) == expected
+    for key, variables in seen.items():
+        owners = []
+        for i in range(len(space)):
+            sub = affected_submodel(empty, space, only=[i])
+            ids = (sub.masses.eids.tolist() if key[0] == "CONM2" else
+                   sub.elements[key[0]].eids.tolist() if key[0] in sub.elements else [])
+            if key[1] in ids:
+                owners.append(i)
+        assert tuple(owners) == variables, key
+    skin = space.names.index("skin_T"), space.names.index("skin_E")
+    assert tuple(sorted(skin)) in [v for v, _ in groups]

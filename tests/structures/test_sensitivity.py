@@ -167,3 +167,51 @@ def test_modal_method_converges_to_nelson_with_more_modes(aircraft):
                           / np.linalg.norm(exact[i], axis=0).max() for i in range(len(space))))
     assert errors[1] < errors[0]
     assert errors[1] < 1e-2
+
+
+def test_thickness_group_is_an_exact_cubic_and_its_derivative_is_exact(aircraft):
+    """PSHELL T alone: K = T C1 + T^3 C3 (membrane/shear and bending), M = T C (rho T): the fit
+    keeps exactly those terms, and dK/dT matches the Richardson-extrapolated central difference
+    of the full assembly (truncation O(h^4) ~ 1e-12 at h = 1e-3 T) to 1e-9."""
+    _, _, model = aircraft
+    space = bind([DesignVariable("skin_T", [("PSHELL", 21, "T"), ("PSHELL", 22, "T")])], [model])
+    sub = SubAssembly(model, space)
+    (group,) = sub.groups
+    assert group.k is not None
+    assert sorted(group.k.exps[:, 0].tolist()) == [1, 3]
+    assert group.m.exps[:, 0].tolist() == [1]
+    x = space.x0 * 1.1
+    dk, dm, _ = sub.derivatives(x)
+
+    def central(h):
+        fp = assemble(apply_design(model, space, x + h))
+        fm = assemble(apply_design(model, space, x - h))
+        return (fp.K - fm.K) / (2 * h), (fp.M - fm.M) / (2 * h)
+    h = 1e-3 * x[0]
+    (k1, m1), (k2, m2) = central(h), central(h / 2)
+    ref_k, ref_m = (4 * k2 - k1) / 3, (4 * m2 - m1) / 3
+    assert abs(dk[0] - ref_k).max() <= 1e-9 * abs(ref_k).max()
+    assert abs(dm[0] - ref_m).max() <= 1e-9 * abs(ref_m).max()
+
+
+def test_group_that_is_not_the_assumed_polynomial_is_reassembled(aircraft, monkeypatch):
+    """MAT1 2 carries E, G and NU (the reader completes G), so the skin modulus changes E with G
+    fixed: the condensed membrane is rational in E and the skin group must be re-assembled. With
+    the thickness declared linear the cubic fails the check the same way. Either way K, M and the
+    derivatives still match the full assembly."""
+    import structures.subassembly as subassembly
+
+    sub, space, model = aircraft
+    skin = [g for g in sub.groups if space.names.index("skin_E") in g.variables.tolist()]
+    assert len(skin) == 1 and skin[0].k is None
+    assert all(g.k is not None for g in sub.groups if g is not skin[0])
+    monkeypatch.setattr(subassembly, "DEGREE", {})
+    space_t = bind([DesignVariable("skin_T", [("PSHELL", 21, "T"), ("PSHELL", 22, "T")]),
+                    DesignVariable("engine", [("CONM2", 900, "M"), ("CONM2", 901, "M")])], [model])
+    sub_t = SubAssembly(model, space_t)
+    assert [g.k is None for g in sub_t.groups] == [True, False]
+    x = space_t.x0 * np.array([1.1, 0.9])
+    k, m, _ = sub_t.matrices(x)
+    full = assemble(apply_design(model, space_t, x))
+    assert abs(k - full.K).max() <= 1e-13 * abs(full.K).max()
+    assert abs(m - full.M).max() <= 1e-13 * abs(full.M).max()
