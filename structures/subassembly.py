@@ -150,37 +150,68 @@ class _Group:
         return self.owner.d.T @ (mg @ self.owner.d)
 
     def fit(self) -> bool:
-        """Fit the polynomial (module docstring); False when the check point rejects it."""
+        """Fit the polynomial (module docstring); False when a check point rejects it.
+
+        Cheap rejection first: along each variable, the others at their first node, the matrices
+        must be a polynomial of the variable's degree (checked at one more point on that line), so
+        a group that is not polynomial costs a few assemblies, not the whole grid.
+        """
         space = self.owner.space
         degree = [max(DEGREE.get((r.card, r.field), 1) for r in space.variables[v].fields)
                   for v in self.variables]
+        nodes = [_chebyshev(d) for d in degree]
+        check = 1.0 + 0.15 * np.sin(1.7 * np.arange(1, len(degree) + 1))
         exps = np.array(list(itertools.product(*[range(d + 1) for d in degree])), int)
-        polynomial = len(exps) <= MAX_TERMS
-        points = np.array(list(itertools.product(*[_chebyshev(d) for d in degree])))
-        check = 1.0 + 0.15 * np.sin(1.7 * np.arange(1, len(self.variables) + 1))
-        ks, ms, m0s = [], [], []
-        for u in np.vstack([check, points if polynomial else np.ones((1, len(degree)))]):
-            x = space.x0.copy()
-            x[self.variables] *= u
-            k, m = self.values(x)
-            ks.append(k)
-            ms.append(m)
-            m0s.append(self.m0_of(m).ravel())
+        cache = {}
+
+        def sample(u):
+            """(K, M, M0) flat values at ratios u (tuple), computed once."""
+            if u not in cache:
+                x = space.x0.copy()
+                x[self.variables] *= np.asarray(u)
+                k, m = self.values(x)
+                cache[u] = (k, m, self.m0_of(m).ravel())
+            return cache[u]
+
+        def rejects(points, value_at, vander, mono):
+            """True when the interpolant through ``points`` misses the value at the check point."""
+            for i in range(3):
+                grid = np.array([sample(u)[i] for u in points])
+                value = sample(value_at)[i]
+                scale = max(np.abs(grid).max(initial=0.0), np.abs(value).max(initial=0.0), 1e-300)
+                coef = np.linalg.solve(vander, grid)
+                if np.abs(mono @ coef - value).max(initial=0.0) > CHECK_TOL * scale:
+                    return True
+            return False
+
+        ok = len(exps) <= MAX_TERMS
+        base = [n[0] for n in nodes]
+        for j in np.argsort(degree, kind="stable") if ok else []:
+            line = [tuple(base[:j] + [t] + base[j + 1:]) for t in nodes[j]]
+            off = tuple(base[:j] + [check[j]] + base[j + 1:])
+            powers = np.arange(degree[j] + 1)
+            if rejects(line, off, nodes[j][:, None] ** powers, check[j] ** powers):
+                ok = False
+                break
+        points = [tuple(u) for u in itertools.product(*nodes)] if ok else [tuple(np.ones(len(degree)))]
+        samples = [np.array([sample(u)[i] for u in points]) for i in range(3)]
         # element-matrix entries that are zero at every sample (rotary mass of shells and bars,
         # uncoupled terms) are structural zeros: kept out of the patterns
-        self.k_keys, self.k_op = _restrict(self.k_keys, self.k_op, np.any(np.array(ks) != 0, axis=0))
-        self.m_keys, self.m_op = _restrict(self.m_keys, self.m_op, np.any(np.array(ms) != 0, axis=0))
-        if not polynomial:
+        used = [np.any(np.array([c[i] for c in cache.values()]) != 0, axis=0) for i in (0, 1)]
+        self.k_keys, self.k_op = _restrict(self.k_keys, self.k_op, used[0])
+        self.m_keys, self.m_op = _restrict(self.m_keys, self.m_op, used[1])
+        if not ok:
             return False
-        vander = np.prod(points[:, None, :] ** exps[None, :, :], axis=2)   # (npoint, nterm)
+        vander = np.prod(np.array(points)[:, None, :] ** exps[None, :, :], axis=2)   # (npoint, nterm)
         mono = np.prod(check[None, :] ** exps, axis=1)
         fits = []
-        for samples in (np.array(ks), np.array(ms), np.array(m0s)):
-            scale = max(np.abs(samples).max(initial=0.0), 1e-300)
-            coef = np.linalg.solve(vander, samples[1:])
+        for i, grid in enumerate(samples):
+            value = sample(tuple(check))[i]
+            scale = max(np.abs(grid).max(initial=0.0), 1e-300)
+            coef = np.linalg.inv(vander) @ grid
             keep = np.abs(coef).max(axis=1, initial=0.0) > DROP_TOL * scale
-            coef = np.linalg.lstsq(vander[:, keep], samples[1:], rcond=None)[0]
-            if np.abs(mono[keep] @ coef - samples[0]).max(initial=0.0) > CHECK_TOL * scale:
+            coef = np.linalg.pinv(vander[:, keep]) @ grid                  # least squares refit
+            if np.abs(mono[keep] @ coef - value).max(initial=0.0) > CHECK_TOL * scale:
                 return False
             fits.append((exps[keep], coef))
         self.k = _Polynomial(self.variables, fits[0][0], (self.k_op @ fits[0][1].T).T)
