@@ -30,9 +30,12 @@ def inverse_iteration(T: np.ndarray, x: np.ndarray, y: np.ndarray) -> tuple[np.n
             lu, piv, info = zgetrf(T[r] + np.finfo(float).eps * np.abs(T[r]).max() * np.eye(n))
         u[r] = zgetrs(lu, piv, x[r])[0]
         w[r] = zgetrs(lu, piv, y[r], trans=2)[0]
-    u /= np.sqrt(np.einsum("ri,ri->r", u, u.conj()).real)[:, None]
-    w /= np.sqrt(np.einsum("ri,ri->r", w, w.conj()).real)[:, None]
-    return u, w
+    return unit_rows(u), unit_rows(w)
+
+
+def unit_rows(u: np.ndarray) -> np.ndarray:
+    """Rows of ``u`` (R, n) scaled to unit 2-norm (a new array)."""
+    return u / np.sqrt(np.einsum("ri,ri->r", u, u.conj()).real)[:, None]
 
 
 def pencil_system(G: np.ndarray, kc: np.ndarray, cd: np.ndarray, q: np.ndarray,
@@ -134,11 +137,12 @@ def rayleigh(G: np.ndarray, kc: np.ndarray, sloped: np.ndarray, cd: np.ndarray, 
     a1 = s[:, 2] - cd * (g[:, 2] + kc * g[:, 3])  # w^H (B_hh - rho b V Q^I/(2k)) u
     if hc is not None:
         a1 = a1 + hc * s[:, 1]
-    disc = np.sqrt(a1 * a1 - 4 * a2 * a0 + 0j)
-    r1, r2 = (-a1 + disc) / (2 * a2), (-a1 - disc) / (2 * a2)
-    pn = np.where(np.abs(r1 - p) <= np.abs(r2 - p), r1, r2)
-    dT = np.where(sloped, -pn * cd * g[:, 3] - q * g[:, 1], 0.0)  # w^H (p dC/dk + dK_t/dk) u
-    dpdk = -dT / (2 * a2 * pn + a1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        disc = np.sqrt(a1 * a1 - 4 * a2 * a0 + 0j)
+        r1, r2 = (-a1 + disc) / (2 * a2), (-a1 - disc) / (2 * a2)
+        pn = np.where(np.abs(r1 - p) <= np.abs(r2 - p), r1, r2)
+        dT = np.where(sloped, -pn * cd * g[:, 3] - q * g[:, 1], 0.0)  # w^H (p dC/dk + dK_t/dk) u
+        dpdk = -dT / (2 * a2 * pn + a1)
     return pn, np.where(np.isfinite(dpdk), dpdk, 0.0)
 
 

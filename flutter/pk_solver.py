@@ -41,9 +41,6 @@ class RootState:
     slope: np.ndarray | None = None  # (R,) dp per unit path length of the last step (predictor)
     du: np.ndarray | None = None     # (R, n) du per unit path length (phase-aligned vectors)
     dw: np.ndarray | None = None     # (R, n) dw per unit path length
-    h: float | None = None           # length of the last step
-    d2u: np.ndarray | None = None    # (R, n) second divided differences of u along the path
-    d2w: np.ndarray | None = None    # (R, n) second divided differences of w
 
 
 class PKSolver:
@@ -171,19 +168,18 @@ class PKSolver:
                 retry: bool = True) -> RootState:
         """Converge every root at (V, rho, M) from ``state`` by two-sided Rayleigh-quotient iteration.
 
-        Each pass, batched over the unconverged roots and with one gather of the GAF interpolant at
-        each root's current k: except on the first pass (which uses the predicted vectors), one LU of
-        T(p, k) = K_t + p C + p^2 M per root at the root's current eigenvalue estimate p and k gives
-        new right and left vectors (inverse iteration with right-hand sides T'(p) u and T'(p)^H w,
-        T' = 2 M p + C); the two-sided Rayleigh functional w^H T(p, k) u = 0 (a quadratic in p; Ruhe
-        1973) then gives p at that k, and its derivative
-        dp/dk = -w^H (p dC/dk + dKt/dk) u / w^H (2 M p + C) u a Newton step on the matching condition
-        f(k) = b Im p(k) / V - k = 0. A root is converged when its Rayleigh value agrees with the
-        estimate p the pass started from (the linearised prediction of the previous pass) and the k
-        mismatch moves p by less than ``tol``. ``p_start`` (predicted eigenvalues) replaces
+        Each iteration, batched over the unconverged roots and with one gather of the GAF
+        interpolant at each root's current k: the two-sided Rayleigh functional w^H T(p, k) u = 0 (a
+        quadratic in p; Ruhe 1973) gives p at the root's current k, and its derivative
+        dp/dk = -w^H (p dC/dk + dKt/dk) u / w^H (2 M p + C) u gives a Newton step on the matching
+        condition f(k) = b Im p(k) / V - k = 0 (:func:`flutter.linalg.rayleigh`). A root is
+        converged when p agrees with the linearised prediction of the previous iteration and the k
+        mismatch moves p by less than ``tol``; that test needs no factorisation. Otherwise one LU of
+        T(p) per root gives the next right and left vectors (inverse iteration,
+        :func:`flutter.linalg.pencil_system`). ``p_start`` (predicted eigenvalues) replaces
         ``state.p`` as the first guess. Roots the Newton update fails to converge within
-        ``NEWTON_ITER`` passes are retried (if ``retry``) with plain substitution of k (slower,
-        linearly convergent, up to ``max_iter`` passes).
+        ``NEWTON_ITER`` iterations are retried (if ``retry``) with plain substitution of k (slower,
+        linearly convergent, up to ``max_iter`` iterations).
         """
         p = (state.p if p_start is None else p_start).copy()
         u, w = state.u.copy(), state.w.copy()
@@ -194,46 +190,50 @@ class PKSolver:
         q_all = 0.5 * rho * V * V
         one_mach = mach[0] if np.all(mach == mach[0]) else None
         done = np.zeros(R, dtype=bool)
+        solved = np.zeros(R, dtype=bool)          # at least one inverse iteration at this point
         outside = np.zeros(R, dtype=bool)
         kk = b_V * np.abs(p.imag)                 # k at which each root's pencil is evaluated
         act = np.arange(R)
-        n_pass = min(self.max_iter, NEWTON_ITER) if newton else self.max_iter
+        M, K, B = self.system.mass, self.system.stiffness, self.B
         with np.errstate(divide="ignore", invalid="ignore"):
-            for it in range(n_pass):
-                k, bv, Va = kk[act], b_V[act], V[act]
+            for _ in range(min(self.max_iter, NEWTON_ITER) if newton else self.max_iter):
+                k, bv = kk[act], b_V[act]
                 G, kc, sloped, out = self._linearised(k, mach[act], one_mach)
                 outside[act] = out
-                cd, q, pa = cd_all[act], q_all[act], p[act]
-                hc = self._hysteretic(k, Va) if self._hyst else None
-                if it:  # inverse iteration at the current (p, k): eigenvectors of the pencil at k
-                    u[act], w[act] = inverse_iteration(*pencil_system(
-                        G, kc, cd, q, hc, pa, self.system.mass, self.system.stiffness, self.B,
-                        u[act], w[act]))
-                pn, dpdk = rayleigh(G, kc, sloped, cd, q, hc, self._MKB, u[act], w[act], pa)
+                cd, q, pa, ua, wa = cd_all[act], q_all[act], p[act], u[act], w[act]
+                hc = self._hysteretic(k, V[act]) if self._hyst else None
+                pn, dpdk = rayleigh(G, kc, sloped, cd, q, hc, self._MKB, ua, wa, pa)
                 flip = pn.imag < 0                  # report the root with Im p >= 0 (conjugate pair)
-                if flip.any():
-                    pn, dpdk = np.where(flip, pn.conj(), pn), np.where(flip, dpdk.conj(), dpdk)
-                    fl = act[flip]
-                    u[fl], w[fl] = u[fl].conj(), w[fl].conj()
-                f = bv * pn.imag - k                # matching condition, Nastran PK
+                pc = np.where(flip, pn.conj(), pn)
+                dpc = np.where(flip, dpdk.conj(), dpdk)
+                f = bv * pc.imag - k                # matching condition, Nastran PK
                 ptol = self.tol * np.maximum(np.abs(pn), self.scale)
-                conv = (np.abs(pn - pa) <= ptol) & (np.abs(dpdk * f) <= ptol) if it else \
-                    np.zeros(act.size, dtype=bool)
+                conv = solved[act] & (np.abs(pc - pa) <= ptol) & (np.abs(dpc * f) <= ptol)
                 done[act[conv]] = True
-                p[act[conv]] = pn[conv]
+                p[act[conv]] = pc[conv]
                 keep = ~conv
                 if not keep.any():
                     break
-                act, pn, dpdk, f, k, bv = act[keep], pn[keep], dpdk[keep], f[keep], k[keep], bv[keep]
-                # k update: Newton on f(k) = b Im p(k) / V - k, plain substitution where Newton is unsafe
-                k_sub = bv * pn.imag
-                fp = bv * dpdk.imag - 1.0
+                if not keep.all():
+                    act, G, kc, cd, q, ua, wa = act[keep], G[keep], kc[keep], cd[keep], q[keep], \
+                        ua[keep], wa[keep]
+                    pn, pc, dpc, f, k, bv, flip = pn[keep], pc[keep], dpc[keep], f[keep], k[keep], \
+                        bv[keep], flip[keep]
+                    hc = hc[keep] if hc is not None else None
+                # inverse iteration at (pn, k): eigenvectors of the pencil at the current k
+                un, wn = inverse_iteration(*pencil_system(G, kc, cd, q, hc, pn, M, K, B, ua, wa))
+                un[flip], wn[flip] = un[flip].conj(), wn[flip].conj()
+                u[act], w[act] = un, wn
+                solved[act] = True
+                # k update: Newton on f(k) = b Im p(k) / V - k, plain substitution where unsafe
+                k_sub = bv * pc.imag
+                fp = bv * dpc.imag - 1.0
                 k_new = k - f / fp
                 use = newton & np.isfinite(k_new) & (fp < 0) & (k_new >= 0) & \
                     (np.abs(k_new - k_sub) <= 0.5 * np.maximum(k_sub, bv * self.scale))
                 k_next = np.where(use, k_new, k_sub)
                 kk[act] = k_next
-                p[act] = pn + dpdk * (k_next - k)    # linearised prediction at the new k
+                p[act] = pc + dpc * (k_next - k)    # linearised prediction at the new k
         new = RootState(p, u, w, done, outside)
         if newton and retry and not done.all():
             start = state if p_start is None else RootState(p_start, state.u, state.w,
@@ -269,9 +269,8 @@ class PKSolver:
     def advance(self, state: RootState, frm: tuple, to: tuple, depth: int = 0) -> RootState:
         """Continue all roots from flight point ``frm`` to ``to`` (V, rho, M), bisecting bad steps.
 
-        Predictor: linear extrapolation of each eigenvalue along the path (slope of the last
-        step), quadratic extrapolation of its phase-aligned right and left eigenvectors
-        (:meth:`predict`).
+        Predictor: linear extrapolation of each eigenvalue and of its phase-aligned right and left
+        eigenvectors along the path (slopes of the last step, :meth:`predict`).
         A step is bisected (up to ``max_depth`` times) when a root lands closer to another root's
         prediction than to its own, loses eigenvector correlation while its eigenvalue jumps, or two
         roots land on the same eigenpair.
@@ -288,9 +287,8 @@ class PKSolver:
 
     @staticmethod
     def predict(state: RootState, frm: tuple, to: tuple) -> RootState:
-        """First guess at ``to``: eigenvalues extrapolated linearly along the path from the last
-        step (the tracking checks measure jumps from this prediction), the phase-aligned eigenvectors
-        quadratically through the last three points (the start vectors of the correction)."""
+        """First guess at ``to``: eigenvalues and (phase-aligned) eigenvectors extrapolated linearly
+        along the path from the last step."""
         h = path_length(frm, to)
         pred = state.p + (state.slope * h if state.slope is not None else 0)
         pred = np.where(pred.imag < 0, pred.real + 0j, pred)
@@ -298,9 +296,6 @@ class PKSolver:
         if state.du is not None:
             u = u + state.du * h
             w = w + state.dw * h
-            if state.d2u is not None:  # quadratic through the last three points (Newton form)
-                u = u + state.d2u * (h * (h + state.h))
-                w = w + state.d2w * (h * (h + state.h))
             u = u / np.linalg.norm(u, axis=1, keepdims=True)
             w = w / np.linalg.norm(w, axis=1, keepdims=True)
         return RootState(pred, u, w, state.converged, state.outside)
@@ -327,13 +322,6 @@ class PKSolver:
             new.du, new.dw = (new.u - state.u) / h, (new.w - state.w) / h
             new.du[reseeded] = 0.0
             new.dw[reseeded] = 0.0
-            new.h = h
-            if state.du is not None and state.h:
-                # no curvature where the last slope was reset (a reseeded root) or is being reset
-                fresh = ~np.any(state.du != 0, axis=1)
-                fresh[reseeded] = True
-                new.d2u = np.where(fresh[:, None], 0.0, (new.du - state.du) / (h + state.h))
-                new.d2w = np.where(fresh[:, None], 0.0, (new.dw - state.dw) / (h + state.h))
         else:
             new.slope = None
         return new
