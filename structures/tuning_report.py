@@ -92,7 +92,7 @@ def index_summary(history: xr.Dataset, after="last", before=0) -> xr.Dataset:
     names = [str(n) for n in history["index"].values]
     config = np.array([n.split(":")[0] for n in names])
     kind = np.array([n.split(":")[1] for n in names])
-    configs = list(dict.fromkeys(config))
+    configs = [c for c in dict.fromkeys(config) if c != "design"]    # design:change: regularisation
     kinds = ["mass", "orthogonality", "frequency", "cross_orthogonality", "mac"]
     out = {}
     for tag, i in (("before", i0), ("after", i1)):

@@ -3,8 +3,8 @@
 ``write_aircraft_deck``: a free-free aircraft-like beam/shell model in SI units: a CBAR fuselage
 along x; two wings along -+y, each a CBAR spar (inner and outer PBAR) inside a CQUAD4 skin strip
 (PSHELL on MAT1 2); a CBAR horizontal tail and fin; two engines (CONM2) hung from the wings on spring
-pylons (CELAS1/PELAS 41 translations, CELAS2 rotations; CBUSH is avoided because structures.bdf
-cannot read it yet); a payload CONM2 in the fuselage; optional fuel CONM2s along the wing spars (the
+pylons (CELAS1/PELAS 41 translations, CELAS2 rotations, so that one PELAS K is the pylon's design
+variable); a payload CONM2 in the fuselage; optional fuel CONM2s along the wing spars (the
 "full" configuration). Left and right wings carry their own property ids (linked by tuning).
 ``write_cantilever_deck``: a clamped CBAR beam whose two first bending modes are a chosen ratio
 apart (I2 / I1 sets it), with a tip CONM2.
