@@ -8,7 +8,9 @@ off-diagonal of both configurations (2 x (14 + 182) indices), SLSQP.
 
 Figures (``key: value`` lines): setup seconds, seconds per evaluation without gradients,
 evaluations per second, seconds per evaluation with gradients (per shape method), seconds per
-SLSQP iteration (with gradients), peak resident memory.
+SLSQP iteration (with gradients), eigen solves and gradients per SLSQP iteration, peak resident
+memory. Wall seconds depend on what else runs on the machine: the CPU seconds of the process
+(all its threads) and the 1-minute load average are printed beside them.
 
 Usage: ``PYTHONPATH=. python benchmarks/tuning.py [--span 180 --chord 8 --iterations 3]``
 """
@@ -86,26 +88,36 @@ def main(argv=None) -> int:
         ev = Evaluator(problem)
         print(f"[{method}] setup_seconds: {time.perf_counter() - t0:.2f}")
         print(f"[{method}] a_set_dofs: {[c.sub.system.K.shape[0] for c in ev.configs]}")
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.process_time()
         n_eval = 3
         for k in range(n_eval):
             ev.evaluate(ev.space.x0 * (1.0 + 0.01 * (k + 1)))
         per_eval = (time.perf_counter() - t0) / n_eval
         print(f"[{method}] seconds_per_evaluation: {per_eval:.2f}")
+        print(f"[{method}] cpu_seconds_per_evaluation: {(time.process_time() - c0) / n_eval:.2f}")
         print(f"[{method}] evaluations_per_second: {1.0 / per_eval:.3f}")
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.process_time()
         ev.evaluate(ev.space.x0 * 1.005, True)
         print(f"[{method}] seconds_per_evaluation_with_gradients: {time.perf_counter() - t0:.2f}")
+        print(f"[{method}] cpu_seconds_per_evaluation_with_gradients: {time.process_time() - c0:.2f}")
         stamps = []
-        t0 = time.perf_counter()
+        counts = dict(ev.counts)
+        t0, c0 = time.perf_counter(), time.process_time()
         result = tune(problem, maxiter=args.iterations, evaluator=ev,
                       progress=lambda it, obj, viol, sec: stamps.append((it, obj, sec)))
-        total = time.perf_counter() - t0
+        total, cpu = time.perf_counter() - t0, time.process_time() - c0
+        n_it = max(len(stamps), 1)
         for it, obj, sec in stamps:
             print(f"[{method}] iteration {it}: objective {obj:.4e} at {sec:.1f} s")
         print(f"[{method}] slsqp_iterations: {len(stamps)}")
         print(f"[{method}] evaluations: {result.history.sizes['iteration']}")
-        print(f"[{method}] seconds_per_iteration: {total / max(len(stamps), 1):.2f}")
+        print(f"[{method}] eigen_solves_per_iteration: "
+              f"{(ev.counts['designs'] - counts['designs']) / n_it:.2f}")
+        print(f"[{method}] gradients_per_iteration: "
+              f"{(ev.counts['gradients'] - counts['gradients']) / n_it:.2f}")
+        print(f"[{method}] seconds_per_iteration: {total / n_it:.2f}")
+        print(f"[{method}] cpu_seconds_per_iteration: {cpu / n_it:.2f}")
+        print(f"[{method}] load_average_1min: {os.getloadavg()[0]:.2f}")
     peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
     print(f"peak_rss_mb: {peak:.0f}")
     return 0

@@ -32,6 +32,8 @@ constraint may be exceeded by 5 % of its limit); if none qualifies, the least-vi
 """
 from __future__ import annotations
 
+import ctypes
+import ctypes.util
 import fnmatch
 import os
 import time
@@ -162,6 +164,28 @@ class _Configuration:
         return values, grad, terms
 
 
+def _libc_trim():
+    """glibc's malloc_trim, or None on other C libraries."""
+    try:
+        return ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6").malloc_trim
+    except (OSError, AttributeError):
+        return None
+
+
+_MALLOC_TRIM = _libc_trim()
+
+
+def _trim_heap():
+    """Give the memory freed by the worker threads back to the system (glibc: malloc_trim).
+
+    Each thread allocates its tens-of-MB temporaries in its own malloc arena, which glibc does not
+    shrink by itself: without this the resident memory of the 20,000-DOF benchmark grew by about
+    50 MB per gradient evaluation (0.7 -> 1.3 GB in 8), with it it stays at 0.5-0.8 GB.
+    """
+    if _MALLOC_TRIM is not None:
+        _MALLOC_TRIM(0)
+
+
 def _select(patterns, names, what: str):
     """Indices of ``names`` matched by each (pattern, number) pair; InputError if none."""
     out = []
@@ -238,6 +262,7 @@ class Evaluator:
         self.records = []
         self._cache = {}
         self._pool = None   # the worker threads, kept for the evaluator's life
+        self.counts = {"designs": 0, "gradients": 0}   # evaluations actually computed
 
     # ------------------------------------------------------------------------------ evaluation
     def evaluate(self, x, gradient: bool = False):
@@ -247,6 +272,8 @@ class Evaluator:
         hit = self._cache.get(key)
         if hit is not None and (hit[1] is not None or not gradient):
             return hit[0], hit[1]
+        self.counts["designs"] += hit is None                 # a new design: one eigen solve each
+        self.counts["gradients"] += bool(gradient)
         vals, grads, pairs, inter, freqs = [], [], [], [], []
         # one BLAS thread per configuration, the configurations side by side (module docstring)
         with threadpool_limits(limits=1, user_api="blas"):
@@ -254,6 +281,7 @@ class Evaluator:
                 if self._pool is None:
                     self._pool = ThreadPoolExecutor(self.workers, thread_name_prefix="tuning")
                 results = list(self._pool.map(lambda c: c.evaluate(x, gradient), self.configs))
+                _trim_heap()
             else:
                 results = [c.evaluate(x, gradient) for c in self.configs]
         for v, g, terms in results:
