@@ -39,7 +39,7 @@ def unit_rows(u: np.ndarray) -> np.ndarray:
 
 
 def pencil_system(G: np.ndarray, kc: np.ndarray, cd: np.ndarray, q: np.ndarray,
-                  hc: np.ndarray | None, p: np.ndarray, M: np.ndarray, K: np.ndarray, B: np.ndarray,
+                  hc: np.ndarray | None, p: np.ndarray, M: np.ndarray, KBM: np.ndarray,
                   u: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The p-k matrix T(p) of each root and the right-hand sides of its inverse-iteration step.
 
@@ -60,8 +60,10 @@ def pencil_system(G: np.ndarray, kc: np.ndarray, cd: np.ndarray, q: np.ndarray,
         Hysteretic damping g / omega per root, or None.
     p : ndarray, shape (R,), complex
         Eigenvalue estimate (shift) of each root.
-    M, K, B : ndarray, shape (n, n)
-        Modal mass, stiffness and viscous damping.
+    M : ndarray, shape (n, n)
+        Modal mass.
+    KBM : ndarray, shape (3, n * n)
+        Modal stiffness, viscous damping and mass, flattened and stacked.
     u, w : ndarray, shape (R, n), complex
         Current right and left vectors.
 
@@ -76,7 +78,7 @@ def pencil_system(G: np.ndarray, kc: np.ndarray, cd: np.ndarray, q: np.ndarray,
     # each matrix as a weighted sum of G0..G3 (one einsum) and of K, B, M (one gemm)
     cC = np.stack([-cd, -cd * kc], axis=1)
     C = np.einsum("rj,rjk->rk", cC, Gf[:, 2:])
-    C += B.ravel()
+    C += KBM[1]
     cT = np.empty((R, 4))                   # Re T on G0..G3; Im T needs G2, G3 only
     cT[:, 0] = -q
     cT[:, 1] = -q * kc
@@ -86,10 +88,9 @@ def pencil_system(G: np.ndarray, kc: np.ndarray, cd: np.ndarray, q: np.ndarray,
     cK[0, :, 1], cK[0, :, 2] = p.real, p2.real
     cK[1, :, 1], cK[1, :, 2] = p.imag, p2.imag
     if hc is not None:
-        C += hc[:, None] * K.ravel()
+        C += hc[:, None] * KBM[0]
         cK[0, :, 0] += p.real * hc
         cK[1, :, 0] += p.imag * hc
-    KBM = np.stack([K.ravel(), B.ravel(), M.ravel()])
     T = np.empty((R, n * n), dtype=complex)
     np.add(np.einsum("rj,rjk->rk", cT, Gf), cK[0] @ KBM, out=T.real)
     np.add(np.einsum("rj,rjk->rk", p.imag[:, None] * cC, Gf[:, 2:]), cK[1] @ KBM, out=T.imag)

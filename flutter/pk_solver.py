@@ -93,6 +93,7 @@ class PKSolver:
             B = B + system.viscous_structural()
         self.B = B
         self._MKB = np.concatenate([system.mass.T, system.stiffness.T, B.T], axis=1).astype(complex)
+        self._KBM = np.stack([system.stiffness.ravel(), B.ravel(), system.mass.ravel()])
         n = system.n
         if GafInterpolator(gaf, self._any_mach(gaf), interpolation).n != n:
             raise InputError(f"p-k: the GAFs have a different number of modes than the system ({n}). "
@@ -194,7 +195,6 @@ class PKSolver:
         outside = np.zeros(R, dtype=bool)
         kk = b_V * np.abs(p.imag)                 # k at which each root's pencil is evaluated
         act = np.arange(R)
-        M, K, B = self.system.mass, self.system.stiffness, self.B
         with np.errstate(divide="ignore", invalid="ignore"):
             for _ in range(min(self.max_iter, NEWTON_ITER) if newton else self.max_iter):
                 k, bv = kk[act], b_V[act]
@@ -221,7 +221,8 @@ class PKSolver:
                         bv[keep], flip[keep]
                     hc = hc[keep] if hc is not None else None
                 # inverse iteration at (pn, k): eigenvectors of the pencil at the current k
-                un, wn = inverse_iteration(*pencil_system(G, kc, cd, q, hc, pn, M, K, B, ua, wa))
+                un, wn = inverse_iteration(*pencil_system(G, kc, cd, q, hc, pn, self.system.mass,
+                                                          self._KBM, ua, wa))
                 un[flip], wn[flip] = un[flip].conj(), wn[flip].conj()
                 u[act], w[act] = un, wn
                 solved[act] = True
