@@ -147,11 +147,8 @@ class PKSolver:
         g = self.system.structural.at(omega / (2 * np.pi))
         return np.where(omega > 1e-12, g / np.maximum(omega, 1e-300), 0.0)
 
-    def _linearised(self, k: np.ndarray, mach: np.ndarray, one_mach: float | None = None):
-        """:meth:`GafInterpolator.linearised` for roots at their own Mach numbers (all at
-        ``one_mach`` when given)."""
-        if one_mach is not None:
-            return self.interpolator(one_mach).linearised(k)
+    def _linearised(self, k: np.ndarray, mach: np.ndarray):
+        """:meth:`GafInterpolator.linearised` for roots at their own Mach numbers."""
         machs = np.unique(mach)
         if machs.size == 1:
             return self.interpolator(machs[0]).linearised(k)
@@ -189,7 +186,8 @@ class PKSolver:
         b_V = self.b / V
         cd_all = 0.5 * rho * self.b * V           # rho cbar V / 4, Nastran PK damping term
         q_all = 0.5 * rho * V * V
-        one_mach = mach[0] if np.all(mach == mach[0]) else None
+        # one interpolator for all roots when they share a Mach number (the usual case)
+        interp = self.interpolator(mach[0]) if np.all(mach == mach[0]) else None
         done = np.zeros(R, dtype=bool)
         solved = np.zeros(R, dtype=bool)          # at least one inverse iteration at this point
         outside = np.zeros(R, dtype=bool)
@@ -198,7 +196,8 @@ class PKSolver:
         with np.errstate(divide="ignore", invalid="ignore"):
             for _ in range(min(self.max_iter, NEWTON_ITER) if newton else self.max_iter):
                 k, bv = kk[act], b_V[act]
-                G, kc, sloped, out = self._linearised(k, mach[act], one_mach)
+                G, kc, sloped, out = interp.linearised(k) if interp is not None else \
+                    self._linearised(k, mach[act])
                 outside[act] = out
                 cd, q, pa, ua, wa = cd_all[act], q_all[act], p[act], u[act], w[act]
                 hc = self._hysteretic(k, V[act]) if self._hyst else None
