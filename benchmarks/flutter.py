@@ -4,7 +4,8 @@ Synthetic but realistic aeroelastic model: a uniform cantilever wing (semi-span 
 elastic axis at 35% chord, CG 10% chord behind it) with 15 bending and 15 torsion modes coupled
 through the static imbalance, and Theodorsen strip GAFs (40 strips, Prandtl-Glauert lift slope per
 Mach) tabulated at 24 reduced frequencies. Prints total seconds, wall and CPU (the machine is shared,
-so wall time is noisy; the load average is printed beside them), of one ``pk_solve`` per Mach number
+so wall time is noisy; the load average and the time of a fixed reference workload just before and
+after are printed beside them), of one ``pk_solve`` per Mach number
 and of the three in one ``pk_solve_many`` batch, seconds per (velocity x root), peak memory, and the
 agreement of every crossing with a plain per-root p-k (full eigen-decomposition per root per
 iteration, located by bisection).
@@ -107,6 +108,25 @@ def plain_crossings(M, K, gaf, ds, rho, mach):
     return out
 
 
+def reference_seconds() -> float:
+    """Seconds of a fixed workload shaped like the solver's (200 LUs of 30 x 30 complex matrices
+    and 20,000 small numpy calls) on one BLAS thread: the machine's speed at the moment, to read
+    the timings against (the cores are shared, so it varies by up to 2x from minute to minute)."""
+    from scipy.linalg.lapack import zgetrf
+    from threadpoolctl import threadpool_limits
+
+    rng = np.random.default_rng(0)
+    T = rng.standard_normal((200, 30, 30)) + 1j * rng.standard_normal((200, 30, 30))
+    x = rng.standard_normal(30)
+    with threadpool_limits(limits=1, user_api="blas"):
+        t0 = time.perf_counter()
+        for t in T:
+            zgetrf(t)
+        for _ in range(20000):
+            np.abs(x)
+        return time.perf_counter() - t0
+
+
 def main():
     M, K, strips = wing_model()
     gaf = gafs(strips)
@@ -114,6 +134,7 @@ def main():
     velocities = np.linspace(20.0, 400.0, 200)
     rho = 1.225
     pk_solve(system, gaf.isel(mach=[0]), velocities[:3], density=rho, mach=MACHS[0])  # warm-up
+    ref_before = min(reference_seconds() for _ in range(3))
     load_before = os.getloadavg()
     t0, c0 = time.perf_counter(), time.process_time()
     results = []
@@ -123,6 +144,7 @@ def main():
             results.append(pk_solve(system, gaf, velocities, density=rho, mach=m))
     total, cpu = time.perf_counter() - t0, time.process_time() - c0
     load_after = os.getloadavg()
+    ref_after = min(reference_seconds() for _ in range(3))
     t0, c0 = time.perf_counter(), time.process_time()  # the same three sweeps in one batch
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
@@ -150,6 +172,7 @@ def main():
         "seconds_per_velocity_root_cpu": cpu / (velocities.size * n_root * len(MACHS)),
         "load_average_1_5_15_before": [round(x, 2) for x in load_before],
         "load_average_1_5_15_after": [round(x, 2) for x in load_after],
+        "reference_workload_seconds_before_after": [round(ref_before, 4), round(ref_after, 4)],
         "batched_pk_solve_many_seconds_wall": round(total_b, 3),
         "batched_pk_solve_many_seconds_cpu": round(cpu_b, 3),
         "batched_crossings_equal_per_mach": bool(same),
