@@ -26,6 +26,18 @@ The case file's ``[[configurations]]`` (name, deck, gvt, nmodes, mass) are read 
     index = "*:cross_orthogonality:*"
     limit = 0.01                  # J_k <= eps_k (MAC: J_k >= eps_k)
 
+    # noisy test shapes: weight every term by its noise, w = sigma_f^2 / sigma^2 (frequency
+    # terms weight 1 <-> sigma_f). With white sensor noise of s x rms per DOF, the MAC terms with
+    # w = n_DOF sigma_f^2 / s^2 are the maximum-likelihood shape fit (1 %, 5 %, 120 DOFs: 4.8);
+    # cross-orthogonality terms pass the noise through SEREP's pseudo-inverse and are better kept
+    # as checks. The design-change terms are a prior of std sigma_p: w = (sigma_f / sigma_p)^2.
+    [[tuning.objective]]
+    index = "*:mac:*"
+    weight = 4.8
+    [[tuning.objective]]
+    index = "design:change:*"     # ((x - x0) / x0)^2 of every design variable
+    weight = 0.013
+
     [tuning.configurations.empty] # optional, per configuration
     test_modes = [7, 8, 9]
     mass_targets = { weight = 1500.0, x_cg = 4.2 }  # default: the configuration's measured_mass
