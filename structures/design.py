@@ -13,6 +13,12 @@ Linking: the variable's value x is the first field's value; every linked field k
 it, value_k(x) = value_k(x0) * x / x0, so left/right symmetric properties move together and fields of
 different size move in proportion. Bounds default to x0 (1 -+ 0.2) (the paper's +-20 % side
 constraints); the optimiser sees the scaled variable z = x / scale (default scale |x0|).
+
+MAT1: the reader completes a blank G (or NU) from the other two at the deck's values, and a field
+tuned alone leaves the others at those values. For the behaviour of a blank G (G following E with
+NU fixed, as Nastran completes it) link E and G in one variable; E alone holds G and NU, so the
+material leaves the isotropic relation G = E / 2(1 + NU) (and a CQUAD4 stiffness becomes rational
+in E, which :mod:`structures.subassembly` then re-assembles at every design).
 """
 from __future__ import annotations
 

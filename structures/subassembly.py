@@ -18,12 +18,20 @@ u_v = x_v / x0_v as
 
 the C_alpha found once from the group assembled on the tensor grid of d_v + 1 Chebyshev points per
 variable in u_v in [0.6, 1.4] (an exact interpolation of a polynomial of that degree), the terms
-below 1e-9 of the largest dropped (E T^3 and E T remain for a skin) and the rest refitted by least
-squares. The fit is then checked against one more assembly at a point off the grid; a group whose
-matrices are not such a polynomial (a MAT1 with E and G given, whose Poisson ratio E / 2G - 1 enters
-a shell; Timoshenko shear factors; pinned ends condensing coupled terms) fails the check by far more
-than the round-off tolerance ``CHECK_TOL`` and is re-assembled at every design instead, its
-derivatives then central differences of step 1e-4 |x_i| (truncation (h_i / x_i)^2 ~ 1e-8).
+below 1e-9 of the largest dropped (T and T^3 remain for a skin thickness alone) and the rest
+refitted by least squares. The fit is checked against one more assembly at a point off the grid,
+and before the grid is sampled, along each variable's line through it (a few assemblies). A group
+whose matrices are not such a polynomial fails a check by far more than the round-off tolerance
+``CHECK_TOL`` and is re-assembled at every design instead, its derivatives then central differences
+of step 1e-4 |x_i| (truncation (h_i / x_i)^2 ~ 1e-8). Examples: a tuned MAT1 E whose G stays fixed
+(given, or completed by the reader at the start value): the CQUAD4 membrane, condensed over its
+incompatible modes, is then rational in E / G; Timoshenko shear factors; pinned ends condensing
+coupled terms.
+
+Element matrices enter as flat value arrays (:func:`structures.assembly.element_matrices`) mapped to
+the a-set entries by a fixed sparse operator (the reduction TR^T A TR of each element entry), so a
+re-assembled group costs its element routines and one sparse product; entries that are zero at
+every sample (rotary mass, uncoupled terms) are structural zeros and stay out of the pattern.
 
 For polynomial groups K(x), M(x) are sums of stored coefficient arrays on a fixed sparsity pattern
 (no element is recomputed), and dK/dx_i = sum_alpha alpha_i C_alpha u^(alpha - e_i) / x0_i is exact.
