@@ -5,8 +5,8 @@ elastic axis at 35% chord, CG 10% chord behind it) with 15 bending and 15 torsio
 through the static imbalance, and Theodorsen strip GAFs (40 strips, Prandtl-Glauert lift slope per
 Mach) tabulated at 24 reduced frequencies. Prints total seconds, wall and CPU (the machine is shared,
 so wall time is noisy; the load average and the time of a fixed reference workload just before and
-after are printed beside them), of one ``pk_solve`` per Mach number
-and of the three in one ``pk_solve_many`` batch, seconds per (velocity x root), peak memory, and the
+after are printed beside them), of one ``pk_solve`` per Mach number, of the three in one ``pk_solve_many`` batch and on two worker processes (``workers=2``, the
+machine's two cores), seconds per (velocity x root), peak memory, and the
 agreement of every crossing with a plain per-root p-k (full eigen-decomposition per root per
 iteration, located by bisection).
 
@@ -152,6 +152,13 @@ def main():
     total_b, cpu_b = time.perf_counter() - t0, time.process_time() - c0
     same = all(np.allclose(a.crossing_velocity.values, b.crossing_velocity.values, rtol=1e-9)
                for a, b in zip(results, batched))
+    t0 = time.perf_counter()  # the three sweeps on two worker processes (flutter.parallel)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        forked = pk_solve_many(system, gaf, [(velocities, rho, m) for m in MACHS], workers=2)
+    total_w = time.perf_counter() - t0
+    same_w = all(np.array_equal(a.eigenvalue.values, b.eigenvalue.values)
+                 for a, b in zip(results, forked))
     tracemalloc.start()  # separate, untimed pass: tracemalloc slows numpy allocation
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
@@ -176,6 +183,8 @@ def main():
         "batched_pk_solve_many_seconds_wall": round(total_b, 3),
         "batched_pk_solve_many_seconds_cpu": round(cpu_b, 3),
         "batched_crossings_equal_per_mach": bool(same),
+        "two_workers_seconds_wall": round(total_w, 3),
+        "two_workers_results_identical": bool(same_w),
         "peak_traced_memory_MB_one_mach": round(peak / 2 ** 20, 2),
         "not_converged_points": int(sum((~ds.converged).sum() for ds in results)),
         "warnings": len(caught),

@@ -26,6 +26,7 @@ import xarray as xr
 from threadpoolctl import threadpool_limits
 
 from flutter.crossings import G_TOL, Crossing, find_brackets, illinois, interpolate_zero
+from flutter.parallel import map_cases
 from flutter.pk_solver import PKSolver, RootState
 from flutter.results import vg_dataset, attach_crossings
 from flutter.system import ModalSystem
@@ -200,11 +201,13 @@ def pk_solve(system: ModalSystem, gaf, velocity, *, density, mach, sweep: str = 
 
 def pk_solve_many(system: ModalSystem, gaf, cases, *, sweep: str = "velocity",
                   refc: float | None = None, interpolation: str = "linear", refine: bool = True,
-                  g_tol: float = G_TOL, **options) -> list[xr.Dataset]:
+                  g_tol: float = G_TOL, workers: int = 1, **options) -> list[xr.Dataset]:
     """Several p-k sweeps (e.g. one per Mach number or density) solved together.
 
-    The roots of all cases are corrected in one batched call per sweep index
-    (:func:`sweep_states_many`); each result equals ``pk_solve`` on that case alone.
+    With ``workers = 1`` the roots of all cases are corrected in one batched call per sweep index
+    (:func:`sweep_states_many`); with more, the cases are solved on up to ``workers`` processes
+    (:func:`flutter.parallel.map_cases`). Either way each result equals ``pk_solve`` on that case
+    alone.
 
     Parameters
     ----------
@@ -212,6 +215,8 @@ def pk_solve_many(system: ModalSystem, gaf, cases, *, sweep: str = "velocity",
         As :func:`pk_solve`.
     cases : list of (velocity, density, mach)
         Each an array_like of shape (npts_c,) or a scalar (broadcast), as in :func:`pk_solve`.
+    workers : int
+        Processes to spread the cases over (1: none; where ``fork`` is unavailable, none).
 
     Returns
     -------
@@ -219,6 +224,13 @@ def pk_solve_many(system: ModalSystem, gaf, cases, *, sweep: str = "velocity",
     """
     if sweep not in ("velocity", "density"):
         raise InputError(f"p-k: unknown sweep {sweep!r}. Fix: use 'velocity' or 'density'.")
+    if not (isinstance(workers, (int, np.integer)) and workers >= 1):
+        raise InputError(f"p-k: workers = {workers!r}. Fix: give a whole number >= 1.")
+    if workers > 1 and len(cases) > 1:
+        settings = dict(sweep=sweep, refc=refc, interpolation=interpolation, refine=refine,
+                        g_tol=g_tol, **options)
+        return map_cases(lambda case: pk_solve_many(system, gaf, [case], **settings)[0],
+                         list(cases), workers)
     flights = []
     for velocity, density, mach in cases:
         V, rho, M = np.broadcast_arrays(np.atleast_1d(np.asarray(velocity, dtype=float)),
