@@ -18,7 +18,7 @@ import numpy as np
 import xarray as xr
 
 from flutter.kmethod import k_solve
-from flutter.pk import pk_solve
+from flutter.pk import pk_solve, pk_solve_many
 from flutter.results import crossings_of, write_flutter
 from flutter.system import ModalSystem, StructuralDamping
 from structures.errors import InputError, UnsupportedCardError, card_message
@@ -140,15 +140,22 @@ def modal_system(modes: xr.Dataset, structural: StructuralDamping) -> ModalSyste
                        modes=tuple(int(m) for m in modes["mode"].values))
 
 
+def _cores() -> int:
+    """Cores this process may run on."""
+    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
+
+
 def solve_request(system: ModalSystem, gaf, req: FlutterRequest) -> list[tuple[dict, xr.Dataset]]:
     """Run one FLUTTER request; returns (label, result Dataset) per sweep."""
     out = []
     if METHODS[req.method] == "pk":
         V = np.unique(req.values)
-        for rho in req.density:
-            for m in req.mach:
-                ds = pk_solve(system, gaf, V, density=rho, mach=m)
-                out.append(({"mach": m, "density": rho, "configuration": f"FLUTTER {req.sid}"}, ds))
+        points = [(rho, m) for rho in req.density for m in req.mach]
+        # the sweeps are independent: one per core (flutter.parallel)
+        results = pk_solve_many(system, gaf, [(V, rho, m) for rho, m in points],
+                                workers=min(len(points), _cores()))
+        for (rho, m), ds in zip(points, results):
+            out.append(({"mach": m, "density": rho, "configuration": f"FLUTTER {req.sid}"}, ds))
     elif METHODS[req.method] == "pknl":
         rho, mach, V = (np.asarray(x) for x in (req.density, req.mach, req.values))
         order = np.argsort(rho, kind="stable")
