@@ -6,6 +6,8 @@ inherit the job (model, GAFs, cases) from the parent's memory, so nothing but th
 to them and only the result comes back; a callable GAF that cannot be pickled works too. Where
 ``fork`` is not available (Windows) the cases run one after the other in the calling process.
 Warnings raised in a worker are recorded there and issued again, in case order, by the caller.
+The job is handed over in a module global, so one map runs at a time per process (not from two
+threads at once).
 """
 from __future__ import annotations
 
