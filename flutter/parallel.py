@@ -6,6 +6,12 @@ inherit the job (model, GAFs, cases) from the parent's memory, so nothing but th
 to them and only the result comes back; a callable GAF that cannot be pickled works too. Where
 ``fork`` is not available (Windows) the cases run one after the other in the calling process.
 Warnings raised in a worker are recorded there and issued again, in case order, by the caller.
+What holds for the results: a worker runs exactly the code the calling process would run on that
+case alone (same kernels, BLAS limited to one thread by the caller of the map, e.g.
+:func:`flutter.pk.pk_solve_many`), so a forked result equals the in-process one; the tests check
+this to 1e-12 relative rather than claim bit-identity, which memory alignment or a different BLAS
+build may break. A result computed in a different batch (the lockstep batch of
+:func:`flutter.pk.pk_solve_many` with ``workers=1``) differs in the last bits: see there.
 The job is handed over in a module global, so one map runs at a time per process (not from two
 threads at once).
 """
