@@ -50,12 +50,33 @@ def test_rbe3_reference_follows_weighted_average_translation(tmp_path):
     np.testing.assert_allclose(g @ u[indep], u[dep], atol=1e-14)
 
 
+def _weighted_plane_at(xy, weights, w, point):
+    """Hand reference: weighted least-squares plane w = a + b x + c y through the data, at point.
+
+    An RBE3 whose independent and dependent components are all T3 reduces to this fit: the rigid
+    motion (w0, theta_x, theta_y) gives u_z = w0 + theta_x (y - y_r) - theta_y (x - x_r), a plane.
+    """
+    basis = np.column_stack([np.ones(len(xy)), xy])
+    normal = basis.T @ (weights[:, None] * basis)
+    a, b, c = np.linalg.solve(normal, basis.T @ (weights * w))
+    return a + b * point[0] + c * point[1]
+
+
 def test_rbe3_weights_bias_towards_heavier_points(tmp_path):
-    model = _model(tmp_path, "RBE3,20,,5,3,1.0,3,1,2,\n,3.0,3,3,4\n")
+    # Weight 1 on grid 1, 3 on grids 2, 3, 4; only grid 3 (a corner of the unit square) moves up, so
+    # the data are not on a plane and the weights change the fit: by the normal equations written
+    # out by hand, [[10, 6, 6], [6, 6, 3], [6, 3, 6]] (a, b, c) = (3, 3, 3) gives a = -1/2,
+    # b = c = 2/3 and w(0.5, 0.5) = 1/6; equal weights give the plain average 1/4.
+    model = _model(tmp_path, "RBE3,20,,5,3,1.0,3,1,\n,3.0,3,2,3,4\n")
     dep, indep, g = element_constraints(model.grids, model.rigid[0])
     u = np.zeros(6 * len(model.grids))
-    u[[14, 20]] = 1.0  # only the weight-3 grids 3 and 4 move up
-    assert 0.5 < (g @ u[indep])[0] < 1.0
+    u[14] = 1.0  # T3 of grid 3
+    xy = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+    w_data = np.array([0.0, 0.0, 1.0, 0.0])
+    reference = _weighted_plane_at(xy, np.array([1.0, 3.0, 3.0, 3.0]), w_data, (0.5, 0.5))
+    assert reference == pytest.approx(1.0 / 6.0, abs=1e-14)
+    assert _weighted_plane_at(xy, np.ones(4), w_data, (0.5, 0.5)) == pytest.approx(0.25, abs=1e-14)
+    np.testing.assert_allclose(g @ u[indep], [1.0 / 6.0], rtol=0, atol=1e-12)
 
 
 def test_rbar_without_six_independent_dofs_raises(tmp_path):
