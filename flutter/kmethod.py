@@ -17,8 +17,9 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from flutter.crossings import find_brackets, interpolate_zero
+from flutter.crossings import Crossing, find_brackets, interpolate_zero
 from flutter.gafinterp import GafInterpolator
+from flutter.results import attach_crossings, vg_dataset
 from flutter.system import ModalSystem
 from flutter.tracking import assign
 from structures.errors import InputError
@@ -43,10 +44,14 @@ def k_solve(system: ModalSystem, gaf, k, *, density: float, mach: float,
     Returns
     -------
     xarray.Dataset
-        dims (k, root): ``velocity``, ``damping`` (required g), ``frequency`` [Hz]; ``eigenvector``
-        (k, root, mode); crossings (g = 0, linear in k) as ``crossing_velocity``,
-        ``crossing_frequency``, ``crossing_root`` on dim ``crossing``. Rigid-body roots (omega = 0)
-        have no k-method solution and are NaN.
+        dims (k, root), the sweep dimension ``k`` (attrs ``sweep = "k"``, ``method = "K"``):
+        ``velocity`` V = omega b / k of each root, ``damping`` (required g), ``frequency`` [Hz],
+        ``eigenvalue`` p = omega (g/2 + i) (the p-k form of the same root, DESIGN.md section 3),
+        ``converged`` (False where the root has no k-method solution); ``eigenvector``
+        (k, root, mode), largest component 1; coordinates ``density`` and ``mach`` along ``k``.
+        Crossings (g = 0, linear in k) on dim ``crossing`` as in :func:`flutter.pk.pk_solve`
+        (``crossing_velocity``, ``crossing_frequency``, ``crossing_root``, ``crossing_kind`` =
+        "flutter", ...). Rigid-body roots (omega = 0) have no k-method solution and are NaN.
     """
     k = np.asarray(k, dtype=float)
     if k.ndim != 1 or np.any(k <= 0) or np.unique(k).size != k.size:
@@ -83,20 +88,22 @@ def k_solve(system: ModalSystem, gaf, k, *, density: float, mach: float,
         omega = np.where(ok, 1.0 / np.sqrt(np.where(ok, inv.real, 1.0)), np.nan)
         g = np.where(ok, inv.imag / inv.real, np.nan)
     V = omega * b / k[:, None]
-    ds = xr.Dataset(
-        {"velocity": (("k", "root"), V), "damping": (("k", "root"), g, {"long_name": "required g"}),
-         "frequency": (("k", "root"), omega / (2 * np.pi), {"units": "Hz"}),
-         "eigenvector": (("k", "root", "mode"), vec)},
-        coords={"k": k, "root": np.arange(1, n + 1), "mode": np.asarray(system.modes)},
-        attrs={"method": "K", "refc": refc, "density": density, "mach": mach},
-    )
-    rows = []
+    ones = np.ones(k.size)
+    ds = vg_dataset(omega * (0.5 * g + 1j), vec, g, np.isfinite(g), V, density * ones, mach * ones,
+                    b=b, modes=system.modes, sweep="k", method="K", k=k,
+                    attrs={"density": density, "mach": mach})
+    ds["damping"].attrs["long_name"] = "required structural damping g (k method)"
+    ds["eigenvalue"].attrs["long_name"] = "p = omega (g/2 + i), the p-k form of the k-method root"
+    rows, vectors = [], []
     for r, i in find_brackets(np.nan_to_num(g, nan=-np.inf)):
         if not (np.isfinite(g[i, r]) and np.isfinite(g[i + 1, r])):
             continue
         t = interpolate_zero(g[i, r], g[i + 1, r])
-        rows.append((r + 1, V[i, r] + t * (V[i + 1, r] - V[i, r]),
-                     (omega[i, r] + t * (omega[i + 1, r] - omega[i, r])) / (2 * np.pi)))
-    return ds.assign({"crossing_root": ("crossing", np.array([r[0] for r in rows], dtype=int)),
-                      "crossing_velocity": ("crossing", np.array([r[1] for r in rows], dtype=float)),
-                      "crossing_frequency": ("crossing", np.array([r[2] for r in rows], dtype=float))})
+        rows.append(Crossing(root=r + 1, index=int(i), t=float(t),
+                             velocity=float(V[i, r] + t * (V[i + 1, r] - V[i, r])),
+                             density=float(density), mach=float(mach),
+                             frequency=float((omega[i, r] + t * (omega[i + 1, r] - omega[i, r]))
+                                             / (2 * np.pi)),
+                             kind="flutter", converged=True, refined=False))
+        vectors.append(vec[i + (t >= 0.5), r])
+    return attach_crossings(ds, rows, np.array(vectors).reshape(len(rows), n))

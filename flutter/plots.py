@@ -1,16 +1,16 @@
 """Plots: V-g / V-f curves (paper Figs. 11-12), flutter boundary vs envelope (Fig. 13) and a flutter
 mode-shape snapshot (Fig. 14). Plotting only: the numbers come from flutter.pk / flutter.summary.
+Figures are built on :class:`matplotlib.figure.Figure` without pyplot (no global figure state, no
+display backend): save them with ``fig.savefig``; nothing needs closing.
 """
 from __future__ import annotations
 
-import matplotlib
+import numpy as np
+import xarray as xr
+from matplotlib.figure import Figure
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-import xarray as xr  # noqa: E402
-
-from flutter.summary import MARGIN_FACTOR, Envelope  # noqa: E402
+from flutter.summary import MARGIN_FACTOR, Envelope
+from structures.units import MODEL_UNITS
 
 
 def plot_vg(ds: xr.Dataset, *, roots=None, title: str | None = None, g_limits=(-0.3, 0.2)):
@@ -19,7 +19,8 @@ def plot_vg(ds: xr.Dataset, *, roots=None, title: str | None = None, g_limits=(-
     Parameters
     ----------
     ds : xarray.Dataset
-        A :func:`flutter.pk.pk_solve` result.
+        A :func:`flutter.pk.pk_solve` result (velocity or density sweep) or a
+        :func:`flutter.kmethod.k_solve` result (each root drawn at its own V = omega b / k).
     roots : list of int, optional
         Roots to draw (default all).
     g_limits : tuple
@@ -29,24 +30,27 @@ def plot_vg(ds: xr.Dataset, *, roots=None, title: str | None = None, g_limits=(-
     -------
     matplotlib.figure.Figure
     """
-    dim = ds.attrs.get("sweep", "velocity")
-    x = ds[dim].values
-    fig, (ax_g, ax_f) = plt.subplots(2, 1, sharex=True, figsize=(7, 7))
+    sweep = ds.attrs.get("sweep", "velocity")
+    dim = "velocity" if sweep == "k" else sweep
+    fig = Figure(figsize=(7, 7))
+    ax_g, ax_f = fig.subplots(2, 1, sharex=True)
     for r in (ds.root.values if roots is None else roots):
-        line, = ax_g.plot(x, ds.damping.sel(root=r).values, label=f"root {int(r)}")
-        ax_f.plot(x, ds.frequency.sel(root=r).values, color=line.get_color())
-        bad = ~ds.converged.sel(root=r).values
+        one = ds.sel(root=r)
+        x = np.broadcast_to(one[dim].values, one.damping.shape)
+        line, = ax_g.plot(x, one.damping.values, label=f"root {int(r)}")
+        ax_f.plot(x, one.frequency.values, color=line.get_color())
+        bad = ~one.converged.values
         if bad.any():
-            ax_g.plot(x[bad], ds.damping.sel(root=r).values[bad], "x", color=line.get_color())
+            ax_g.plot(x[bad], one.damping.values[bad], "x", color=line.get_color())
     for i in range(ds.sizes.get("crossing", 0)):
         xc = float(ds[f"crossing_{dim}"][i])
         ax_g.plot(xc, 0.0, "ko", mfc="none")
         ax_f.plot(xc, float(ds.crossing_frequency[i]), "ko", mfc="none")
     ax_g.axhline(0.0, color="k", lw=0.8)
     ax_g.set_ylim(*g_limits)
-    ax_g.set_ylabel("damping g")
+    ax_g.set_ylabel("damping g" + (" (required, k method)" if sweep == "k" else ""))
     ax_f.set_ylabel("frequency [Hz]")
-    ax_f.set_xlabel(f"{dim} [{ds[dim].attrs.get('units', 'model units')}]")
+    ax_f.set_xlabel(f"{dim} [{ds[dim].attrs.get('units', MODEL_UNITS)}]")
     ax_g.legend(fontsize=7, ncol=3)
     ax_g.set_title(title or f"{ds.attrs.get('method', 'PK')} V-g / V-f")
     fig.tight_layout()
@@ -68,7 +72,8 @@ def plot_flutter_boundary(points: list[dict], envelope: Envelope | None = None, 
     -------
     matplotlib.figure.Figure
     """
-    fig, ax = plt.subplots(figsize=(7, 5))
+    fig = Figure(figsize=(7, 5))
+    ax = fig.add_subplot()
     groups: dict = {}
     for p in points:
         groups.setdefault((p["kind"], p.get("type", p["kind"]), p.get("root")), []).append(p)
@@ -82,7 +87,7 @@ def plot_flutter_boundary(points: list[dict], envelope: Envelope | None = None, 
         ax.plot(m, MARGIN_FACTOR * np.asarray(envelope.velocity), "k--",
                 label=f"{MARGIN_FACTOR:.2f} x envelope")
     ax.set_xlabel("Mach")
-    ax.set_ylabel(f"speed [{envelope.units if envelope else 'model units'}]")
+    ax.set_ylabel(f"speed [{envelope.units if envelope else MODEL_UNITS}]")
     ax.set_title(title)
     ax.legend(fontsize=7)
     fig.tight_layout()
@@ -113,8 +118,8 @@ def plot_mode_snapshot(modes: xr.Dataset, eigenvector: np.ndarray, *, component:
     disp = np.asarray(eigenvector) @ shape  # complex motion of each grid
     amp = np.abs(disp).max() or 1.0
     scale = scale if scale is not None else 0.15 * max(np.ptp(x), np.ptp(y), 1e-12) / amp
-    fig, axes = plt.subplots(1, len(phases), figsize=(4 * len(phases), 4), squeeze=False,
-                             subplot_kw={"projection": "3d"})
+    fig = Figure(figsize=(4 * len(phases), 4))
+    axes = fig.subplots(1, len(phases), squeeze=False, subplot_kw={"projection": "3d"})
     for ax, ph in zip(axes[0], phases):
         z = scale * np.real(disp * np.exp(2j * np.pi * ph))
         ax.scatter(x, y, z, c=z, cmap="coolwarm", s=8)

@@ -1,10 +1,25 @@
 """V-g / V-f result Datasets and the flutter file contract (DESIGN.md section 6).
 
-One sweep gives a Dataset on (velocity, root) (or (density, root) for a PKNL density sweep) with
-``damping``, ``frequency`` [Hz], ``k``, ``eigenvalue``, ``converged`` and ``eigenvector(., root, mode)``,
-plus the crossings on a ``crossing`` dimension. Several sweeps (Mach numbers, densities,
-configurations) are stacked into ``DIR/flutter.nc`` on (case, velocity, root) and their crossings
-listed in ``DIR/summary.json``.
+One sweep gives a Dataset on (velocity, root) (or (density, root) for a PKNL density sweep, or
+(k, root) for the k method, whose ``velocity`` V = omega b / k is then a data variable per root)
+with ``damping``, ``frequency`` [Hz], ``k``, ``eigenvalue``, ``converged`` and
+``eigenvector(., root, mode)``, plus the crossings on a ``crossing`` dimension.
+
+Several sweeps (Mach numbers, densities, configurations, methods) are stacked into
+``DIR/flutter.nc`` with the contract's layout for every method: ``damping``, ``frequency``, ``k``,
+``eigenvalue``, ``converged`` on (case, velocity, root) and ``eigenvector`` on (case, velocity,
+root, mode), where ``velocity`` is the point index of each case's sweep. A p-k point is one flight
+velocity for all roots; a k-method point is one k value, each root at its own V = omega b / k, so
+``root_velocity(case, velocity, root)`` holds the airspeed of each root for every method (the
+flight velocity for p-k) and ``velocity_value(case, velocity)`` the flight velocity (NaN for the
+k method); ``method(case)`` says which. Their crossings are listed in ``DIR/summary.json`` (a list
+of ``{"mach", "density", "velocity", "frequency", "root", "kind", ..., "units"}``), the tables in
+Nastran's FLUTTER SUMMARY layout in ``DIR/flutter_summary.txt`` and the V-g / V-f figures in
+``DIR/vg_<case>.png``.
+
+Units: the numbers are in the model's consistent units; :func:`label_units` labels velocity and
+density with the case's unit system (structures.units) in the attrs, and every summary.json entry
+carries them under ``units``.
 """
 from __future__ import annotations
 
@@ -17,6 +32,7 @@ import xarray as xr
 
 from flutter.crossings import Crossing
 from structures.netcdf import write_dataset
+from structures.units import unit_labels
 
 KINDS = ("flutter", "divergence")
 
@@ -41,7 +57,7 @@ def normalise_eigenvectors(u: np.ndarray) -> np.ndarray:
 
 def vg_dataset(p: np.ndarray, u: np.ndarray, damping: np.ndarray, converged: np.ndarray,
                velocity: np.ndarray, density: np.ndarray, mach: np.ndarray, *, b: float,
-               modes: tuple, sweep: str = "velocity", method: str = "PK",
+               modes: tuple, sweep: str = "velocity", method: str = "PK", k: np.ndarray | None = None,
                attrs: dict | None = None) -> xr.Dataset:
     """Build the V-g / V-f Dataset of one sweep.
 
@@ -54,43 +70,83 @@ def vg_dataset(p: np.ndarray, u: np.ndarray, damping: np.ndarray, converged: np.
     damping : ndarray, shape (npts, nroot)
         g (2 gamma; Nastran's decay rate for real roots).
     converged : ndarray of bool, shape (npts, nroot)
-    velocity, density, mach : ndarray, shape (npts,)
+    velocity : ndarray, shape (npts,), or (npts, nroot) for a k sweep (V = omega b / k per root)
+    density, mach : ndarray, shape (npts,)
     b : float
         Reference semichord (REFC / 2) for k = omega b / V.
     modes : tuple of int
         Mode ids.
-    sweep : {"velocity", "density"}
-        Name of the sweep dimension.
+    sweep : {"velocity", "density", "k"}
+        Name of the sweep dimension (``"k"``: the k method, ``velocity`` a data variable).
+    k : ndarray, shape (npts,), optional
+        Reduced frequencies of a k sweep (required for ``sweep="k"``).
+
+    Returns
+    -------
+    xarray.Dataset
+        dims (sweep, root, mode); velocity and density labelled "model units" (see
+        :func:`label_units`).
     """
     omega = np.abs(p.imag)
     dim = sweep
+    velocity = np.asarray(velocity, dtype=float)
+    data = {
+        "damping": ((dim, "root"), damping, {"units": "1", "long_name": "damping g = 2 gamma"}),
+        "frequency": ((dim, "root"), omega / (2 * np.pi), {"units": "Hz"}),
+        "eigenvalue": ((dim, "root"), p, {"units": "rad/s", "long_name": "p = omega (gamma + i)"}),
+        "eigenvector": ((dim, "root", "mode"), normalise_eigenvectors(u),
+                        {"units": "1", "long_name": "modal coordinates, largest = 1"}),
+        "converged": ((dim, "root"), np.asarray(converged, dtype=bool)),
+    }
+    k_attrs = {"units": "1", "long_name": "reduced frequency k = omega b / V, b = refc/2"}
+    if sweep == "k":
+        data["velocity"] = ((dim, "root"), velocity,
+                            {"long_name": "V = omega b / k of each root (k method)"})
+        coords = {dim: (dim, np.asarray(k, dtype=float), k_attrs)}
+        along = {"density": density, "mach": mach}
+    else:
+        data["k"] = ((dim, "root"), omega * b / velocity[:, None], k_attrs)
+        coords = {dim: np.asarray(velocity if sweep == "velocity" else density, dtype=float)}
+        along = {"density": density, "mach": mach} if sweep == "velocity" else \
+            {"velocity": velocity, "mach": mach}
     ds = xr.Dataset(
-        {
-            "damping": ((dim, "root"), damping, {"units": "1", "long_name": "damping g = 2 gamma"}),
-            "frequency": ((dim, "root"), omega / (2 * np.pi), {"units": "Hz"}),
-            "k": ((dim, "root"), omega * b / velocity[:, None],
-                  {"units": "1", "long_name": "reduced frequency k = omega b / V, b = refc/2"}),
-            "eigenvalue": ((dim, "root"), p, {"units": "rad/s", "long_name": "p = omega (gamma + i)"}),
-            "eigenvector": ((dim, "root", "mode"), normalise_eigenvectors(u),
-                            {"units": "1", "long_name": "modal coordinates, largest = 1"}),
-            "converged": ((dim, "root"), np.asarray(converged, dtype=bool)),
-        },
-        coords={
-            dim: np.asarray(velocity if sweep == "velocity" else density, dtype=float),
-            "root": np.arange(1, p.shape[1] + 1),
-            "mode": np.asarray(modes, dtype=int),
-        },
+        data,
+        coords={**coords, "root": np.arange(1, p.shape[1] + 1), "mode": np.asarray(modes, dtype=int)},
         attrs={"method": method, "refc": 2.0 * b, "sweep": sweep,
                "conventions": "p = omega (gamma + i), g = 2 gamma, k = omega b / V, b = refc/2; "
                               "real roots: g = p refc / (V ln 2) (Nastran)",
                **(attrs or {})},
     )
-    other = {"velocity": ("density", density), "density": ("velocity", velocity)}[sweep]
-    ds = ds.assign_coords({other[0]: (dim, np.asarray(other[1], dtype=float)),
-                           "mach": (dim, np.asarray(mach, dtype=float))})
-    ds["velocity"].attrs["units"] = "model length/time"
-    ds["density"].attrs["units"] = "model mass/length^3"
+    ds = ds.assign_coords({name: (dim, np.asarray(v, dtype=float)) for name, v in along.items()})
+    return label_units(ds, None)
+
+
+def label_units(ds: xr.Dataset, system: str | None) -> xr.Dataset:
+    """A copy of a sweep or flutter.nc Dataset with the unit labels of ``system`` on its flight
+    quantities (velocity, density and their per-root / crossing / per-case variants) and in attrs
+    ``unit_system``; ``None`` labels them "model units" (a bare deck). The numbers are unchanged.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+    system : {"si", "english_in", "english_ft"} or None
+    """
+    labels = unit_labels(system)
+    ds = ds.copy()
+    for quantity in ("velocity", "density"):
+        for name in (quantity, f"{quantity}_value", f"root_{quantity}", f"crossing_{quantity}",
+                     f"case_{quantity}"):
+            if name in ds.variables:
+                ds[name].attrs["units"] = getattr(labels, quantity)
+    ds.attrs["unit_system"] = labels.system
     return ds
+
+
+def units_entry(system: str | None) -> dict:
+    """The ``units`` of a summary.json crossing: system name and velocity / density / frequency."""
+    labels = unit_labels(system)
+    return {"system": labels.system, "velocity": labels.velocity, "density": labels.density,
+            "frequency": labels.frequency}
 
 
 def attach_crossings(ds: xr.Dataset, crossings: list[Crossing],
@@ -123,17 +179,46 @@ def attach_crossings(ds: xr.Dataset, crossings: list[Crossing],
 
 
 def crossings_of(ds: xr.Dataset) -> list[dict]:
-    """The crossings stored in a sweep Dataset as summary.json entries."""
+    """The crossings stored in a sweep Dataset as summary.json entries.
+
+    Each entry: ``mach``, ``density``, ``velocity``, ``frequency`` [Hz], ``root``, ``kind``,
+    ``converged``, ``method`` and ``units`` (:func:`units_entry` of the Dataset's ``unit_system``
+    attribute, set by :func:`label_units`; "model units" when absent).
+    """
     if "crossing_root" not in ds:
         return []
+    units = units_entry(ds.attrs.get("unit_system"))
     out = []
     for i in range(ds.sizes.get("crossing", 0)):
         out.append({"mach": float(ds.crossing_mach[i]), "density": float(ds.crossing_density[i]),
                     "velocity": float(ds.crossing_velocity[i]),
                     "frequency": float(ds.crossing_frequency[i]),
                     "root": int(ds.crossing_root[i]), "kind": str(ds.crossing_kind.values[i]),
-                    "converged": bool(ds.crossing_converged[i])})
+                    "converged": bool(ds.crossing_converged[i]),
+                    "method": str(ds.attrs.get("method", "")), "units": dict(units)})
     return out
+
+
+def _per_root(s: xr.Dataset, name: str) -> np.ndarray:
+    """Values of a sweep quantity on (point, root[, mode]), broadcasting a per-point one over roots
+    (the flight velocity of a p-k sweep, the k of a k-method sweep)."""
+    dim, v = s.attrs["sweep"], s[name]
+    if "root" not in v.dims:
+        return np.repeat(v.values[:, None], s.sizes["root"], axis=1)
+    return v.transpose(dim, "root", ...).values
+
+
+def summary_entries(sweeps: list[xr.Dataset], labels: list[dict]) -> list[dict]:
+    """The summary.json list: :func:`crossings_of` every sweep, with ``case`` (index in flutter.nc)
+    and the case's ``configuration``."""
+    summary = []
+    for c, (s, lab) in enumerate(zip(sweeps, labels)):
+        for entry in crossings_of(s):
+            entry["case"] = c
+            if lab.get("configuration") is not None:
+                entry["configuration"] = str(lab["configuration"])
+            summary.append(entry)
+    return summary
 
 
 def stack_cases(sweeps: list[xr.Dataset], labels: list[dict]) -> xr.Dataset:
@@ -142,44 +227,60 @@ def stack_cases(sweeps: list[xr.Dataset], labels: list[dict]) -> xr.Dataset:
     Parameters
     ----------
     sweeps : list of xarray.Dataset
-        Results of :func:`flutter.pk.pk_solve` (any sweep kind; same roots and modes).
+        Results of :func:`flutter.pk.pk_solve` (velocity or density sweeps) or
+        :func:`flutter.kmethod.k_solve` (k sweeps); same roots and modes.
     labels : list of dict
         Per case: ``mach``, ``density`` (or ``altitude``), ``configuration``.
 
     Returns
     -------
     xarray.Dataset
-        ``velocity`` is a point index; ``velocity_value``, ``density_value``, ``mach_value`` hold the
-        flight point of each (case, velocity) (NaN padded when sweeps differ in length).
+        ``damping``, ``frequency``, ``k``, ``eigenvalue``, ``converged`` on (case, velocity, root)
+        and ``eigenvector`` on (case, velocity, root, mode) for every method (DESIGN.md section 6).
+        ``velocity`` is the point index of each case's sweep (NaN / False padded when sweeps differ
+        in length). ``root_velocity`` (case, velocity, root) is the airspeed of each root: the
+        flight velocity for p-k, V = omega b / k for the k method, whose points are its k values
+        (one k for all roots of a point, each root at its own V). ``velocity_value``,
+        ``density_value``, ``mach_value`` (case, velocity) hold the flight point (``velocity_value``
+        NaN for the k method); ``method`` (case) names the method of each case.
     """
     npts = max(s.sizes[s.attrs["sweep"]] for s in sweeps)
     nc = len(sweeps)
     nroot, nmode = sweeps[0].sizes["root"], sweeps[0].sizes["mode"]
 
-    def padded(name, shape, dtype, fill):
+    def padded(values, shape, dtype, fill):
         out = np.full((nc, npts) + shape, fill, dtype=dtype)
-        for c, s in enumerate(sweeps):
-            vals = s[name].transpose(s.attrs["sweep"], ...).values
+        for c, vals in enumerate(values):
             out[c, :vals.shape[0]] = vals
         return out
 
+    def attrs_of(name):
+        return next(s[name].attrs for s in sweeps if name in s.variables)
+
     dims3 = ("case", "velocity", "root")
     ds = xr.Dataset(
-        {name: (dims3, padded(name, (nroot,), dt, fill), sweeps[0][name].attrs)
+        {name: (dims3, padded([_per_root(s, name) for s in sweeps], (nroot,), dt, fill),
+                attrs_of(name))
          for name, dt, fill in (("damping", float, np.nan), ("frequency", float, np.nan),
                                 ("k", float, np.nan), ("eigenvalue", complex, np.nan),
                                 ("converged", bool, False))},
         coords={"case": np.arange(nc), "velocity": np.arange(npts),
                 "root": sweeps[0]["root"].values, "mode": sweeps[0]["mode"].values},
         attrs={"layout": "velocity is the point index of each case's sweep; flight point in "
-                         "velocity_value / density_value / mach_value",
+                         "velocity_value / density_value / mach_value; airspeed of each root in "
+                         "root_velocity (k method: V = omega b / k per root at each k point)",
                "conventions": sweeps[0].attrs.get("conventions", "")},
     )
-    ds["eigenvector"] = (dims3 + ("mode",), padded("eigenvector", (nroot, nmode), complex, np.nan),
-                         sweeps[0]["eigenvector"].attrs)
+    ds["eigenvector"] = (dims3 + ("mode",),
+                         padded([_per_root(s, "eigenvector") for s in sweeps], (nroot, nmode),
+                                complex, np.nan), sweeps[0]["eigenvector"].attrs)
+    ds["root_velocity"] = (dims3, padded([_per_root(s, "velocity") for s in sweeps], (nroot,),
+                                         float, np.nan),
+                           {"long_name": "airspeed of each root (k method: omega b / k)"})
     for name in ("velocity", "density", "mach"):
-        ds[f"{name}_value"] = (("case", "velocity"), padded(name, (), float, np.nan),
-                               sweeps[0][name].attrs)
+        vals = [s[name].values if s[name].dims == (s.attrs["sweep"],)
+                else np.full(s.sizes[s.attrs["sweep"]], np.nan) for s in sweeps]
+        ds[f"{name}_value"] = (("case", "velocity"), padded(vals, (), float, np.nan), attrs_of(name))
     ds["method"] = ("case", np.array([s.attrs.get("method", "") for s in sweeps], dtype=str))
     for key in ("mach", "density", "altitude", "configuration"):
         vals = [lab.get(key) for lab in labels]
@@ -189,29 +290,56 @@ def stack_cases(sweeps: list[xr.Dataset], labels: list[dict]) -> xr.Dataset:
             else:
                 arr = np.array([np.nan if v is None else float(v) for v in vals], dtype=float)
             ds = ds.assign_coords({f"case_{key}": ("case", arr)})
-    return ds
+    systems = {s.attrs.get("unit_system") for s in sweeps}
+    return label_units(ds, systems.pop() if len(systems) == 1 else None)
 
 
-def write_flutter(out_dir: str | os.PathLike, sweeps: list[xr.Dataset], labels: list[dict]) -> Path:
-    """Write ``DIR/flutter.nc`` and ``DIR/summary.json`` (DESIGN.md section 6).
+def write_flutter(out_dir: str | os.PathLike, sweeps: list[xr.Dataset], labels: list[dict], *,
+                  units: str | None = None, title: str = "") -> Path:
+    """Write the flutter outputs of one run into ``out_dir`` (DESIGN.md section 6).
+
+    - ``flutter.nc``: :func:`stack_cases` of every sweep (p-k, PKNL and k method alike);
+    - ``summary.json``: the list of crossings (:func:`crossings_of`, with ``case``,
+      ``configuration`` and ``units``);
+    - ``flutter_summary.txt``: Nastran's FLUTTER SUMMARY layout, one table per case and root
+      (:func:`flutter.nastran_text.flutter_summary_text`), to compare line by line with an F06;
+    - ``vg_<case>.png``: the V-g / V-f figure of each case (:func:`flutter.plots.plot_vg`).
+
+    Parameters
+    ----------
+    out_dir : path
+    sweeps : list of xarray.Dataset
+        Sweep results, one per case.
+    labels : list of dict
+        Per case: ``mach``, ``density``, ``configuration``.
+    units : {"si", "english_in", "english_ft"} or None
+        The case's unit system (None: "model units").
+    title : str
+        Heading of the text file and prefix of the figure titles (e.g. the deck name).
 
     Returns
     -------
     Path
         The output directory.
     """
+    from flutter.nastran_text import flutter_summary_text
+    from flutter.plots import plot_vg
+
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
-    ds = stack_cases(sweeps, labels)
-    write_dataset(ds, out_dir / "flutter.nc")
-    summary = []
-    for c, s in enumerate(sweeps):
-        for entry in crossings_of(s):
-            entry["case"] = c
-            if labels[c].get("configuration") is not None:
-                entry["configuration"] = str(labels[c]["configuration"])
-            summary.append(entry)
-    tmp = out_dir / ".summary.json.tmp"
-    tmp.write_text(json.dumps(summary, indent=2))
-    os.replace(tmp, out_dir / "summary.json")
+    sweeps = [label_units(s, units) for s in sweeps]
+    write_dataset(stack_cases(sweeps, labels), out_dir / "flutter.nc")
+    _write_text(out_dir / "summary.json", json.dumps(summary_entries(sweeps, labels), indent=2))
+    _write_text(out_dir / "flutter_summary.txt", flutter_summary_text(sweeps, title=title))
+    for c, (s, lab) in enumerate(zip(sweeps, labels)):
+        where = ", ".join(f"{key} {lab[key]:.4g}" for key in ("mach", "density") if key in lab)
+        fig = plot_vg(s, title=f"{title} {lab.get('configuration', '')} {where}".strip())
+        fig.savefig(out_dir / f"vg_{c + 1}.png", dpi=90)
     return out_dir
+
+
+def _write_text(path: Path, text: str) -> None:
+    """Write a text file atomically (temp file + rename)."""
+    tmp = path.with_name(f".{path.name}.tmp")
+    tmp.write_text(text)
+    os.replace(tmp, path)

@@ -19,10 +19,11 @@ import xarray as xr
 
 from flutter.kmethod import k_solve
 from flutter.pk import pk_solve, pk_solve_many
-from flutter.results import crossings_of, write_flutter
+from flutter.results import label_units, summary_entries, write_flutter
 from flutter.system import ModalSystem, StructuralDamping
 from structures.errors import InputError, UnsupportedCardError, card_message
 from structures.netcdf import write_dataset
+from structures.units import system_of, unit_labels
 
 METHODS = {"PK": "pk", "PKNL": "pknl", "K": "k", "KE": "k"}
 
@@ -171,15 +172,19 @@ def solve_request(system: ModalSystem, gaf, req: FlutterRequest) -> list[tuple[d
 
 def run_flutter(deck: str | os.PathLike, out_dir: str | os.PathLike | None = None, *,
                 modes: xr.Dataset | None = None, gaf: xr.Dataset | None = None,
-                nmodes: int | None = None, kernel: str = "quartic", flutter_ids=None) -> dict:
-    """modes -> GAFs -> flutter for a Nastran deck; writes DIR/flutter.nc and DIR/summary.json.
+                nmodes: int | None = None, kernel: str = "quartic", flutter_ids=None,
+                units: str | None = None) -> dict:
+    """modes -> GAFs -> flutter for a Nastran deck; writes the flutter outputs of DESIGN.md section 6.
 
     Parameters
     ----------
     deck : path
         Nastran deck with structure, aero (CAERO1/SPLINE/AERO/MKAERO1) and FLUTTER/FLFACT cards.
     out_dir : path, optional
-        Output folder (also gets modes.nc and gaf.nc). Nothing is written when None.
+        Output folder: ``flutter.nc`` (every case, p-k and k method alike), ``summary.json``,
+        ``flutter_summary.txt`` (Nastran's FLUTTER SUMMARY layout), ``vg_<case>.png``
+        (:func:`flutter.results.write_flutter`), ``modes.nc`` and ``gaf.nc``. Nothing is written
+        when None.
     modes, gaf : xarray.Dataset, optional
         Precomputed modes / GAFs (otherwise computed with structures.modal and aero.gaf).
     nmodes : int, optional
@@ -188,17 +193,22 @@ def run_flutter(deck: str | os.PathLike, out_dir: str | os.PathLike | None = Non
         Doublet-lattice kernel integration for the GAFs.
     flutter_ids : list of int, optional
         FLUTTER cards to run (default: those selected by FMETHOD).
+    units : {"si", "english_in", "english_ft"}, optional
+        The case's unit system, for the labels of every written number (structures.units); None
+        (a bare deck): the modes' own ``units`` attribute if it names a system, else "model units".
 
     Returns
     -------
     dict
-        ``summary`` (list of crossings as in summary.json), ``results`` (list of (label, Dataset)),
-        ``modes``, ``gaf``.
+        ``summary`` (list of crossings as in summary.json), ``results`` (list of (label, Dataset),
+        the Datasets labelled with the unit system), ``modes``, ``gaf``, ``units`` (the system
+        used, None for "model units").
     """
-    from pyNastran.bdf.bdf import read_bdf
+    from structures.bdf import read_pynastran
 
+    unit_labels(units)  # an unknown name fails before any work
     deck = Path(deck)
-    bdf = read_bdf(str(deck), debug=None)
+    bdf = read_pynastran(deck)
     requests = read_flutter_requests(bdf, str(deck), flutter_ids)
     if modes is None:
         from structures.bdf import read_model
@@ -206,6 +216,7 @@ def run_flutter(deck: str | os.PathLike, out_dir: str | os.PathLike | None = Non
 
         lmodes = _param(bdf, "LMODES")
         modes = compute_modes(read_model(deck), nmodes or (int(lmodes) if lmodes else None))
+    units = units if units is not None else system_of(modes.attrs)
     if gaf is None:
         from aero.gaf import generalized_aero_forces
         from aero.model import read_aero_model
@@ -216,30 +227,19 @@ def run_flutter(deck: str | os.PathLike, out_dir: str | os.PathLike | None = Non
         ks = np.unique(np.concatenate([aero.ks, np.asarray(extra, dtype=float)]))
         ks = ks[ks > 0]
         gaf = generalized_aero_forces(aero, modes, aero.machs, ks, method=kernel)
+    rhoref = float(bdf.aero.rho_ref) if bdf.aero is not None else 1.0
     results = []
     for req in requests:
         system = modal_system(modes, structural_damping(bdf, req.sdamp, str(deck)))
-        results += solve_request(system, gaf, req)
-    pk_like = [(lab, ds) for lab, ds in results if "sweep" in ds.attrs]
-    summary = []
-    for lab, ds in results:
-        if "sweep" in ds.attrs:
-            summary += crossings_of(ds)
-        else:
-            summary += [{"mach": lab["mach"], "density": lab["density"],
-                         "velocity": float(ds.crossing_velocity[i]),
-                         "frequency": float(ds.crossing_frequency[i]),
-                         "root": int(ds.crossing_root[i]), "kind": "flutter", "method": "K"}
-                        for i in range(ds.sizes.get("crossing", 0))]
+        for lab, ds in solve_request(system, gaf, req):
+            ds = label_units(ds, units)
+            ds.attrs.update(method=req.method, rhoref=rhoref, configuration=lab["configuration"])
+            results.append((lab, ds))
+    summary = summary_entries([ds for _, ds in results], [lab for lab, _ in results])
     if out_dir is not None:
         out_dir = Path(out_dir)
-        if pk_like:
-            write_flutter(out_dir, [ds for _, ds in pk_like], [lab for lab, _ in pk_like])
-        for n, (lab, ds) in enumerate(r for r in results if "sweep" not in r[1].attrs):
-            write_dataset(ds, out_dir / f"flutter_k_{n + 1}.nc")
+        write_flutter(out_dir, [ds for _, ds in results], [lab for lab, _ in results],
+                      units=units, title=deck.name)
         write_dataset(modes, out_dir / "modes.nc")
         write_dataset(gaf, out_dir / "gaf.nc")
-        if not pk_like:
-            import json
-            (out_dir / "summary.json").write_text(json.dumps(summary, indent=2))
-    return {"summary": summary, "results": results, "modes": modes, "gaf": gaf}
+    return {"summary": summary, "results": results, "modes": modes, "gaf": gaf, "units": units}

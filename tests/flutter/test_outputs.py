@@ -16,6 +16,7 @@ from flutter.results import write_flutter
 from flutter.system import ModalSystem
 from structures.errors import InputError
 from structures.netcdf import read_dataset
+from flutter_nastran import DATA
 
 A, E, MU, R2, SIGMA = -0.2, -0.1, 20.0, 0.24, 0.4
 B, W_THETA, RHO_S = 1.0, 2 * np.pi * 10.0, 1.225
@@ -76,7 +77,8 @@ def test_rigid_modes_shown(sweep):
 def test_flutter_files_contract(tmp_path, sweep):
     other = pk_solve(section(), gaf_dataset(), np.linspace(20, 250, 30), density=RHO_S, mach=0.6)
     write_flutter(tmp_path, [sweep, other], [{"mach": 0.3, "density": RHO_S, "configuration": "a"},
-                                             {"mach": 0.6, "density": RHO_S, "configuration": "a"}])
+                                             {"mach": 0.6, "density": RHO_S, "configuration": "a"}],
+                  units="si")
     ds = read_dataset(tmp_path / "flutter.nc")
     for v in ("damping", "frequency", "k", "eigenvalue", "converged"):
         assert ds[v].dims == ("case", "velocity", "root"), v
@@ -88,8 +90,58 @@ def test_flutter_files_contract(tmp_path, sweep):
     summary = json.loads((tmp_path / "summary.json").read_text())
     assert len(summary) == sweep.sizes["crossing"] + other.sizes["crossing"]
     first = summary[0]
-    assert set(first) >= {"mach", "density", "velocity", "frequency", "root", "kind"}
+    assert set(first) >= {"mach", "density", "velocity", "frequency", "root", "kind", "units"}
     assert first["velocity"] == pytest.approx(float(sweep.crossing_velocity[0]))
+    assert first["units"] == {"system": "si", "velocity": "m/s", "density": "kg/m^3",
+                              "frequency": "Hz"}
+    assert ds.attrs["unit_system"] == "si"
+    assert ds["velocity_value"].attrs["units"] == "m/s"
+    assert ds["density_value"].attrs["units"] == "kg/m^3"
+    assert ds["frequency"].attrs["units"] == "Hz"
+    np.testing.assert_array_equal(ds.root_velocity.isel(case=0, root=0).values, sweep.velocity.values)
+    text = (tmp_path / "flutter_summary.txt").read_text()
+    assert text.count("FLUTTER  SUMMARY") == 2 * sweep.sizes["root"]
+    assert "UNITS = si (VELOCITY m/s, DENSITY kg/m^3, FREQUENCY Hz)" in text
+    assert (tmp_path / "vg_1.png").stat().st_size > 0 and (tmp_path / "vg_2.png").exists()
+
+
+def test_bare_deck_labels_model_units(tmp_path, sweep):
+    """Without a case the labels say "model units"; an unknown system is refused up front."""
+    write_flutter(tmp_path, [sweep], [{"mach": 0.3, "density": RHO_S}])
+    ds = read_dataset(tmp_path / "flutter.nc")
+    assert ds["velocity_value"].attrs["units"] == "model units"
+    assert ds.attrs["unit_system"] == "model units"
+    entry = json.loads((tmp_path / "summary.json").read_text())[0]
+    assert entry["units"]["velocity"] == "model units" and entry["units"]["frequency"] == "Hz"
+    with pytest.raises(InputError, match="valid|use one of"):
+        write_flutter(tmp_path, [sweep], [{"mach": 0.3}], units="imperial")
+
+
+@pytest.mark.filterwarnings("ignore::UserWarning")
+def test_pt145_ke_writes_the_flutter_contract(tmp_path):
+    """The K method (pt145, KE at M 0.45) goes into flutter.nc with the p-k contract: its points are
+    the FLFACT k values, each root at its own V = omega b / k in root_velocity."""
+    from flutter.run import run_flutter
+
+    out = run_flutter(DATA / "pt145" / "pt145.bdf", tmp_path, units="english_in")
+    ds = read_dataset(tmp_path / "flutter.nc")
+    for v in ("damping", "frequency", "k", "eigenvalue", "converged", "root_velocity"):
+        assert ds[v].dims == ("case", "velocity", "root"), v
+    assert ds["eigenvector"].dims == ("case", "velocity", "root", "mode")
+    assert list(ds.method.values) == ["KE"] and not list(tmp_path.glob("flutter_k_*.nc"))
+    bdf_k = [0.1, 1 / 9.00009, 0.125, 1 / 6.99986, 1 / 5.99988, 0.2, 0.25, 1 / 3.00003, 0.5]
+    np.testing.assert_allclose(np.sort(ds.k.isel(case=0, root=0).values), bdf_k, rtol=1e-4)
+    assert bool(ds.converged.all()) and np.isnan(ds.velocity_value).all()
+    b = 0.5 * float(out["gaf"].attrs["refc"])
+    omega = 2 * np.pi * ds.frequency.values
+    np.testing.assert_allclose(ds.root_velocity.values, omega * b / ds.k.values, rtol=1e-12)
+    np.testing.assert_allclose(ds.eigenvalue.values, omega * (ds.damping.values / 2 + 1j), rtol=1e-12)
+    assert ds["root_velocity"].attrs["units"] == "in/s"
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    assert [(c["kind"], c["method"], c["units"]["velocity"]) for c in summary] == [
+        ("flutter", "KE", "in/s")]
+    assert summary[0]["velocity"] == pytest.approx(6004.0, rel=0.02)  # DESIGN.md: Nastran ~6004
+    assert (tmp_path / "vg_1.png").exists() and (tmp_path / "flutter_summary.txt").exists()
 
 
 def test_us76_reference_values():
