@@ -4,6 +4,8 @@ from __future__ import annotations
 import html
 from pathlib import Path
 
+from structures.units import UnitLabels, unit_labels
+
 
 _STYLE = """body{font-family:sans-serif;margin:2em;max-width:70em}
 table{border-collapse:collapse;margin:0.5em 0 1.5em}td,th{border:1px solid #bbb;padding:2px 8px;
@@ -17,26 +19,25 @@ def _table(header, rows) -> str:
     return f"<table><tr>{head}</tr>{body}</table>"
 
 
-def _modes_section(name, result) -> str:
+def _modes_section(name, result, labels: UnitLabels) -> str:
     modes = result["modes"]
     rows = [(int(m), f"{f:.5g}") for m, f in zip(modes["mode"].values, modes["frequency"].values)]
     mp = result["mass_properties"]
     cg = mp["cg"].values
     inertia = mp["inertia"].values
-    mass_rows = [("mass", f"{float(mp['mass']):.6g}"), ("x_cg", f"{cg[0]:.6g}"),
-                 ("y_cg", f"{cg[1]:.6g}"), ("z_cg", f"{cg[2]:.6g}"),
-                 ("Ixx", f"{inertia[0, 0]:.6g}"), ("Iyy", f"{inertia[1, 1]:.6g}"),
-                 ("Izz", f"{inertia[2, 2]:.6g}"), ("Ixy", f"{-inertia[0, 1]:.6g}"),
-                 ("Iyz", f"{-inertia[1, 2]:.6g}"), ("Izx", f"{-inertia[2, 0]:.6g}")]
+    values = [("mass", float(mp["mass"])), ("x_cg", cg[0]), ("y_cg", cg[1]), ("z_cg", cg[2]),
+              ("Ixx", inertia[0, 0]), ("Iyy", inertia[1, 1]), ("Izz", inertia[2, 2]),
+              ("Ixy", -inertia[0, 1]), ("Iyz", -inertia[1, 2]), ("Izx", -inertia[2, 0])]
+    mass_rows = [(q, f"{v:.6g}", labels.of_mass_property(q)) for q, v in values]
     return (f"<h2>Configuration {html.escape(name)}</h2>"
             f"<p>Deck: {html.escape(str(modes.attrs.get('deck', '')))}; modes from "
             f"{html.escape(str(modes.attrs.get('source', '')))}.</p>"
             "<h3>Natural frequencies</h3>" + _table(("mode", "frequency [Hz]"), rows) +
             "<h3>Mass properties (about the CG, basic axes)</h3>" +
-            _table(("quantity", "value"), mass_rows))
+            _table(("quantity", "value", "unit"), mass_rows))
 
 
-def _correlation_section(result) -> str:
+def _correlation_section(result, labels: UnitLabels, wtmass: float) -> str:
     corr = result["dataset"]
     names = corr["test_name"].values if "test_name" in corr else [""] * corr.sizes["test_mode"]
     rows = []
@@ -51,35 +52,44 @@ def _correlation_section(result) -> str:
     if "mass_model" in corr:
         mass_rows = [(q, f"{float(corr['mass_model'].sel(quantity=q)):.6g}",
                       f"{float(corr['mass_measured'].sel(quantity=q)):.6g}",
-                      f"{float(corr['mass_relative_error'].sel(quantity=q)):+.2f}")
+                      f"{float(corr['mass_relative_error'].sel(quantity=q)):+.2f}",
+                      labels.of_mass_property(str(q), wtmass))
                      for q in corr["quantity"].values]
         mass = "<h3>Mass properties, model vs measured</h3>" + _table(
-            ("quantity", "model", "measured", "error [%]"), mass_rows)
+            ("quantity", "model", "measured", "error [%]", "unit"), mass_rows)
     figures = "".join(f"<img src='{html.escape(str(f))}' alt='correlation' width='420'>"
                       for f in result["figures"])
     return "<h3>Test-analysis correlation (paper Tables 1-4)</h3>" + table + mass + figures
 
 
-def _flutter_section(result) -> str:
+def _flutter_section(result, labels: UnitLabels) -> str:
     rows = [(c["kind"], c["root"], f"{c['mach']:.3g}", f"{c['density']:.5g}",
              f"{c['velocity']:.5g}", f"{c['frequency']:.4g}") for c in result["summary"]]
-    table = (_table(("kind", "root", "Mach", "density", "velocity", "frequency [Hz]"), rows)
+    table = (_table(("kind", "root", "Mach", f"density [{labels.density}]",
+                     f"velocity [{labels.velocity}]", f"frequency [{labels.frequency}]"), rows)
              if rows else "<p>No flutter or divergence crossing in the analysed range.</p>")
     figures = "".join(f"<img src='{html.escape(str(f))}' alt='V-g / V-f' width='560'>"
                       for f in result["figures"])
-    return "<h3>Flutter crossings (model units)</h3>" + table + figures
+    return f"<h3>Flutter crossings ({html.escape(labels.system)})</h3>" + table + figures
 
 
 def write_report(case, results: dict, out_dir) -> Path:
-    """Write ``report.html`` into ``out_dir`` and return its path."""
+    """Write ``report.html`` into ``out_dir`` and return its path; every number is labelled with
+    the case's unit system (structures.units)."""
     out = Path(out_dir) / "report.html"
-    sections = "".join(_modes_section(name, res) +
-                       (_correlation_section(res["correlation"]) if "correlation" in res else "") +
-                       (_flutter_section(res["flutter"]) if "flutter" in res else "")
+    labels = unit_labels(case.units)
+    sections = "".join(_modes_section(name, res, labels) +
+                       (_correlation_section(res["correlation"], labels,
+                                             float(res["mass_properties"].attrs.get("wtmass", 1.0)))
+                        if "correlation" in res else "") +
+                       (_flutter_section(res["flutter"], labels) if "flutter" in res else "")
                        for name, res in results.items())
     page = (f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>{html.escape(case.name)}"
             f"</title><style>{_STYLE}</style></head><body><h1>Case {html.escape(case.name)}</h1>"
-            f"<p>Units: {html.escape(case.units)}. Configurations: "
+            f"<p>Units: {html.escape(case.units)} (" +
+            html.escape(", ".join(f"{q} {getattr(labels, q)}" for q in
+                                  ("length", "velocity", "density", "mass", "inertia", "force",
+                                   "frequency"))) + "). Configurations: "
             f"{len(case.configurations)}.</p>{sections}</body></html>")
     tmp = out.with_suffix(".html.tmp")
     tmp.write_text(page)

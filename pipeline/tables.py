@@ -5,6 +5,7 @@ import numpy as np
 import xarray as xr
 
 from structures.massprops import MassProperties
+from structures.units import unit_labels
 
 
 def frequency_table(modes: xr.Dataset) -> str:
@@ -16,13 +17,22 @@ def frequency_table(modes: xr.Dataset) -> str:
     return "\n".join(lines)
 
 
-def mass_table(props: MassProperties) -> str:
-    """Mass, CG and inertias about the CG (the paper's J1..J10 quantities)."""
+def mass_table(props: MassProperties, units: str | None = None) -> str:
+    """Mass, CG and inertias about the CG (the paper's J1..J10 quantities), each with its unit.
+
+    Parameters
+    ----------
+    props : MassProperties
+    units : {"si", "english_in", "english_ft"} or None
+        The case's unit system (structures.units); None: "model units".
+    """
+    labels = unit_labels(units)
     values = props.as_dict()
     if props.wtmass == 1.0:
         del values["weight"]
-    lines = [f"{'quantity':>10} {'value':>16}"]
-    lines += [f"{name:>10} {value:16.8g}" for name, value in values.items()]
+    lines = [f"{'quantity':>10} {'value':>16}  unit"]
+    lines += [f"{name:>10} {value:16.8g}  {labels.of_mass_property(name, props.wtmass)}"
+              for name, value in values.items()]
     return "\n".join(lines)
 
 

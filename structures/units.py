@@ -33,6 +33,19 @@ class UnitLabels:
         if empty:
             raise InputError(f"UnitLabels: empty labels {empty}. Fix: give every quantity a label.")
 
+    def of_mass_property(self, quantity: str, wtmass: float = 1.0) -> str:
+        """Unit of a mass-properties quantity as structures.massprops names it: ``mass``,
+        ``x_cg``.. (length), ``Ixx``.. ``Izx`` (inertia) and ``weight`` = mass / WTMASS, a force
+        when PARAM WTMASS converts the deck's weights to mass, else the mass unit itself."""
+        if quantity in ("mass", "weight"):
+            return self.force if quantity == "weight" and wtmass != 1.0 else self.mass
+        if quantity in ("x_cg", "y_cg", "z_cg"):
+            return self.length
+        if len(quantity) == 3 and quantity[0] == "I" and set(quantity[1:]) <= set("xyz"):
+            return self.inertia
+        raise InputError(f"unit of mass property {quantity!r} is not known. Fix: use mass, weight, "
+                         "x_cg, y_cg, z_cg or Ixx .. Izx.")
+
     def as_dict(self) -> dict:
         """The labels as a plain dict (for ``summary.json`` entries and netCDF attrs)."""
         return {f.name: getattr(self, f.name) for f in fields(self)}
