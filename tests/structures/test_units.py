@@ -39,3 +39,12 @@ def test_system_named_by_a_result_and_the_case_file_agree():
     assert system_of({"units": "english_ft"}) == "english_ft"
     assert system_of({"units": "deck"}) is None and system_of({}) is None
     assert set(UNIT_SYSTEMS) == set(CASE_SYSTEMS)
+
+
+def test_mass_property_units():
+    si, ips = unit_labels("si"), unit_labels("english_in")
+    assert [si.of_mass_property(q) for q in ("mass", "x_cg", "Izx", "weight")] == \
+        ["kg", "m", "kg m^2", "kg"]                   # WTMASS = 1: weight is the mass itself
+    assert ips.of_mass_property("weight", wtmass=1 / 386.089) == "lbf"
+    with pytest.raises(InputError, match="'Jxx'"):
+        si.of_mass_property("Jxx")
