@@ -14,15 +14,13 @@ Reduced frequency everywhere is Nastran's k = omega * b / V with b = REFC / 2.
 """
 from __future__ import annotations
 
-import io
-import logging
-from contextlib import redirect_stdout
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from aero.panels import BoxMesh, caero1_boxes, concat
+from structures.bdf import read_pynastran
 from structures.errors import InputError, MissingReferenceError, UnsupportedCardError, card_message
 
 #: Aerodynamic cards whose effect on the forces this project does not model.
@@ -224,29 +222,6 @@ class AeroModel:
         return self.aero_frame.to_basic(points)
 
 
-def _read_bdf(path: Path):
-    from pyNastran.bdf.bdf import BDF
-
-    if not path.exists():
-        raise InputError(f"file {path}: no such deck. Fix: check the path.")
-    log = logging.getLogger("pynastran.quiet.aero")
-    log.setLevel(logging.CRITICAL)
-    model = BDF(debug=None, log=log)
-    try:
-        with redirect_stdout(io.StringIO()):
-            model.read_bdf(str(path), xref=False, validate=False)
-            model.cross_reference(xref=True, xref_nodes=True, xref_elements=False,
-                                  xref_properties=False, xref_masses=False, xref_materials=False,
-                                  xref_loads=False, xref_constraints=False, xref_aero=False,
-                                  xref_sets=False, xref_optimization=False)
-    except (KeyError, RuntimeError, ValueError, SyntaxError, AssertionError, IndexError,
-            FileNotFoundError, NotImplementedError) as exc:
-        raise InputError(f"file {path}: pyNastran could not read the deck: {exc}. Fix: correct "
-                         "the card named above (field formats, INCLUDE files, coordinate "
-                         "systems).") from exc
-    return model
-
-
 def _frame(bdf, cid: int, card: str, card_id, filename: str) -> Frame:
     if cid in (0, None):
         return BASIC
@@ -415,7 +390,7 @@ def read_aero_model(path_or_bdf) -> AeroModel:
     """
     if isinstance(path_or_bdf, (str, Path)):
         filename = str(path_or_bdf)
-        bdf = _read_bdf(Path(path_or_bdf))
+        bdf = read_pynastran(path_or_bdf)
     else:
         bdf = path_or_bdf
         filename = str(getattr(bdf, "bdf_filename", "") or "<BDF object>")

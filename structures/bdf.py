@@ -35,6 +35,10 @@ NON_STRUCTURAL_CARDS = frozenset({
 
 _SHELL_MIN = ("CQUAD4", "CTRIA3")
 
+#: An OP2 file starts with a Fortran record marker (4) and holds NUL bytes near its start.
+_OP2_MARKER = b"\x04\x00\x00\x00"
+_BINARY_PROBE = 4096
+
 
 def _comp_mask(components) -> int:
     """Bit mask of a Nastran component string such as '1246' (bit c-1 for component c)."""
@@ -51,12 +55,52 @@ def _comp_mask(components) -> int:
     return mask
 
 
-def _read_pynastran(path: Path):
+def _deck_text(path: Path) -> str:
+    """The deck's text after the file-level checks: exists, is a file, not empty, not binary."""
+    filename = str(path)
+    if not path.exists():
+        raise InputError(card_message("no such deck.", filename=filename,
+                                      fix="check the path (relative to the current folder)."))
+    if not path.is_file():
+        raise InputError(card_message("is a folder, not a deck.", filename=filename,
+                                      fix="give the .bdf/.dat file inside it."))
+    raw = path.read_bytes()
+    if not raw.strip():
+        raise InputError(card_message("the deck is empty.", filename=filename,
+                                      fix="give a bulk-data deck with GRID and element cards."))
+    if raw[:4] == _OP2_MARKER or b"\x00" in raw[:_BINARY_PROBE]:
+        raise InputError(card_message(
+            "is a binary file (an OP2 result file?), not a bulk-data deck.", filename=filename,
+            fix="give the text input deck (.bdf/.dat); modes computed by Nastran are imported "
+                "from the OP2 with structures.nastran_results."))
+    return raw.decode("latin-1")
+
+
+def read_pynastran(path):
+    """Parse a deck with pyNastran (INCLUDEs followed, grids cross-referenced): the one reader.
+
+    Every part that needs bulk-data cards (structures, aero, flutter) reads the deck here, so a bad
+    file fails the same way everywhere.
+
+    Parameters
+    ----------
+    path : str or Path
+        The deck; with or without executive and case control sections.
+
+    Returns
+    -------
+    pyNastran.bdf.bdf.BDF
+
+    Raises
+    ------
+    InputError
+        Missing, empty or binary file, BEGIN BULK without CEND, or any card pyNastran cannot parse
+        (the message carries pyNastran's own words, which name the card and line when it knows).
+    """
     from pyNastran.bdf.bdf import BDF
 
-    if not path.exists():
-        raise InputError(f"file {path}: no such deck. Fix: check the path.")
-    text = path.read_text(errors="replace").upper()
+    path = Path(path)
+    text = _deck_text(path).upper()
     # A file without an executive/case control section is bulk data only (a "punch" file).
     lines = [line.strip() for line in text.splitlines()]
     punch = not any(line.startswith("CEND") for line in lines)
@@ -76,9 +120,12 @@ def _read_pynastran(path: Path):
     except Exception as exc:  # pyNastran signals bad decks with many exception types
         if isinstance(exc, InputError):
             raise
-        raise InputError(f"file {path}: pyNastran could not read the deck: {exc}. Fix: correct the "
-                         "card named above (field formats, missing INCLUDE files, coordinate-system "
-                         "references).") from exc
+        said = " ".join(str(exc).split())
+        said = said if len(said) <= 400 else said[:400] + " ..."
+        raise InputError(card_message(
+            f"pyNastran could not read the deck ({type(exc).__name__}: {said}).",
+            filename=str(path), fix="correct the card and line named above (field formats, "
+            "continuation lines, missing INCLUDE files, coordinate-system references).")) from exc
     return model
 
 
@@ -88,8 +135,12 @@ def _check_cards(model, filename: str) -> None:
         if name in SUPPORTED_CARDS or name in NON_STRUCTURAL_CARDS:
             continue
         unsupported[name] = count
-    rejects = [line[0].split(",")[0].split()[0].rstrip("*").upper()
-               for line in getattr(model, "reject_lines", []) if line]
+    rejects = []
+    for lines in getattr(model, "reject_lines", []):
+        first = next((text for text in lines if text.strip()), "")
+        name = (first.split(",")[0].split() or [first.strip()[:16]])[0].rstrip("*").upper()
+        if name:
+            rejects.append(name)
     for name in rejects:
         unsupported.setdefault(name, 1)
     if unsupported:
@@ -420,8 +471,12 @@ def read_model(path, *, spc_id: int | None = None) -> FEModel:
         For undefined grids, properties, materials or coordinate systems and invalid values.
     """
     path = Path(path)
-    model = _read_pynastran(path)
+    model = read_pynastran(path)
     filename = str(path)
+    if not model.nodes:
+        raise InputError(card_message("the deck has no grids (no GRID cards).", card="GRID",
+                                      filename=filename, fix="add GRID and element cards, or "
+                                      "INCLUDE the file that holds them."))
     _check_cards(model, filename)
     grids = _grids(model, filename)
     wtmass = float(model.params["WTMASS"].values[0]) if "WTMASS" in model.params else 1.0
