@@ -216,7 +216,10 @@ def run_flutter(deck: str | os.PathLike, out_dir: str | os.PathLike | None = Non
 
         lmodes = _param(bdf, "LMODES")
         modes = compute_modes(read_model(deck), nmodes or (int(lmodes) if lmodes else None))
-    units = units if units is not None else system_of(modes.attrs)
+    if units is None:
+        units = system_of(modes.attrs)
+    elif modes.attrs.get("units") != units:
+        modes = modes.assign_attrs(units=units)  # modes.nc and the GAFs' labels name the system
     if gaf is None:
         from aero.gaf import generalized_aero_forces
         from aero.model import read_aero_model

@@ -142,6 +142,8 @@ def test_pt145_ke_writes_the_flutter_contract(tmp_path):
         ("flutter", "KE", "in/s")]
     assert summary[0]["velocity"] == pytest.approx(6004.0, rel=0.02)  # DESIGN.md: Nastran ~6004
     assert (tmp_path / "vg_1.png").exists() and (tmp_path / "flutter_summary.txt").exists()
+    assert read_dataset(tmp_path / "modes.nc").attrs["units"] == "english_in"
+    assert "(english_in)" in read_dataset(tmp_path / "gaf.nc").attrs["units"]
 
 
 def test_us76_reference_values():
