@@ -332,7 +332,9 @@ def write_flutter(out_dir: str | os.PathLike, sweeps: list[xr.Dataset], labels: 
     _write_text(out_dir / "summary.json", json.dumps(summary_entries(sweeps, labels), indent=2))
     _write_text(out_dir / "flutter_summary.txt", flutter_summary_text(sweeps, title=title))
     for c, (s, lab) in enumerate(zip(sweeps, labels)):
-        where = ", ".join(f"{key} {lab[key]:.4g}" for key in ("mach", "density") if key in lab)
+        where = ", ".join(f"{name} {lab[key]:.4g}" for key, name in (("mach", "Mach"),
+                                                                      ("density", "density"))
+                          if lab.get(key) is not None)
         fig = plot_vg(s, title=f"{title} {lab.get('configuration', '')} {where}".strip())
         fig.savefig(out_dir / f"vg_{c + 1}.png", dpi=90)
     return out_dir
