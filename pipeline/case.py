@@ -16,12 +16,18 @@ Example (``data/bah_wing/case.toml``)::
     kernel = "quartic"       # doublet-lattice kernel integration: quartic or parabolic
     flutter_ids = [502]      # FLUTTER cards to run (default: the case control's FMETHOD)
 
-Unknown keys raise with the list of valid ones, so a typo never passes silently.
+    [tuning]                 # optional: pipeline tune (schema in pipeline.cmd_tune's docstring)
+
+:func:`read_case` checks the whole file before anything is computed: unknown keys raise with the
+list of valid ones, every value has the type its key needs (an integer is never a bool or a float,
+a list of FLUTTER ids is never a bare number or a string), and every deck, GVT file and restart
+history named exists. Each message names the file, the table, the key, the value given and the
+expected type.
 """
 from __future__ import annotations
 
-import tomllib
-from dataclasses import dataclass, field, fields
+import tomllib  # Python >= 3.11 (pyproject requires-python)
+from dataclasses import dataclass, field
 from pathlib import Path
 from types import MappingProxyType
 from typing import Mapping
@@ -31,13 +37,80 @@ from structures.errors import InputError
 from structures.massprops import check_measured_mass
 
 UNIT_SYSTEMS = ("si", "english_in", "english_ft")
+KERNELS = ("quartic", "parabolic")
+
+# expected type -> (test, words for the message, example value)
+_KINDS = {
+    "str": (lambda v: isinstance(v, str), "a string", '"text"'),
+    "int": (lambda v: isinstance(v, int) and not isinstance(v, bool), "an integer", "10"),
+    "float": (lambda v: isinstance(v, (int, float)) and not isinstance(v, bool) and v == v
+              and abs(v) != float("inf"), "a finite number", "1.0"),
+    "int list": (lambda v: isinstance(v, list) and all(
+        isinstance(i, int) and not isinstance(i, bool) for i in v), "a list of integers", "[502]"),
+    "list": (lambda v: isinstance(v, list), "a list", "[...]"),
+    "table": (lambda v: isinstance(v, dict), "a table", "{ ... }"),
+    "table list": (lambda v: isinstance(v, list) and all(isinstance(i, dict) for i in v),
+                   "a list of tables ([[...]])", "[{ ... }]"),
+}
+#: Examples shown in the fix of a wrongly typed key (default: the type's example).
+_EXAMPLES = {"measured_mass": "{ weight = 18950.0, x_cg = 0.1 }", "mass": '"lumped"',
+             "deck": '"wing.bdf"', "gvt": '"gvt.unv"', "kernel": '"quartic"', "units": '"si"',
+             "mass_targets": "{ weight = 1500.0 }", "test_modes": "[7, 8, 9]",
+             "fields": '[["PBAR", 11, "I1"]]', "method": '"slsqp"', "index": '"*:frequency:*"'}
+_TOML_TYPES = {str: "a string", bool: "a boolean", int: "an integer", float: "a number",
+               list: "a list", dict: "a table"}
+
+#: The keys of every table and the type of each.
+CASE_KEYS = {"name": "str", "units": "str", "configurations": "table list", "flutter": "table",
+             "tuning": "table"}
+CONFIGURATION_KEYS = {"name": "str", "deck": "str", "nmodes": "int", "mass": "str", "gvt": "str",
+                      "measured_mass": "table"}
+FLUTTER_KEYS = {"kernel": "str", "flutter_ids": "int list"}
+TUNING_KEYS = {"method": "str", "maxiter": "int", "shape_method": "str", "restart": "str",
+               "allowed_violation": "float", "out": "str", "variables": "table list",
+               "objective": "table list", "constraints": "table list",
+               "configurations": "table"}
+VARIABLE_KEYS = {"name": "str", "fields": "list", "lower": "float", "upper": "float",
+                 "scale": "float"}
+OBJECTIVE_KEYS = {"index": "str", "weight": "float"}
+CONSTRAINT_KEYS = {"index": "str", "limit": "float"}
+TUNING_CONFIGURATION_KEYS = {"test_modes": "int list", "mass_targets": "table",
+                             "mass_references": "table"}
 
 
-def _check_keys(table: dict, cls, where: str) -> None:
-    valid = {f.name for f in fields(cls)} - {"path"}
-    unknown = sorted(set(table) - valid)
+def _checked(table: dict, schema: dict, where: str, required=()) -> dict:
+    """``table`` after checking its keys against ``schema`` (key -> kind) and the values' types."""
+    unknown = sorted(set(table) - set(schema))
     if unknown:
-        raise InputError(f"{where}: unknown keys {unknown}; valid: {sorted(valid)}.")
+        raise InputError(f"{where}: unknown keys {unknown}; valid: {sorted(schema)}.")
+    missing = [k for k in required if k not in table]
+    if missing:
+        raise InputError(f"{where}: {', '.join(repr(k) for k in missing)} "
+                         f"{'is' if len(missing) == 1 else 'are'} required. Fix: add "
+                         + ", ".join(f"{k} = ..." for k in missing) + ".")
+    for key, value in table.items():
+        test, words, example = _KINDS[schema[key]]
+        if not test(value):
+            given = _TOML_TYPES.get(type(value), type(value).__name__)
+            raise InputError(f"{where}: {key} = {value!r} is {given}; expected {words}. "
+                             f"Fix: write e.g. {key} = {_EXAMPLES.get(key, example)}.")
+    return table
+
+
+def _built(cls, where: str, **values):
+    """``cls(**values)``, with the file and table put in front of a range error's message."""
+    try:
+        return cls(**values)
+    except InputError as exc:
+        raise InputError(f"{where}: {exc}") from None
+
+
+def _existing(base: Path, name: str, where: str, what: str) -> Path:
+    path = (base / name).resolve()
+    if not path.is_file():
+        raise InputError(f"{where}: {what} {name!r} -> {path} does not exist. Fix: give a path "
+                         "relative to the case file.")
+    return path
 
 
 @dataclass(frozen=True)
@@ -55,18 +128,20 @@ class Configuration:
         object.__setattr__(self, "measured_mass", MappingProxyType(check_measured_mass(
             dict(self.measured_mass), f"configuration {self.name}, measured_mass")))
         if not self.name or not self.name.replace("_", "").replace("-", "").isalnum():
-            raise InputError(f"configuration name {self.name!r} must be letters, digits, '_' or '-'.")
-        if not Path(self.deck).exists():
+            raise InputError(f"configuration name {self.name!r} must be letters, digits, '_' or "
+                             "'-'. Fix: rename it, e.g. name = \"full_fuel\".")
+        if not Path(self.deck).is_file():
             raise InputError(f"configuration {self.name}: deck {self.deck} does not exist. Fix: give a "
+                             "path relative to the case file.")
+        if self.gvt is not None and not Path(self.gvt).is_file():
+            raise InputError(f"configuration {self.name}: gvt {self.gvt} does not exist. Fix: give a "
                              "path relative to the case file.")
         if self.mass not in MASS_OPTIONS:
             raise InputError(f"configuration {self.name}: mass = {self.mass!r}; valid: "
                              f"{', '.join(MASS_OPTIONS)}.")
         if self.nmodes is not None and self.nmodes < 1:
-            raise InputError(f"configuration {self.name}: nmodes = {self.nmodes} must be >= 1.")
-
-
-KERNELS = ("quartic", "parabolic")
+            raise InputError(f"configuration {self.name}: nmodes = {self.nmodes} must be >= 1. "
+                             "Fix: give a positive number of modes or leave it out.")
 
 
 @dataclass(frozen=True)
@@ -78,8 +153,42 @@ class FlutterSettings:
 
     def __post_init__(self):
         if self.kernel not in KERNELS:
-            raise InputError(f"[flutter] kernel = {self.kernel!r}; valid: {', '.join(KERNELS)}.")
+            raise InputError(f"kernel = {self.kernel!r}; valid: {', '.join(KERNELS)}.")
         object.__setattr__(self, "flutter_ids", tuple(int(i) for i in self.flutter_ids))
+
+
+@dataclass(frozen=True)
+class TuningSettings:
+    """The validated ``[tuning]`` section of a case file (see :mod:`pipeline.cmd_tune`).
+
+    ``variables`` holds :class:`structures.design.DesignVariable`; ``objective`` and
+    ``constraints`` hold (index pattern, weight or limit); ``per_configuration`` holds
+    (configuration name, {test_modes, mass_targets, mass_references}).
+    """
+
+    variables: tuple
+    objective: tuple
+    constraints: tuple = ()
+    method: str = "slsqp"
+    maxiter: int = 50
+    shape_method: str = "nelson"
+    restart: Path | None = None
+    allowed_violation: float = 0.05
+    out: Path | None = None
+    per_configuration: tuple = ()
+
+    def __post_init__(self):
+        from structures.sensitivity import SHAPE_METHODS
+        from structures.tuning import METHODS
+
+        if self.method not in METHODS:
+            raise InputError(f"method = {self.method!r}; valid: {', '.join(METHODS)}.")
+        if self.shape_method not in SHAPE_METHODS:
+            raise InputError(f"shape_method = {self.shape_method!r}; valid: "
+                             f"{', '.join(SHAPE_METHODS)}.")
+        if self.maxiter < 1:
+            raise InputError(f"maxiter = {self.maxiter} must be >= 1. Fix: e.g. "
+                             "maxiter = 50.")
 
 
 @dataclass(frozen=True)
@@ -90,7 +199,7 @@ class Case:
     configurations: tuple
     units: str = "si"
     flutter: FlutterSettings | None = None
-    tuning: Mapping | None = None  # the raw [tuning] table, validated by pipeline.cmd_tune
+    tuning: TuningSettings | None = None
     path: Path | None = None
 
     def __post_init__(self):
@@ -102,37 +211,100 @@ class Case:
                              "name and deck.")
         names = [c.name for c in self.configurations]
         if len(set(names)) != len(names):
-            raise InputError(f"case {self.name}: duplicate configuration names {names}.")
+            raise InputError(f"case {self.name}: duplicate configuration names {names}. Fix: give "
+                             "each configuration its own name.")
+
+
+def _tuning(table: dict, path: Path, case_name: str, configs: tuple) -> TuningSettings:
+    from structures.design import DesignVariable
+
+    where = f"file {path}, [tuning]"
+    _checked(table, TUNING_KEYS, where)
+    base = path.parent
+    variables = []
+    for i, v in enumerate(table.get("variables", [])):
+        at = f"file {path}, [[tuning.variables]] #{i + 1}"
+        _checked(v, VARIABLE_KEYS, at, required=("name", "fields"))
+        for f in v["fields"]:
+            if not (isinstance(f, list) and len(f) == 3 and isinstance(f[0], str)
+                    and _KINDS["int"][0](f[1]) and isinstance(f[2], str)):
+                raise InputError(f"{at}: fields entry {f!r} is not [card, id, field]. Fix: write "
+                                 'e.g. fields = [["PBAR", 11, "I1"]].')
+        variables.append(_built(DesignVariable, at, name=v["name"],
+                                fields=tuple(tuple(f) for f in v["fields"]), lower=v.get("lower"),
+                                upper=v.get("upper"), scale=v.get("scale")))
+    objective = tuple(
+        (t["index"], float(t.get("weight", 1.0))) for i, t in enumerate(table.get("objective", []))
+        if _checked(t, OBJECTIVE_KEYS, f"file {path}, [[tuning.objective]] #{i + 1}", ("index",)))
+    constraints = tuple(
+        (t["index"], float(t["limit"])) for i, t in enumerate(table.get("constraints", []))
+        if _checked(t, CONSTRAINT_KEYS, f"file {path}, [[tuning.constraints]] #{i + 1}",
+                    ("index", "limit")))
+    names = {c.name for c in configs}
+    per = []
+    for name, sub in table.get("configurations", {}).items():
+        at = f"file {path}, [tuning.configurations.{name}]"
+        if name not in names:
+            raise InputError(f"{at}: names no configuration; valid: {sorted(names)}.")
+        if not isinstance(sub, dict):
+            raise InputError(f"{at}: {sub!r} is not a table. Fix: write "
+                             f"[tuning.configurations.{name}] with test_modes = [...].")
+        _checked(sub, TUNING_CONFIGURATION_KEYS, at)
+        for key in ("mass_targets", "mass_references"):
+            if key in sub:
+                check_measured_mass(sub[key], f"{at}, {key}")
+        per.append((name, MappingProxyType(dict(sub))))
+    restart = table.get("restart")
+    return _built(
+        TuningSettings, where, variables=tuple(variables), objective=objective, constraints=constraints,
+        method=table.get("method", "slsqp"), maxiter=table.get("maxiter", 50),
+        shape_method=table.get("shape_method", "nelson"),
+        restart=None if not restart else _existing(base, restart, where, "restart history"),
+        allowed_violation=float(table.get("allowed_violation", 0.05)),
+        out=(base / table.get("out", f"{case_name}_tuning")).resolve(),
+        per_configuration=tuple(per))
 
 
 def read_case(path) -> Case:
-    """Read and validate a TOML case file (paths resolved relative to it)."""
+    """Read and validate a whole TOML case file (paths resolved relative to it).
+
+    Parameters
+    ----------
+    path : str or Path
+
+    Returns
+    -------
+    Case
+
+    Raises
+    ------
+    InputError
+        Missing or non-TOML file, unknown keys, values of the wrong type or out of range, decks,
+        GVT files or restart histories that do not exist; the message names file, table and key.
+    """
     path = Path(path)
-    if not path.exists():
+    if not path.is_file():
         raise InputError(f"file {path}: no such case file. Fix: check the path.")
     try:
-        data = tomllib.loads(path.read_text())
-    except tomllib.TOMLDecodeError as exc:
-        raise InputError(f"file {path}: not valid TOML ({exc}).") from None
-    _check_keys(data, Case, f"file {path}")
+        data = tomllib.loads(path.read_text(encoding="utf-8"))
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+        raise InputError(f"file {path}: not valid TOML ({exc}). Fix: correct the line named.") from None
+    _checked(data, CASE_KEYS, f"file {path}")
     base = path.parent
     configs = []
     for i, table in enumerate(data.get("configurations", [])):
-        _check_keys(table, Configuration, f"file {path}, [[configurations]] #{i + 1}")
-        if "name" not in table or "deck" not in table:
-            raise InputError(f"file {path}, [[configurations]] #{i + 1}: 'name' and 'deck' are required.")
-        table = dict(table)
-        table["deck"] = (base / table["deck"]).resolve()
-        if table.get("gvt"):
-            table["gvt"] = (base / table["gvt"]).resolve()
-        configs.append(Configuration(**table))
+        where = f"file {path}, [[configurations]] #{i + 1}"
+        table = dict(_checked(table, CONFIGURATION_KEYS, where, required=("name", "deck")))
+        table["deck"] = _existing(base, table["deck"], where, "deck")
+        if "gvt" in table:
+            table["gvt"] = _existing(base, table["gvt"], where, "gvt")
+        configs.append(_built(Configuration, where, **table))
     flutter = None
     if "flutter" in data:
-        _check_keys(data["flutter"], FlutterSettings, f"file {path}, [flutter]")
-        flutter = FlutterSettings(**data["flutter"])
-    tuning = data.get("tuning")
-    if tuning is not None and not isinstance(tuning, dict):
-        raise InputError(f"file {path}: 'tuning' must be a table ([tuning]).")
-    return Case(name=data.get("name", path.stem), configurations=tuple(configs),
-                units=data.get("units", "si"), flutter=flutter,
-                tuning=None if tuning is None else MappingProxyType(tuning), path=path.resolve())
+        where = f"file {path}, [flutter]"
+        flutter = _built(FlutterSettings, where, **_checked(data["flutter"], FLUTTER_KEYS, where))
+    name = data.get("name", path.stem)
+    tuning = None if "tuning" not in data else _tuning(data["tuning"], path, name, tuple(configs))
+    return _built(Case, f"file {path}", name=name, configurations=tuple(configs),
+                  units=data.get("units", "si"), flutter=flutter, tuning=tuning,
+                  path=path.resolve())

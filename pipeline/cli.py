@@ -1,6 +1,9 @@
 """The ``pipeline`` command: parses arguments and calls the library, nothing else.
 
 Each subcommand lives in its own module exposing ``add_parser(subparsers)`` and ``run(args)``.
+Exit codes: 0 success; 2 a project error (one line ``error: ...`` naming file, card or key and the
+fix) or a bad argument; 130 Ctrl-C (one line naming the stage that was running). Anything else is
+a bug and shows its traceback.
 """
 from __future__ import annotations
 
@@ -9,11 +12,24 @@ import importlib
 import sys
 import warnings
 
+from pipeline.stage import Interrupted, running
 from structures.errors import PipelineError
 
 #: Subcommand modules, in the order ``pipeline --help`` lists them.
 COMMANDS = ("pipeline.cmd_run", "pipeline.cmd_modes", "pipeline.cmd_correlate",
             "pipeline.cmd_flutter", "pipeline.cmd_tune")
+
+
+def positive_int(text: str) -> int:
+    """argparse type of counts such as ``--nmodes``: an integer >= 1."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not an integer; give a count >= 1") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"{value} must be >= 1 (a count of modes); leave the "
+                                         "option out for the default")
+    return value
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -39,10 +55,14 @@ def main(argv=None) -> int:
     shown = warnings.showwarning
     warnings.showwarning = _show_warning
     try:
-        return int(args.func(args) or 0)
+        with running(args.command):
+            return int(args.func(args) or 0)
     except PipelineError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
+    except Interrupted as exc:
+        print(f"interrupted in {exc.stage}; run the same command again to resume", file=sys.stderr)
+        return 130
     finally:
         warnings.showwarning = shown
 

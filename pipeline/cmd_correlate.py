@@ -20,7 +20,8 @@ from structures.assembly import MASS_OPTIONS
 from structures.correlation import CorrelationSettings, correlate, default_nmodes
 from structures.errors import InputError
 from structures.gvt import load_gvt
-from structures.netcdf import write_dataset
+from structures.netcdf import check_output, staged_folder, write_dataset
+from pipeline.cli import positive_int
 
 _FAIL_CODES = (("pass_frequency", "f"), ("pass_cross_orthogonality_diagonal", "d"),
                ("pass_cross_orthogonality_off_diagonal", "x"), ("pass_orthogonality", "o"))
@@ -43,7 +44,7 @@ def add_parser(sub) -> None:
     p.add_argument("--out", default=None, help="write the correlation Dataset to this netCDF file")
     p.add_argument("--figures", default=None, help="write MAC / orthogonality / frequency figures here")
     p.add_argument("--config", default=None, help="configuration of a case file (default: first with a gvt)")
-    p.add_argument("--nmodes", type=int, default=None,
+    p.add_argument("--nmodes", type=positive_int, default=None,
                    help="analysis modes to compute for a deck (default: 2 x test modes + 6, at most "
                         "the number of measured DOFs)")
     p.add_argument("--mass", choices=MASS_OPTIONS, default="deck", help="mass formulation for a deck")
@@ -85,6 +86,10 @@ def _from_case(args):
 
 
 def run(args) -> int:
+    if args.out:
+        check_output(args.out, folder=False)
+    if args.figures:
+        check_output(args.figures, folder=True, option="--figures")
     path = Path(args.model)
     measured = {}
     if path.suffix.lower() == ".toml":
@@ -105,13 +110,20 @@ def run(args) -> int:
         print("\nMass properties (model vs measured):")
         print(mass_comparison_table(comparison))
         corr = corr.merge(comparison.rename({name: f"mass_{name}" for name in comparison.data_vars}))
-    if args.out:
-        write_dataset(corr, args.out)
-        print(f"\ncorrelation written to {args.out}")
+    figures = []
     if args.figures:
         from structures.correlation_plots import save_correlation_figures
-        for p in save_correlation_figures(corr, args.figures):
-            print(f"figure written to {p}")
+        with staged_folder(args.figures) as staged:
+            figures = [Path(args.figures) / p.relative_to(staged)
+                       for p in save_correlation_figures(corr, staged)]
+            if args.out:
+                write_dataset(corr, args.out)
+    elif args.out:
+        write_dataset(corr, args.out)
+    if args.out:
+        print(f"\ncorrelation written to {args.out}")
+    for p in figures:
+        print(f"figure written to {p}")
     return 0
 
 

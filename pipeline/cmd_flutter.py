@@ -1,9 +1,14 @@
 """``pipeline flutter CASE_OR_DECK [--out DIR]``: modes -> GAFs -> flutter (library: flutter.run)."""
 from __future__ import annotations
 
+from contextlib import nullcontext
 from pathlib import Path
 
 from flutter.run import run_flutter
+from pipeline.cli import positive_int
+from pipeline.stage import running
+from structures.netcdf import check_output, staged_folder
+from structures.units import unit_labels
 
 
 def add_parser(sub) -> None:
@@ -13,7 +18,7 @@ def add_parser(sub) -> None:
                         "every configuration's deck is run")
     p.add_argument("--out", default=None, help="output folder for flutter.nc and summary.json "
                                                "(per configuration in a sub-folder for a case file)")
-    p.add_argument("--nmodes", type=int, default=None,
+    p.add_argument("--nmodes", type=positive_int, default=None,
                    help="number of modes (default: PARAM LMODES, else the deck's EIGR/EIGRL)")
     p.add_argument("--flutter-id", type=int, action="append", default=None,
                    help="FLUTTER card id to run (repeatable; default: the FMETHOD selection)")
@@ -21,25 +26,45 @@ def add_parser(sub) -> None:
 
 
 def _print(name: str, summary: list) -> None:
+    """The crossings of a run, each number with its unit (the entry's ``units``, structures.units)."""
     print(f"{name}: {len(summary)} crossing(s)")
     for c in summary:
-        print(f"  {c['kind']:10s} root {c['root']:3d}  Mach {c['mach']:.3f}  density {c['density']:.5g}"
-              f"  V {c['velocity']:.5g}  f {c['frequency']:.4g} Hz")
+        u = c.get("units") or unit_labels(None).as_dict()
+        print(f"  {c['kind']:10s} root {c['root']:3d}  Mach {c['mach']:.3f}  density "
+              f"{c['density']:.5g} {u['density']}  V {c['velocity']:.5g} {u['velocity']}  "
+              f"f {c['frequency']:.4g} {u['frequency']}")
 
 
 def run(args) -> int:
+    """A deck: :func:`flutter.run.run_flutter`. A case file: for every configuration the same two
+    library calls as ``pipeline run`` (:func:`pipeline.run.configuration_modes` with the
+    configuration's nmodes and mass option, :func:`pipeline.run.configuration_flutter` with the
+    case's ``[flutter]`` kernel and FLUTTER ids); ``--nmodes`` / ``--flutter-id`` override them.
+    All outputs are written only when every configuration has finished."""
     target = Path(args.target)
+    if args.out:
+        check_output(args.out, folder=True)
     if target.suffix.lower() == ".toml":
-        from pipeline.case import read_case
+        from pipeline.case import FlutterSettings, read_case
+        from pipeline.run import configuration_flutter, configuration_modes
 
         case = read_case(target)
-        for conf in case.configurations:
-            out = None if args.out is None else Path(args.out) / conf.name
-            res = run_flutter(conf.deck, out, nmodes=args.nmodes or conf.nmodes,
-                              flutter_ids=args.flutter_id)
-            _print(conf.name, res["summary"])
+        settings = case.flutter or FlutterSettings()
+        done = []
+        with staged_folder(args.out) if args.out else nullcontext() as staged:
+            for conf in case.configurations:
+                with running(f"flutter/{conf.name}"):
+                    modes, _ = configuration_modes(conf, args.nmodes)
+                    out = None if staged is None else staged / conf.name
+                    done.append((conf.name, configuration_flutter(
+                        conf, settings, modes, out, args.flutter_id, units=case.units)))
+        for name, res in done:
+            _print(name, res["summary"])
+        if args.out:
+            print(f"results written to {args.out}")
         return 0
-    res = run_flutter(target, args.out, nmodes=args.nmodes, flutter_ids=args.flutter_id)
+    with staged_folder(args.out) if args.out else nullcontext() as staged:
+        res = run_flutter(target, staged, nmodes=args.nmodes, flutter_ids=args.flutter_id)
     _print(target.name, res["summary"])
     if args.out:
         print(f"results written to {args.out}")

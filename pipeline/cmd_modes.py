@@ -6,13 +6,15 @@ from structures.bdf import read_model
 from structures.massprops import mass_properties
 from structures.modal import compute_modes
 from structures.modes import write_modes
+from structures.netcdf import check_output
+from pipeline.cli import positive_int
 from pipeline.tables import frequency_table, mass_table
 
 
 def add_parser(sub) -> None:
     p = sub.add_parser("modes", help="normal modes and mass properties of a Nastran deck")
     p.add_argument("deck", help="bulk-data deck (.bdf/.dat), INCLUDEs followed")
-    p.add_argument("--nmodes", type=int, default=None,
+    p.add_argument("--nmodes", type=positive_int, default=None,
                    help="number of modes (default: the deck's EIGRL/EIGR ND, else 20)")
     p.add_argument("--mass", choices=MASS_OPTIONS, default="deck",
                    help="mass formulation (default: PARAM COUPMASS of the deck, as Nastran)")
@@ -21,6 +23,8 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> int:
+    if args.out:
+        check_output(args.out, folder=False)
     model = read_model(args.deck)
     system = assemble(model, args.mass)
     modes = compute_modes(model, args.nmodes, mass=args.mass, system=system)

@@ -1,7 +1,7 @@
 """``pipeline tune CASE.toml``: tune the configurations' decks to their GVT data (paper eq. 25).
 
-The case file's ``[[configurations]]`` (name, deck, gvt, nmodes, mass) are read as in
-:mod:`pipeline.case`; the ``[tuning]`` section (read here, by :func:`read_tuning`) adds::
+The case file's ``[[configurations]]`` (name, deck, gvt, nmodes, mass) and its ``[tuning]`` section
+are read and validated by :func:`pipeline.case.read_case`; ``[tuning]`` holds::
 
     [tuning]
     method = "slsqp"              # slsqp | trust-constr | differential_evolution
@@ -49,86 +49,30 @@ progress line per optimiser iteration.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
 from pathlib import Path
 
+from pipeline.cli import positive_int
 from structures.errors import InputError
-
-_TUNING_KEYS = {"method", "maxiter", "shape_method", "restart", "allowed_violation", "out",
-                "variables", "objective", "constraints", "configurations"}
-_VARIABLE_KEYS = {"name", "fields", "lower", "upper", "scale"}
-_CONFIG_KEYS = {"test_modes", "mass_targets", "mass_references"}
-
-
-@dataclass(frozen=True)
-class TuningSettings:
-    """The validated ``[tuning]`` section of a case file."""
-
-    variables: tuple
-    objective: tuple
-    constraints: tuple = ()
-    method: str = "slsqp"
-    maxiter: int = 50
-    shape_method: str = "nelson"
-    restart: Path | None = None
-    allowed_violation: float = 0.05
-    out: Path | None = None
-    per_configuration: tuple = ()
-
-
-def _unknown(table: dict, valid: set, where: str) -> None:
-    bad = sorted(set(table) - valid)
-    if bad:
-        raise InputError(f"{where}: unknown keys {bad}; valid: {sorted(valid)}.")
 
 
 def read_tuning(path) -> tuple:
-    """Read a case file with a ``[tuning]`` section.
+    """Read a case file with a ``[tuning]`` section (validated by :func:`pipeline.case.read_case`).
 
     Returns
     -------
-    (pipeline.case.Case, TuningSettings)
+    (pipeline.case.Case, pipeline.case.TuningSettings)
     """
     from pipeline.case import read_case
-    from structures.design import DesignVariable
 
     case = read_case(path)
-    path = case.path
-    base = path.parent
-    configs = case.configurations
-    tun = case.tuning
-    if tun is None:
-        raise InputError(f"file {path}: no [tuning] section. Fix: add [tuning] with variables and "
-                         "objective (see pipeline/cmd_tune.py).")
-    _unknown(tun, _TUNING_KEYS, f"file {path}, [tuning]")
-    variables = []
-    for i, v in enumerate(tun.get("variables", [])):
-        _unknown(v, _VARIABLE_KEYS, f"file {path}, [[tuning.variables]] #{i + 1}")
-        if "name" not in v or "fields" not in v:
-            raise InputError(f"file {path}, [[tuning.variables]] #{i + 1}: 'name' and 'fields' are required.")
-        variables.append(DesignVariable(v["name"], tuple(tuple(f) for f in v["fields"]),
-                                        v.get("lower"), v.get("upper"), v.get("scale")))
-    objective = tuple((t["index"], float(t.get("weight", 1.0))) for t in tun.get("objective", []))
-    constraints = tuple((t["index"], float(t["limit"])) for t in tun.get("constraints", []))
-    names = {c.name for c in configs}
-    per = []
-    for name, table in tun.get("configurations", {}).items():
-        if name not in names:
-            raise InputError(f"file {path}: [tuning.configurations.{name}] names no configuration "
-                             f"{sorted(names)}.")
-        _unknown(table, _CONFIG_KEYS, f"file {path}, [tuning.configurations.{name}]")
-        per.append((name, table))
-    for c in configs:
+    if case.tuning is None:
+        raise InputError(f"file {case.path}: no [tuning] section. Fix: add [tuning] with variables "
+                         "and objective (see pipeline/cmd_tune.py).")
+    for c in case.configurations:
         if c.gvt is None:
-            raise InputError(f"file {path}: configuration {c.name} has no gvt file. Fix: add gvt = ...")
-    settings = TuningSettings(
-        variables=tuple(variables), objective=objective, constraints=constraints,
-        method=tun.get("method", "slsqp"), maxiter=int(tun.get("maxiter", 50)),
-        shape_method=tun.get("shape_method", "nelson"),
-        restart=(base / tun["restart"]).resolve() if tun.get("restart") else None,
-        allowed_violation=float(tun.get("allowed_violation", 0.05)),
-        out=(base / tun.get("out", f"{case.name}_tuning")).resolve(), per_configuration=tuple(per))
-    return case, settings
+            raise InputError(f"file {case.path}: configuration {c.name} has no gvt file. Fix: add "
+                             "gvt = \"...\" to it.")
+    return case, case.tuning
 
 
 def build_problem(case, settings):
@@ -154,19 +98,21 @@ def add_parser(subparsers) -> None:
     p = subparsers.add_parser("tune", help="tune the decks to the GVT data (paper eq. 25)")
     p.add_argument("case", help="TOML case file with [[configurations]] and [tuning]")
     p.add_argument("--out", help="output folder (default: [tuning] out)")
-    p.add_argument("--maxiter", type=int, help="override [tuning] maxiter")
+    p.add_argument("--maxiter", type=positive_int, help="override [tuning] maxiter")
     p.set_defaults(func=run)
 
 
 def run(args) -> int:
     from structures.design import write_tuned_bdf
-    from structures.netcdf import read_dataset, write_dataset
+    from structures.netcdf import (check_output, read_dataset, staged_folder, write_dataset,
+                                   write_text)
     from structures.tuning import best_from_history, tune
     from structures.tuning_report import tuning_report
 
     case, settings = read_tuning(args.case)
+    out = check_output(Path(args.out).resolve() if args.out else settings.out, folder=True,
+                       option="--out" if args.out else "[tuning] out")
     problem = build_problem(case, settings)
-    out = Path(args.out).resolve() if args.out else settings.out
     start = None
     if settings.restart is not None:
         start = best_from_history(read_dataset(settings.restart), settings.allowed_violation)
@@ -178,11 +124,12 @@ def run(args) -> int:
 
     result = tune(problem, method=settings.method, start=start,
                   maxiter=args.maxiter or settings.maxiter, progress=progress)
-    write_dataset(result.history, out / "history.nc")
-    for c in case.configurations:
-        write_tuned_bdf(c.deck, out / f"{c.name}_tuned.bdf", result.space, result.x)
     report = tuning_report(result.history)
-    (out / "report.txt").write_text(report + "\n")
+    with staged_folder(out) as staged:
+        write_dataset(result.history, staged / "history.nc")
+        for c in case.configurations:
+            write_tuned_bdf(c.deck, staged / f"{c.name}_tuned.bdf", result.space, result.x)
+        write_text(report + "\n", staged / "report.txt")
     print(report)
     print(f"{'converged' if result.success else 'not converged'}: {result.message}; results in {out}")
     return 0

@@ -2,14 +2,18 @@
 
 A stage's outputs are recorded in ``manifest.json`` together with a fingerprint of its inputs
 (deck files and settings); a re-run skips every stage whose fingerprint still matches, so an
-interrupted run resumes from the last finished stage.
+interrupted run resumes from the last finished stage. A failed or interrupted run keeps the outputs
+of its finished stages (recorded in the manifest) and removes every other file it wrote.
+
+:func:`configuration_modes` and :func:`configuration_flutter` are the computations of the modes
+and flutter stages; ``pipeline flutter CASE.toml`` calls the same two functions, so it cannot
+disagree with ``pipeline run``.
 """
 from __future__ import annotations
 
 import hashlib
 import json
-import os
-import tempfile
+import shutil
 from pathlib import Path
 
 import matplotlib.pyplot as plt
@@ -19,6 +23,7 @@ from flutter.plots import plot_vg
 from flutter.run import run_flutter
 from pipeline.case import Case, Configuration, FlutterSettings
 from pipeline.report import write_report
+from pipeline.stage import running
 from structures.assembly import assemble
 from structures.bdf import read_model
 from structures.correlation import CorrelationSettings, correlate
@@ -27,16 +32,10 @@ from structures.gvt import load_gvt
 from structures.massprops import compare_mass_properties, mass_properties
 from structures.modal import compute_modes
 from structures.modes import read_modes, write_modes
-from structures.netcdf import read_dataset, write_dataset
+from structures.netcdf import (check_output, read_dataset, staged_folder, write_dataset,
+                               write_json)
 
 EXAMPLE_CASE = Path(__file__).resolve().parents[1] / "data" / "bah_wing" / "case.toml"
-
-
-def _write_json(obj, path: Path) -> None:
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
-    with os.fdopen(fd, "w") as fh:
-        json.dump(obj, fh, indent=2, default=str)
-    os.replace(tmp, path)
 
 
 def _deck_fingerprint(deck: Path) -> str:
@@ -53,8 +52,10 @@ class Run:
     """A run folder with its manifest of finished stages."""
 
     def __init__(self, out_dir):
-        self.dir = Path(out_dir)
+        self.dir = check_output(out_dir, folder=True)
+        self.new = not self.dir.exists()
         self.dir.mkdir(parents=True, exist_ok=True)
+        self.before = {p for p in self.dir.rglob("*")}
         self.manifest_path = self.dir / "manifest.json"
         self.manifest = (json.loads(self.manifest_path.read_text())
                          if self.manifest_path.exists() else {})
@@ -66,7 +67,45 @@ class Run:
 
     def finish(self, stage: str, fingerprint: str, outputs) -> None:
         self.manifest[stage] = {"fingerprint": fingerprint, "outputs": [str(o) for o in outputs]}
-        _write_json(self.manifest, self.manifest_path)
+        write_json(self.manifest, self.manifest_path)
+
+    def discard_unfinished(self) -> None:
+        """Remove what this run wrote outside finished stages (the folder too if it is empty)."""
+        kept = {self.dir / f for entry in self.manifest.values() for f in entry["outputs"]}
+        kept |= {self.manifest_path} if self.manifest else set()
+        kept |= {folder for path in kept for folder in path.parents}
+        for path in sorted(set(self.dir.rglob("*")) - self.before - kept, reverse=True):
+            if path.is_dir():
+                shutil.rmtree(path, ignore_errors=True)
+            elif path.exists():
+                path.unlink()
+        if self.new and not any(self.dir.iterdir()):
+            self.dir.rmdir()
+
+
+def configuration_modes(config: Configuration, nmodes: int | None = None) -> tuple:
+    """Modes and mass properties of one configuration (its deck, nmodes and mass option).
+
+    Returns
+    -------
+    (xarray.Dataset, structures.massprops.MassProperties)
+        The modes (DESIGN.md section 6) and the mass properties.
+    """
+    model = read_model(config.deck)
+    system = assemble(model, config.mass)
+    modes = compute_modes(model, nmodes or config.nmodes, mass=config.mass, system=system)
+    return modes, mass_properties(model, m_basic=system.m_basic)
+
+
+def configuration_flutter(config: Configuration, settings: FlutterSettings, modes, out_dir,
+                          flutter_ids=None, units: str | None = None) -> dict:
+    """GAFs and flutter of one configuration on ``modes`` with the case's ``[flutter]`` settings.
+
+    ``flutter_ids`` (a command-line override) replaces ``settings.flutter_ids``; both empty: the
+    deck's FMETHOD selection. ``units`` is the case's unit system. Returns :func:`flutter.run.run_flutter`'s dict; writes ``out_dir``.
+    """
+    return run_flutter(config.deck, out_dir, modes=modes, kernel=settings.kernel,
+                       flutter_ids=list(flutter_ids or settings.flutter_ids) or None, units=units)
 
 
 def modes_stage(run: Run, config: Configuration, log=print) -> dict:
@@ -80,10 +119,7 @@ def modes_stage(run: Run, config: Configuration, log=print) -> dict:
         log(f"[{stage}] up to date, skipped")
     else:
         log(f"[{stage}] reading {config.deck}")
-        model = read_model(config.deck)
-        system = assemble(model, config.mass)
-        modes = compute_modes(model, config.nmodes, mass=config.mass, system=system)
-        props = mass_properties(model, m_basic=system.m_basic)
+        modes, props = configuration_modes(config)
         write_modes(modes, run.dir / modes_file)
         write_dataset(props.to_dataset(), run.dir / mass_file)
         run.finish(stage, fp, [modes_file, mass_file])
@@ -126,7 +162,7 @@ def correlation_stage(run: Run, config: Configuration, modes, log=print) -> dict
 
 
 def flutter_stage(run: Run, config: Configuration, settings: FlutterSettings, modes,
-                  log=print) -> dict:
+                  log=print, units: str | None = None) -> dict:
     """GAFs and flutter of one configuration from its deck's FLUTTER cards (on the stage's modes).
 
     Writes ``<config>/flutter/{flutter.nc, summary.json, gaf.nc, modes.nc}`` and the V-g / V-f
@@ -134,24 +170,25 @@ def flutter_stage(run: Run, config: Configuration, settings: FlutterSettings, mo
     """
     stage = f"flutter/{config.name}"
     fp = hashlib.sha256(json.dumps([_deck_fingerprint(config.deck), config.nmodes, config.mass,
-                                    settings.kernel, list(settings.flutter_ids)]).encode()).hexdigest()
+                                    settings.kernel, list(settings.flutter_ids), units]).encode()
+                    ).hexdigest()
     folder = Path(config.name) / "flutter"
     if run.done(stage, fp):
         log(f"[{stage}] up to date, skipped")
     else:
         log(f"[{stage}] GAFs ({settings.kernel} kernel) and flutter")
-        result = run_flutter(config.deck, run.dir / folder, modes=modes, kernel=settings.kernel,
-                             flutter_ids=list(settings.flutter_ids) or None)
         figures = []
-        for n, (label, ds) in enumerate(result["results"]):
-            if "sweep" not in ds.attrs:
-                continue
-            title = (f"{config.name}: {label.get('configuration', '')} Mach {label['mach']:.3g}, "
-                     f"density {label['density']:.4g}")
-            fig = plot_vg(ds, title=title)
-            figures.append(folder / f"vg_{n + 1}.png")
-            fig.savefig(run.dir / figures[-1], dpi=90)
-            plt.close(fig)
+        with staged_folder(run.dir / folder) as staged:
+            result = configuration_flutter(config, settings, modes, staged, units=units)
+            for n, (label, ds) in enumerate(result["results"]):
+                if "sweep" not in ds.attrs:
+                    continue
+                title = (f"{config.name}: {label.get('configuration', '')} Mach "
+                         f"{label['mach']:.3g}, density {label['density']:.4g}")
+                fig = plot_vg(ds, title=title)
+                figures.append(folder / f"vg_{n + 1}.png")
+                fig.savefig(staged / figures[-1].name, dpi=90)
+                plt.close(fig)
         outputs = [folder / "summary.json", folder / "gaf.nc", *figures]
         run.finish(stage, fp, outputs)
         flutter = [c for c in result["summary"] if c["kind"] == "flutter"]
@@ -167,14 +204,22 @@ def run_case(case: Case, out_dir, log=print) -> Path:
     """Run every stage of a case into ``out_dir``; returns the HTML report's path."""
     run = Run(out_dir)
     results = {}
-    for config in case.configurations:
-        results[config.name] = modes_stage(run, config, log)
-        if config.gvt is not None:
-            results[config.name]["correlation"] = correlation_stage(
-                run, config, results[config.name]["modes"], log)
-        if case.flutter is not None:
-            results[config.name]["flutter"] = flutter_stage(
-                run, config, case.flutter, results[config.name]["modes"], log)
-    report = write_report(case, results, run.dir)
+    try:
+        for config in case.configurations:
+            with running(f"modes/{config.name}"):
+                results[config.name] = modes_stage(run, config, log)
+            if config.gvt is not None:
+                with running(f"correlation/{config.name}"):
+                    results[config.name]["correlation"] = correlation_stage(
+                        run, config, results[config.name]["modes"], log)
+            if case.flutter is not None:
+                with running(f"flutter/{config.name}"):
+                    results[config.name]["flutter"] = flutter_stage(
+                        run, config, case.flutter, results[config.name]["modes"], log, case.units)
+        with running("report"):
+            report = write_report(case, results, run.dir)
+    except BaseException:
+        run.discard_unfinished()
+        raise
     log(f"report: {report}")
     return report

@@ -23,6 +23,12 @@ exponents, free-format columns, trailing blanks, CRLF) are read by a tolerant to
 of the same record layout; ``attrs["reader"]`` says which one was used. UFF 55 stores values as
 E13.5, so a UFF round trip keeps 5-6 significant digits; the netCDF form is exact.
 
+Both readers refuse a damaged file with an :class:`InputError` naming the file, the dataset (its
+position and line) and the mode: a dataset without its closing ``-1`` (a file cut short), a node
+record with fewer values than the dataset's header says, text or NaN / inf where a number belongs,
+and dataset numbers this reader does not know (e.g. a 58 where a 55 belongs). A node absent from one
+mode but present in others is 0 there (UFF note 9), with a warning naming the mode and the nodes.
+
 Measured mass properties (weight, CG, inertias) are not part of a UFF file: they come from the case
 file.
 """
@@ -31,6 +37,7 @@ from __future__ import annotations
 import os
 import re
 import tempfile
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -43,7 +50,13 @@ from structures.netcdf import read_dataset, write_dataset
 _UFF_SUFFIXES = (".unv", ".uff", ".uf")
 # A real number as Fortran writes it, possibly run together with its neighbour ("1.0E+00-2.0E+00")
 # and possibly with a D exponent ("1.0D+00").
-_NUMBER = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eEdD][-+]?\d+)?")
+_NUMBER = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eEdD][-+]?\d+)?|[-+]?(?i:nan|inf(?:inity)?)")
+#: Datasets read: node coordinates (15, 2411) and mode shapes (55); datasets skipped: header (151),
+#: units (164), trace lines and elements for display (82, 2412). Any other number is refused.
+_READ_DATASETS = (15, 2411, 55)
+_SKIPPED_DATASETS = (151, 164, 82, 2412)
+#: UFF labels are I10 integers.
+_LABEL_LIMIT = 2 ** 31
 
 
 def make_gvt_dataset(frequency, shape, grid, component, *, mode=None, damping=None, name=None,
@@ -201,10 +214,10 @@ def read_uff(path: str | os.PathLike, *, drop_unmeasured: bool = True, units: st
         ``NONE``/blank.
     """
     path = Path(path)
-    if not path.exists():
+    if not path.is_file():
         raise InputError(f"GVT file {path}: no such file. Fix: check the path.")
     blocks = _split_blocks(path)
-    n_modes = sum(1 for kind, _ in blocks if kind == 55)
+    n_modes = sum(1 for kind, _, _ in blocks if kind == 55)
     try:
         sets = pyuff.UFF(str(path)).read_sets()
         sets = [sets] if isinstance(sets, dict) else list(sets)
@@ -224,6 +237,7 @@ def read_uff(path: str | os.PathLike, *, drop_unmeasured: bool = True, units: st
 def _from_pyuff(sets, path: Path) -> tuple[dict, list]:
     """Nodes {id: (xyz, def_cs, disp_cs)} and mode records from pyuff dictionaries."""
     nodes, records = {}, []
+    where = f"GVT file {path}"
     for s in sets:
         kind = s.get("type")
         if kind in (15, 2411):
@@ -231,8 +245,8 @@ def _from_pyuff(sets, path: Path) -> tuple[dict, list]:
             def_cs = np.asarray(s.get("def_cs", np.zeros(n)))
             disp_cs = np.asarray(s.get("disp_cs", np.zeros(n)))
             for i, nid in enumerate(np.asarray(s["node_nums"])):
-                nodes[_as_int(nid)] = (np.array([s["x"][i], s["y"][i], s["z"][i]], float),
-                                       _as_int(def_cs[i]), _as_int(disp_cs[i]))
+                nodes[_as_int(nid, where)] = (np.array([s["x"][i], s["y"][i], s["z"][i]], float),
+                                              _as_int(def_cs[i], where), _as_int(disp_cs[i], where))
         elif kind == 55:
             ndv = int(s["n_data_per_node"])
             node_nums = np.asarray(s["node_nums"])
@@ -250,27 +264,43 @@ def _from_pyuff(sets, path: Path) -> tuple[dict, list]:
                                  f"{s['analysis_type']} is not normal (2) or complex (3) modes. Fix: export "
                                  "the test mode shapes.")
             records.append(dict(mode=int(s["mode_n"]), freq=freq, eig=eig, modal_mass=mmass, zeta=zeta,
-                                name=str(s.get("id4", "")), nodes=node_nums.astype(np.int64),
+                                name=str(s.get("id4", "")),
+                                nodes=np.array([_as_int(v, where) for v in node_nums], np.int64),
                                 values=vals, ndv=ndv))
     return nodes, records
 
 
-def _as_int(value) -> int:
-    iv = int(round(float(value)))
-    if iv != float(value):
-        raise InputError(f"UFF file: label {value} is not an integer. Fix: node and mode labels must "
-                         "be integers.")
-    return iv
+def _as_int(value, where: str) -> int:
+    """An integer label (node, mode, count, coordinate system) of a UFF record."""
+    number = float(value)
+    if not np.isfinite(number) or round(number) != number or abs(number) >= _LABEL_LIMIT:
+        raise InputError(f"{where}: label {value} is not an integer label. Fix: node and mode "
+                         "labels and counts must be integers (UFF I10).")
+    return int(number)
 
 
-def _numbers(text: str) -> list[float]:
-    return [float(t.replace("D", "E").replace("d", "e")) for t in _NUMBER.findall(text)]
+def _numbers(lines: list[str], where: str, first_line: int) -> list[float]:
+    """The numbers of numeric records; anything else on those lines raises naming the line."""
+    out = []
+    for n, line in enumerate(lines):
+        found = _NUMBER.findall(line)
+        junk = _NUMBER.sub(" ", line).replace(",", " ").strip()
+        if junk:
+            raise InputError(f"{where}, line {first_line + n}: {junk.split()[0]!r} is not a number "
+                             f"({line.strip()!r}). Fix: correct or re-export the record.")
+        out += [float(t.replace("D", "E").replace("d", "e")) for t in found]
+    return out
 
 
-def _split_blocks(path: Path) -> list[tuple[int | None, list[str]]]:
-    """(dataset number, body lines) of every dataset between ``-1`` delimiter lines; the number is
-    None for a binary dataset header (``2414b``), which only pyuff reads."""
-    lines = [ln.rstrip() for ln in path.read_bytes().decode("latin-1").splitlines()]
+def _split_blocks(path: Path) -> list[tuple[int | None, list[str], int]]:
+    """(dataset number, body lines, line number of the body's first line) of every dataset between
+    ``-1`` delimiter lines; the number is None for a binary dataset header (``2414b``), which only
+    pyuff reads. Raises for a dataset without its closing ``-1`` or with an unknown number."""
+    raw = path.read_bytes()
+    if not raw.strip():
+        raise InputError(f"GVT file {path}: the file is empty. Fix: export the test modes as "
+                         "universal datasets 15 and 55.")
+    lines = [ln.rstrip() for ln in raw.decode("latin-1").splitlines()]
     blocks, i, n = [], 0, len(lines)
     while i < n:
         if lines[i].strip() != "-1":
@@ -280,48 +310,68 @@ def _split_blocks(path: Path) -> list[tuple[int | None, list[str]]]:
         while j < n and lines[j].strip() != "-1":
             j += 1
         block = lines[i + 1:j]
+        if j == n and any(ln.strip() for ln in block):
+            raise InputError(f"GVT file {path}, dataset #{len(blocks) + 1} (line {i + 2}): no "
+                             "closing -1 line: the file is cut short. Fix: re-export or copy the "
+                             "whole file.")
         i = j + 1
         if not block or not block[0].split():
             continue
         head = block[0].split()[0]
-        blocks.append((int(head) if head.isdigit() else None, block[1:]))
+        where = f"GVT file {path}, dataset #{len(blocks) + 1} (line {i - len(block)})"
+        if re.fullmatch(r"\d+b", head):
+            blocks.append((None, block[1:], i - len(block) + 1))
+            continue
+        if not head.isdigit():
+            raise InputError(f"{where}: {head!r} is not a dataset number. Fix: each dataset starts "
+                             "with its number on the line after -1.")
+        kind = int(head)
+        if kind not in _READ_DATASETS + _SKIPPED_DATASETS:
+            raise InputError(f"{where}: dataset {kind} is not a dataset this reader knows; node "
+                             "coordinates are 15 or 2411, mode shapes 55 (skipped: "
+                             f"{', '.join(map(str, _SKIPPED_DATASETS))}). Fix: export the modes as "
+                             "datasets 15 and 55, or remove the other datasets.")
+        blocks.append((kind, block[1:], i - len(block) + 1))
     return blocks
 
 
 def _parse_tolerant(path: Path, blocks) -> tuple[dict, list]:
     """Token-stream parser of UFF 15/2411/55 tolerant of D exponents, CRLF, blanks, free format."""
     nodes, records = {}, []
-    for kind, body in blocks:
+    for number, (kind, body, line) in enumerate(blocks, start=1):
+        where = f"GVT file {path}, dataset #{number} ({kind}, line {line - 1})"
         if kind is None:
             raise InputError(f"GVT file {path}: a binary dataset that pyuff could not read. Fix: export "
                              "ASCII universal files.")
         if kind in (15, 2411):
-            vals = _numbers("\n".join(body))
+            vals = _numbers(body, where, line)
             if len(vals) % 7:
-                raise InputError(f"GVT file {path}: dataset {kind} has {len(vals)} numbers, not 7 per node. "
+                raise InputError(f"{where}: {len(vals)} numbers, not 7 per node. "
                                  "Fix: check the node records.")
             for rec in np.reshape(vals, (-1, 7)):
-                nodes[_as_int(rec[0])] = (rec[4:7].astype(float), _as_int(rec[1]), _as_int(rec[2]))
+                nodes[_as_int(rec[0], where)] = (rec[4:7].astype(float), _as_int(rec[1], where),
+                                                 _as_int(rec[2], where))
         elif kind == 55:
-            records.append(_parse_55(body, path))
+            records.append(_parse_55(body, where, line))
     return nodes, records
 
 
-def _parse_55(body: list[str], path: Path) -> dict:
+def _parse_55(body: list[str], where: str, line: int) -> dict:
     if len(body) < 6:
-        raise InputError(f"GVT file {path}: a dataset 55 is truncated. Fix: re-export the file.")
+        raise InputError(f"{where}: the dataset 55 is truncated. Fix: re-export the file.")
     name = body[3].strip()
-    tok = _numbers("\n".join(body[5:]))
-    if len(tok) < 8 or len(tok) < 8 + _as_int(tok[6]) + _as_int(tok[7]) or _as_int(tok[7]) < 2:
-        raise InputError(f"GVT file {path}: the header records 6-8 of a dataset 55 ({body[3].strip()!r}) are "
+    tok = _numbers(body[5:], where, line + 5)
+    if (len(tok) < 8 or len(tok) < 8 + _as_int(tok[6], where) + _as_int(tok[7], where)
+            or _as_int(tok[7], where) < 2):
+        raise InputError(f"{where}: the header records 6-8 of the dataset 55 ({name!r}) are "
                          "incomplete. Fix: re-export the file.")
-    _model, analysis, data_ch, _spec, data_type, ndv = (_as_int(t) for t in tok[:6])
-    nint, nreal = _as_int(tok[6]), _as_int(tok[7])
-    ints = [_as_int(t) for t in tok[8:8 + nint]]
+    _model, analysis, data_ch, _spec, data_type, ndv = (_as_int(t, where) for t in tok[:6])
+    nint, nreal = _as_int(tok[6], where), _as_int(tok[7], where)
+    ints = [_as_int(t, where) for t in tok[8:8 + nint]]
     reals = tok[8 + nint:8 + nint + nreal]
     rest = np.asarray(tok[8 + nint + nreal:])
     mode = ints[1] if len(ints) > 1 else None
-    where = f"GVT file {path}, dataset 55 mode {mode}"
+    where = f"{where}, mode {mode}"
     if analysis not in (2, 3, 7) or mode is None:
         raise InputError(f"{where}: analysis type {analysis} is not normal (2) or complex (3) modes. "
                          "Fix: export the test mode shapes.")
@@ -330,11 +380,13 @@ def _parse_55(body: list[str], path: Path) -> dict:
                          "3 or 6 DOF vector. Fix: export displacement vectors (data characteristic 2 or 3).")
     width = ndv * (2 if data_type == 5 else 1)
     if rest.size % (width + 1):
-        raise InputError(f"{where}: {rest.size} numbers do not make whole node records of 1 + {width}. "
-                         "Fix: check the node/value records.")
+        raise InputError(f"{where}: {rest.size} numbers do not make whole node records of 1 node "
+                         f"label + {width} values (the header's data type {data_type}, {ndv} values "
+                         "per node): a node record is cut or has a value too many. Fix: correct the "
+                         "node/value records or re-export the file.")
     rec = rest.reshape(-1, width + 1)
     values = rec[:, 1:] if data_type != 5 else rec[:, 1::2] + 1j * rec[:, 2::2]
-    out = dict(mode=mode, name=name, nodes=np.array([_as_int(v) for v in rec[:, 0]], dtype=np.int64),
+    out = dict(mode=mode, name=name, nodes=np.array([_as_int(v, where) for v in rec[:, 0]], np.int64),
                values=values, ndv=ndv, modal_mass=0.0, freq=None, eig=None, zeta=None)
     if analysis == 2:
         out.update(freq=reals[0], modal_mass=reals[1] if nreal > 1 else 0.0,
@@ -382,6 +434,17 @@ def _assemble(path: Path, nodes: dict, records: list, *, drop_unmeasured: bool, 
         if np.any(cnt > 1):
             raise InputError(f"GVT file {path}, mode {r['mode']}: nodes {u[cnt > 1].tolist()} appear twice. "
                              "Fix: one record per node.")
+        bad = ~np.all(np.isfinite(r["values"]), axis=1)
+        if np.any(bad):
+            raise InputError(f"GVT file {path}, mode {r['mode']}: NaN/inf in the shape at nodes "
+                             f"{r['nodes'][bad][:10].tolist()}. Fix: correct those values or "
+                             "re-export the shapes.")
+        absent = np.setdiff1d(all_nodes, r["nodes"])
+        if absent.size:
+            warnings.warn(f"GVT file {path}, mode {r['mode']}: no values for nodes "
+                          f"{absent[:10].tolist()}{' ...' if absent.size > 10 else ''} "
+                          f"({r['nodes'].size} of {all_nodes.size} nodes); taken as 0 (UFF note 9). "
+                          "Fix: re-export the mode if the file was cut.", stacklevel=3)
         freq[k], zeta[k], vals = _realise(r)
         # nodes absent from a record are 0 (UFF note 9)
         shape[k, np.searchsorted(all_nodes, r["nodes"])] = vals
