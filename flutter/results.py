@@ -23,7 +23,6 @@ carries them under ``units``.
 """
 from __future__ import annotations
 
-import json
 import os
 from pathlib import Path
 
@@ -31,7 +30,7 @@ import numpy as np
 import xarray as xr
 
 from flutter.crossings import Crossing
-from structures.netcdf import write_dataset
+from structures.netcdf import write_dataset, write_json, write_text
 from structures.units import unit_labels
 
 KINDS = ("flutter", "divergence")
@@ -329,8 +328,8 @@ def write_flutter(out_dir: str | os.PathLike, sweeps: list[xr.Dataset], labels: 
     out_dir.mkdir(parents=True, exist_ok=True)
     sweeps = [label_units(s, units) for s in sweeps]
     write_dataset(stack_cases(sweeps, labels), out_dir / "flutter.nc")
-    _write_text(out_dir / "summary.json", json.dumps(summary_entries(sweeps, labels), indent=2))
-    _write_text(out_dir / "flutter_summary.txt", flutter_summary_text(sweeps, title=title))
+    write_json(summary_entries(sweeps, labels), out_dir / "summary.json")
+    write_text(flutter_summary_text(sweeps, title=title), out_dir / "flutter_summary.txt")
     for c, (s, lab) in enumerate(zip(sweeps, labels)):
         where = ", ".join(f"{name} {lab[key]:.4g}" for key, name in (("mach", "Mach"),
                                                                       ("density", "density"))
@@ -338,10 +337,3 @@ def write_flutter(out_dir: str | os.PathLike, sweeps: list[xr.Dataset], labels: 
         fig = plot_vg(s, title=f"{title} {lab.get('configuration', '')} {where}".strip())
         fig.savefig(out_dir / f"vg_{c + 1}.png", dpi=90)
     return out_dir
-
-
-def _write_text(path: Path, text: str) -> None:
-    """Write a text file atomically (temp file + rename)."""
-    tmp = path.with_name(f".{path.name}.tmp")
-    tmp.write_text(text)
-    os.replace(tmp, path)
