@@ -23,67 +23,10 @@ from structures.errors import SolverError, card_message
 from structures.frames import rigid_offset
 from structures.model import FEModel
 from structures.modes import modes_dataset
+from structures.sparse_factor import PIVOT_RATIO, factorize, massless_mechanism
 
 DEFAULT_SHIFT = -(2.0 * np.pi * 0.1) ** 2
 DENSE_LIMIT = 600
-
-
-PIVOT_RATIO = 1e-11
-
-
-def _massless_mechanism(filename: str) -> SolverError:
-    return SolverError(card_message(
-        "the shifted stiffness K - sigma M is singular: some motion has neither stiffness nor "
-        "mass (a massless mechanism, e.g. a free rotation of grids without rotary inertia).",
-        filename=filename,
-        fix="constrain it (SPC), connect the free grids, or give that motion mass (CONM2 inertia, "
-            "CBEAM instead of CBAR)."))
-
-
-class ShiftedFactor:
-    """Sparse LU of the shifted matrix K - sigma M, ordered on the grid graph.
-
-    A minimum-degree ordering of the grid connectivity (one node per grid), expanded to each
-    grid's DOFs, gives less fill than ordering the DOF graph directly (about 16M instead of 21M
-    factor non-zeros on a 60,000-DOF shell model) and costs a fraction of a second. Tiny pivots
-    (relative to the matrix diagonal) mean a singular matrix: a massless mechanism.
-    """
-
-    def __init__(self, a: sp.csc_matrix, groups: np.ndarray | None, filename: str):
-        self.perm = _grouped_ordering(a, groups)
-        permuted = a[self.perm][:, self.perm].tocsc()
-        try:
-            self.lu = spla.splu(permuted, permc_spec="NATURAL", diag_pivot_thresh=0.0,
-                                options={"SymmetricMode": True})
-        except RuntimeError:
-            raise _massless_mechanism(filename) from None
-        pivots = np.abs(self.lu.U.diagonal())
-        diag = np.abs(permuted.diagonal())[self.lu.perm_c]
-        if not np.all(np.isfinite(pivots)) or np.any(pivots <= PIVOT_RATIO * diag):
-            raise _massless_mechanism(filename)
-
-    def solve(self, b: np.ndarray) -> np.ndarray:
-        out = np.empty_like(b)
-        out[self.perm] = self.lu.solve(b[self.perm])
-        return out
-
-
-def _grouped_ordering(a: sp.csc_matrix, groups: np.ndarray | None) -> np.ndarray:
-    """Fill-reducing permutation of ``a`` computed on the graph of DOF groups (grids)."""
-    n = a.shape[0]
-    if groups is None:
-        groups = np.arange(n)
-    labels, inverse = np.unique(groups, return_inverse=True)
-    coo = a.tocoo()
-    graph = sp.csc_matrix((-np.ones(coo.nnz), (inverse[coo.row], inverse[coo.col])),
-                          shape=(len(labels), len(labels)))
-    graph.sum_duplicates()
-    graph.data[:] = -1.0
-    graph = graph + sp.diags(np.asarray(abs(graph).sum(axis=1)).ravel() + 1.0)  # dominant
-    # SuperLU's perm_c[j] is the new position of column j.
-    rank = spla.splu(graph.tocsc(), permc_spec="MMD_AT_PLUS_A",
-                     options={"SymmetricMode": True}).perm_c
-    return np.lexsort((np.arange(n), rank[inverse]))
 
 
 def solve_eigen(k: sp.spmatrix, m: sp.spmatrix, nmodes: int, *, shift: float = DEFAULT_SHIFT,
@@ -111,9 +54,9 @@ def solve_eigen(k: sp.spmatrix, m: sp.spmatrix, nmodes: int, *, shift: float = D
         try:
             chol = sla.cholesky(dense, lower=True)
         except np.linalg.LinAlgError:
-            raise _massless_mechanism(filename) from None
+            raise massless_mechanism(filename) from None
         if np.any(np.diag(chol) ** 2 <= PIVOT_RATIO * np.diag(dense)):
-            raise _massless_mechanism(filename)
+            raise massless_mechanism(filename)
         mu, vec = sla.eigh(m.toarray(), dense)
         order = np.argsort(-mu)[:nmodes]
         mu, vec = mu[order], vec[:, order]
@@ -123,13 +66,13 @@ def solve_eigen(k: sp.spmatrix, m: sp.spmatrix, nmodes: int, *, shift: float = D
                 "asked for.", filename=filename, fix="ask for fewer modes or add mass."))
         lam = shift + 1.0 / mu
     else:
-        factor = ShiftedFactor(shifted, groups, filename)
+        factor = factorize(shifted, groups=groups, filename=filename)
         op = spla.LinearOperator((n, n), matvec=factor.solve, dtype=float)
         ncv = min(n, max(2 * nmodes + 1, nmodes + 20))
         try:
             # ARPACK's small dense steps gain nothing from BLAS threads and lose a lot when the
-            # cores are shared: run them on one thread.
-            with threadpool_limits(limits=1, user_api="blas"):
+            # cores are shared: run OpenBLAS on one thread (MKL PARDISO's solves keep theirs).
+            with threadpool_limits(limits={"openblas": 1}):
                 lam, vec = spla.eigsh(k, k=nmodes, M=m, sigma=shift, which="LM", OPinv=op,
                                       ncv=ncv, tol=1e-9)
         except spla.ArpackNoConvergence as exc:
