@@ -4,6 +4,7 @@ from __future__ import annotations
 import html
 from pathlib import Path
 
+from structures.netcdf import write_text
 from structures.units import UnitLabels, unit_labels
 
 
@@ -91,7 +92,4 @@ def write_report(case, results: dict, out_dir) -> Path:
                                   ("length", "velocity", "density", "mass", "inertia", "force",
                                    "frequency"))) + "). Configurations: "
             f"{len(case.configurations)}.</p>{sections}</body></html>")
-    tmp = out.with_suffix(".html.tmp")
-    tmp.write_text(page)
-    tmp.replace(out)
-    return out
+    return write_text(page, out)

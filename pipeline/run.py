@@ -28,6 +28,7 @@ from structures.assembly import assemble
 from structures.bdf import read_model
 from structures.correlation import CorrelationSettings, correlate
 from structures.correlation_plots import save_correlation_figures
+from structures.errors import InputError
 from structures.gvt import load_gvt
 from structures.massprops import compare_mass_properties, mass_properties
 from structures.modal import compute_modes
@@ -57,8 +58,21 @@ class Run:
         self.dir.mkdir(parents=True, exist_ok=True)
         self.before = {p for p in self.dir.rglob("*")}
         self.manifest_path = self.dir / "manifest.json"
-        self.manifest = (json.loads(self.manifest_path.read_text())
-                         if self.manifest_path.exists() else {})
+        self.manifest = self._read_manifest()
+
+    def _read_manifest(self) -> dict:
+        if not self.manifest_path.exists():
+            return {}
+        try:
+            manifest = json.loads(self.manifest_path.read_text())
+        except (ValueError, UnicodeDecodeError) as exc:
+            manifest = exc
+        if not (isinstance(manifest, dict) and all(
+                isinstance(e, dict) and {"fingerprint", "outputs"} <= set(e)
+                for e in manifest.values())):
+            raise InputError(f"file {self.manifest_path}: the run manifest is damaged. Fix: delete "
+                             "it (every stage then runs again) or give another --out folder.")
+        return manifest
 
     def done(self, stage: str, fingerprint: str) -> bool:
         entry = self.manifest.get(stage)

@@ -59,8 +59,13 @@ def read_dataset(path: str | os.PathLike) -> xr.Dataset:
     if not path.exists():
         raise InputError(f"file {path}: no such result file. Fix: check the path or re-run the stage "
                          "that writes it.")
-    with xr.open_dataset(path, engine="netcdf4", auto_complex=True) as ds:
-        return ds.load()
+    try:
+        with xr.open_dataset(path, engine="netcdf4", auto_complex=True) as ds:
+            return ds.load()
+    except (OSError, ValueError) as exc:  # netCDF4 / HDF5 signal a damaged file this way
+        raise InputError(f"file {path}: not a readable netCDF4 file ({exc}). Fix: give a file "
+                         "written by this project (pipeline modes/correlate/flutter --out) or "
+                         "re-run the stage that writes it.") from exc
 
 
 def check_output(path: str | os.PathLike, *, folder: bool, option: str = "--out") -> Path:

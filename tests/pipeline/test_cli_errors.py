@@ -266,3 +266,24 @@ def test_flutter_of_a_case_agrees_with_run(tmp_path, capsys):
     flutter = [c for c in cli_crossings if c["kind"] == "flutter"]
     # the case's FLUTTER 502 (Nastran: 394.0 m/s), not the deck's FMETHOD 501
     assert len(flutter) == 1 and flutter[0]["velocity"] == pytest.approx(394.0, rel=0.02)
+
+
+# ------------------------------------------------------------------ damaged result and GVT files
+def test_damaged_netcdf_and_cut_gvt_through_correlate(pt145, tmp_path, capsys):
+    (tmp_path / "modes.nc").write_text("not netCDF")
+    gvt = ROOT / "data" / "bah_wing" / "gvt.unv"
+    failed(["correlate", tmp_path / "modes.nc", gvt], capsys, "modes.nc",
+           "not a readable netCDF4 file")
+    data = gvt.read_bytes()
+    (tmp_path / "cut.unv").write_bytes(data[:len(data) // 2])
+    failed(["correlate", pt145, tmp_path / "cut.unv", "--out", tmp_path / "corr.nc", "--figures",
+            tmp_path / "figures"], capsys, "cut.unv", "no closing -1")
+    assert not (tmp_path / "corr.nc").exists() and not (tmp_path / "figures").exists()
+
+
+def test_damaged_run_manifest(tmp_path, capsys):
+    case = _case(tmp_path, BASE)
+    (tmp_path / "run").mkdir()
+    (tmp_path / "run" / "manifest.json").write_text("{ half")
+    failed(["run", case, "--out", tmp_path / "run"], capsys, "manifest.json",
+           "the run manifest is damaged")
