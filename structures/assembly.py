@@ -1,8 +1,11 @@
 """Sparse assembly of K and M, constraint elimination and the free (a-set) system.
 
 DOF sets follow Nastran: the g-set has 6 DOFs per grid in its displacement (CD) frame; rigid
-elements make the m-set dependent (u_m = G_mo u_o); SPC, GRID PS and automatic SPC of DOFs with no
-stiffness at all form the s-set; the remaining a-set is what the eigensolver sees. ``T`` maps a-set
+elements make the m-set dependent (u_m = G_mo u_o); SPC, GRID PS and the automatic SPCs form the
+s-set; the remaining a-set is what the eigensolver sees. Automatic SPCs are Nastran's grid point
+singularity processing of K_nn (:mod:`structures.singularity`, PARAM EPZERO / AUTOSPC) plus, whatever
+AUTOSPC says, the DOFs with no stiffness at all (diagonal <= 1e-12 of the model's largest
+translational / rotational one), which no eigensolver can keep. ``T`` maps a-set
 displacements to g-set ones (u_g = T u_a), so K_aa = T^T K_gg T and M_aa = T^T M_gg T.
 
 Mass formulation: ``mass="deck"`` follows PARAM COUPMASS like Nastran (lumped unless COUPMASS > 0),
@@ -10,7 +13,7 @@ Mass formulation: ``mass="deck"`` follows PARAM COUPMASS like Nastran (lumped un
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import scipy.sparse as sp
@@ -20,6 +23,7 @@ from structures.errors import InputError, card_message
 from structures.frames import rigid_offset
 from structures.model import FEModel
 from structures.rigid import solve_constraints
+from structures.singularity import SingularityTable, grid_point_singularities, warn_singularities
 
 MASS_OPTIONS = ("deck", "consistent", "lumped")
 
@@ -35,7 +39,8 @@ class AssembledSystem:
     a_dofs : (na,) int g-set numbers (grid index * 6 + component - 1) of the a-set.
     m_basic : scipy.sparse.csr_matrix (ng, ng), the g-set mass in BASIC axes (mass properties).
     rotation : scipy.sparse.csr_matrix (ng, ng), u_basic = rotation @ u_cd.
-    autospc : (ns,) int g-set DOFs removed for having no stiffness.
+    autospc : (ns,) int g-set DOFs removed by automatic SPC (singularity table + no stiffness).
+    singularities : SingularityTable, Nastran's GRID POINT SINGULARITY TABLE of K_nn.
     """
 
     K: sp.csc_matrix
@@ -45,6 +50,7 @@ class AssembledSystem:
     m_basic: sp.csr_matrix
     rotation: sp.csr_matrix
     autospc: np.ndarray
+    singularities: SingularityTable
 
 
 def _lumped(model: FEModel, mass: str) -> bool:
@@ -232,7 +238,7 @@ def _shells(model, es, lumped):
                                                      mats, len(part))
             shifted = xyz[part] + zoff[part, None, None] * normal[part, None, :]
             fn = shell.quad4_matrices if nn == 4 else shell.tria3_matrices
-            kp, mp = fn(shifted, section, theta[part], lumped)
+            kp, mp = fn(shifted, section, theta[part], lumped, model.k6rot)
             if np.any(zoff[part]):
                 t = np.zeros((len(part), 6 * nn, 6 * nn))
                 off = rigid_offset(zoff[part, None] * normal[part])
@@ -334,13 +340,14 @@ def _constrained(model: FEModel, m_dofs) -> np.ndarray:
     return fixed
 
 
-def assemble(model: FEModel, mass: str = "deck") -> AssembledSystem:
+def assemble(model: FEModel, mass: str = "deck", *, warn: bool = True) -> AssembledSystem:
     """Assemble and reduce to the free (a-set) system.
 
     Parameters
     ----------
     model : FEModel
     mass : {'deck', 'consistent', 'lumped'}
+    warn : bool, issue the singularity-table warning (one per call) when it is not empty.
 
     Returns
     -------
@@ -372,9 +379,18 @@ def assemble(model: FEModel, mass: str = "deck") -> AssembledSystem:
     diag = np.abs(k_nn.diagonal())
     rot_dof = (n_dofs % 6) >= 3
     scale = np.array([diag[~rot_dof].max(initial=0.0), diag[rot_dof].max(initial=0.0)])
-    no_stiffness = diag <= 1e-12 * scale[rot_dof.astype(int)]
-    free = ~fixed[n_dofs] & ~no_stiffness
-    autospc = n_dofs[~fixed[n_dofs] & no_stiffness]
+    no_stiffness = ~fixed[n_dofs] & (diag <= 1e-12 * scale[rot_dof.astype(int)])
+    table = grid_point_singularities(k_nn, n_dofs, fixed[n_dofs], model.grids.ids,
+                                     epzero=model.epzero, autospc=model.autospc,
+                                     floor=1e-12 * scale)
+    if not model.autospc:
+        forced = np.isin(table.dof, n_dofs[no_stiffness])
+        table = replace(table, action=np.where(forced, "autospc", table.action))
+    if warn:
+        warn_singularities(table, model.filename)
+    removed = no_stiffness | np.isin(n_dofs, table.constrained)
+    free = ~fixed[n_dofs] & ~removed
+    autospc = n_dofs[removed]
     t_ga = t_gn[:, np.flatnonzero(free)].tocsr()
     if len(m_dofs):
         k_aa = (t_ga.T @ k_cd @ t_ga).tocsc()
@@ -388,4 +404,4 @@ def assemble(model: FEModel, mass: str = "deck") -> AssembledSystem:
                                       filename=model.filename,
                                       fix="check the SPC set and the element connectivity."))
     return AssembledSystem(K=k_aa, M=m_aa, T=t_ga, a_dofs=n_dofs[free], m_basic=m_basic,
-                           rotation=rot, autospc=autospc)
+                           rotation=rot, autospc=autospc, singularities=table)

@@ -412,7 +412,8 @@ def _rigid(model, filename: str) -> tuple:
     return tuple(out)
 
 
-def _case_id(model, name: str):
+def _case_value(model, name: str):
+    """The value of a case-control command (the highest subcase that has it), or None."""
     cc = model.case_control_deck
     if cc is None:
         return None
@@ -420,8 +421,37 @@ def _case_id(model, name: str):
         sub = cc.subcases[sub_id]
         found = sub.has_parameter(name)  # pyNastran returns [bool] for one name
         if found[0] if isinstance(found, list) else found:
-            return int(sub.get_parameter(name)[0])
+            return sub.get_parameter(name)[0]
     return None
+
+
+def _case_id(model, name: str):
+    value = _case_value(model, name)
+    return None if value is None else int(value)
+
+
+def _yes_no(value, name: str, filename: str) -> bool:
+    text = str(value).strip().upper()
+    if text not in ("YES", "NO"):
+        raise InputError(card_message(f"{name} = {value!r} is not YES or NO.", card="PARAM",
+                                      card_id=name, filename=filename, fix="give YES or NO."))
+    return text == "YES"
+
+
+def _params(model, filename: str) -> dict:
+    """PARAMs the structures use, with Nastran's defaults (MSC QRG, SOL 103).
+
+    WTMASS (1.0), COUPMASS (-1: lumped), K6ROT (100.), EPZERO (1e-8) and AUTOSPC (YES; the case
+    control command AUTOSPC, when present, overrides PARAM AUTOSPC). Other PARAMs (LMODES, GRDPNT,
+    NEWSEQ, ...) do not change the stiffness or mass and are ignored.
+    """
+    def value(name, default):
+        return model.params[name].values[0] if name in model.params else default
+    autospc = _case_value(model, "AUTOSPC")
+    return dict(wtmass=float(value("WTMASS", 1.0)), coupmass=int(value("COUPMASS", -1)),
+                k6rot=float(value("K6ROT", 100.0)), epzero=float(value("EPZERO", 1.0e-8)),
+                autospc=_yes_no(value("AUTOSPC", "YES") if autospc is None else autospc,
+                                "AUTOSPC", filename))
 
 
 def _spc(model, filename: str, spc_id) -> tuple:
@@ -479,8 +509,6 @@ def read_model(path, *, spc_id: int | None = None) -> FEModel:
                                       "INCLUDE the file that holds them."))
     _check_cards(model, filename)
     grids = _grids(model, filename)
-    wtmass = float(model.params["WTMASS"].values[0]) if "WTMASS" in model.params else 1.0
-    coupmass = int(model.params["COUPMASS"].values[0]) if "COUPMASS" in model.params else -1
     nd = None
     method_id = _case_id(model, "METHOD")
     method = model.methods.get(method_id) if method_id is not None else None
@@ -493,8 +521,8 @@ def read_model(path, *, spc_id: int | None = None) -> FEModel:
     fe = FEModel(filename=filename, grids=grids, elements=_elements(model, filename),
                  properties=_properties(model, filename), materials=_materials(model),
                  masses=_conm2(model, grids, filename), rigid=_rigid(model, filename),
-                 spc=_spc(model, filename, spc_id), suport=suport, wtmass=wtmass,
-                 coupmass=coupmass, eigrl_nd=nd)
+                 spc=_spc(model, filename, spc_id), suport=suport, eigrl_nd=nd,
+                 **_params(model, filename))
     from structures.validate import validate_model
     validate_model(fe)
     return fe

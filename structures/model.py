@@ -226,7 +226,12 @@ class RigidElement:
 
 @dataclass(frozen=True)
 class FEModel:
-    """A validated structural model read from one bulk-data deck."""
+    """A validated structural model read from one bulk-data deck.
+
+    ``k6rot``, ``epzero`` and ``autospc`` are the deck's PARAM K6ROT (shell drilling stiffness,
+    MSC default 100.), PARAM EPZERO (grid point singularity ratio, default 1e-8) and PARAM / case
+    control AUTOSPC (default YES); see :mod:`structures.singularity`.
+    """
 
     filename: str
     grids: Grids
@@ -241,6 +246,9 @@ class FEModel:
     coupmass: int = -1
     eigrl_nd: int | None = None
     units: str = "deck"
+    k6rot: float = 100.0
+    epzero: float = 1.0e-8
+    autospc: bool = True
 
     def __post_init__(self):
         object.__setattr__(self, "elements", MappingProxyType(dict(self.elements)))
@@ -250,6 +258,11 @@ class FEModel:
             raise InputError(card_message(f"WTMASS = {self.wtmass} must be positive.", card="PARAM",
                                           card_id="WTMASS", filename=self.filename,
                                           fix="set PARAM,WTMASS to a positive factor (default 1.0)."))
+        for name, value in (("K6ROT", self.k6rot), ("EPZERO", self.epzero)):
+            if not (np.isfinite(value) and value >= 0):
+                raise InputError(card_message(f"{name} = {value} must be a non-negative number.",
+                                              card="PARAM", card_id=name, filename=self.filename,
+                                              fix=f"set PARAM,{name} to a value >= 0 or remove it."))
 
     def property(self, pid: int, *, card: str, eid: int) -> Property:
         """The property ``pid`` referenced by element ``eid``; a clear error when missing."""

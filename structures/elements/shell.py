@@ -17,8 +17,14 @@ Formulation (DOFs per grid [T1, T2, T3, R1, R2, R3], BASIC frame on output):
   stiffness ``KIRCHHOFF_PENALTY`` times the bending stiffness / element area; MITC4 does not lock, so
   this reproduces the Kirchhoff limit to ~1/KIRCHHOFF_PENALTY.
 * Drilling: rotation about the element normal is tied to the membrane's rotation at the element centre,
-  w_z = (dv/dx - du/dy)/2, by a penalty ``DRILL_FACTOR * (mean diag(A) * area + mean diag(D))`` (the
-  role of Nastran's K6ROT): rigid-body modes stay exact and flat meshes are not singular.
+  w_z = (dv/dx - du/dy)/2, by a penalty ``1e-6 * K6ROT * (mean diag(A) * area + mean diag(D))``:
+  rigid-body modes stay exact and flat meshes are not singular. K6ROT is Nastran's PARAM K6ROT (MSC
+  QRG: stiffness added to the normal rotation of CQUAD4/CTRIA3, default 100. since MSC Nastran 2004;
+  Nastran's penalty is ~1e-6 * K6ROT * G * t * area). With mean diag(A) ~ 2.2 G t (nu = 0.3) our
+  penalty is about 2.2 times Nastran's at the same K6ROT; K6ROT = 0 leaves the drilling rotation
+  without stiffness, to be removed by AUTOSPC (structures.singularity) as in MSC Nastran V2001.
+  As in Nastran ("K6ROT is forced to 0 when only membrane elements exist"), membrane-only sections
+  (PSHELL MID2 blank: no bending) get no drilling penalty.
 * Warped CQUAD4: the element is built on its mean plane (normal = d13 x d24, the QRG element z axis)
   and joined to the grids by rigid offsets h_i along the normal, so rigid-body motion stays exact.
 * Mass: consistent (bilinear / linear shape functions) or lumped (area/4, area/3) translational mass
@@ -36,7 +42,8 @@ from structures.elements.shell_materials import ShellSection
 from structures.errors import InputError
 
 KIRCHHOFF_PENALTY = 1.0e4
-DRILL_FACTOR = 1.0e-4
+#: Nastran PARAM K6ROT default (MSC Nastran 2004 and later, linear solutions included).
+K6ROT_DEFAULT = 100.0
 CHUNK = 2048            # elements per vectorised block: bounds the temporaries (~100 MB)
 
 _G = 1.0 / np.sqrt(3.0)
@@ -153,20 +160,21 @@ def _drill_stiffness(b_omega: np.ndarray, k: np.ndarray, nn: int) -> np.ndarray:
     return k[:, None, None] * (np.swapaxes(V, 1, 2) @ V)
 
 
-def _drill_k(A: np.ndarray, D: np.ndarray, area: np.ndarray) -> np.ndarray:
+def _drill_k(A: np.ndarray, D: np.ndarray, area: np.ndarray, k6rot: float) -> np.ndarray:
+    """Drilling penalty per element; zero for membrane-only sections (K6ROT forced to 0)."""
     dA = np.trace(A, axis1=1, axis2=2) / 3.0
     dD = np.trace(D, axis1=1, axis2=2) / 3.0
-    return DRILL_FACTOR * (dA * area + dD)
+    return np.where(np.any(D != 0.0, axis=(1, 2)), 1.0e-6 * k6rot * (dA * area + dD), 0.0)
 
 
-def _chunked(block, xyz, section, theta, lumped, ndof):
+def _chunked(block, xyz, section, theta, lumped, k6rot, ndof):
     """Run ``block`` over chunks of CHUNK elements into preallocated K, M (bounded temporaries)."""
     ne = xyz.shape[0]
     K = np.empty((ne, ndof, ndof))
     M = np.empty((ne, ndof, ndof))
     for start in range(0, ne, CHUNK):
         part = slice(start, min(start + CHUNK, ne))
-        K[part], M[part] = block(xyz[part], section.take(part), theta[part], lumped)
+        K[part], M[part] = block(xyz[part], section.take(part), theta[part], lumped, k6rot)
     return K, M
 
 
@@ -211,7 +219,8 @@ def _covariant_shear_row(xy: np.ndarray, xi: float, eta: float, direction: int) 
 
 
 def quad4_matrices(xyz: np.ndarray, section: ShellSection, theta: np.ndarray,
-                   lumped: bool = False) -> tuple[np.ndarray, np.ndarray]:
+                   lumped: bool = False,
+                   k6rot: float = K6ROT_DEFAULT) -> tuple[np.ndarray, np.ndarray]:
     """Stiffness and mass of CQUAD4 elements in the basic frame.
 
     Parameters
@@ -224,6 +233,8 @@ def quad4_matrices(xyz: np.ndarray, section: ShellSection, theta: np.ndarray,
         Material angle [rad] from the CQUAD4 element x axis (QRG bisector convention).
     lumped : bool
         Lumped translational mass (area/4 per grid) instead of consistent.
+    k6rot : float
+        Nastran PARAM K6ROT, scale of the drilling penalty (>= 0).
 
     Returns
     -------
@@ -231,10 +242,11 @@ def quad4_matrices(xyz: np.ndarray, section: ShellSection, theta: np.ndarray,
         DOFs node-major [T1, T2, T3, R1, R2, R3] per grid, basic frame.
     """
     xyz, theta = _check_xyz(xyz, section, theta, 4, "quad4_matrices")
-    return _chunked(_quad4_block, xyz, section, theta, lumped, 24)
+    return _chunked(_quad4_block, xyz, section, theta, lumped, k6rot, 24)
 
 
-def _quad4_block(xyz: np.ndarray, section: ShellSection, theta: np.ndarray, lumped: bool):
+def _quad4_block(xyz: np.ndarray, section: ShellSection, theta: np.ndarray, lumped: bool,
+                 k6rot: float):
     """CQUAD4 K, M of one chunk of elements (see :func:`quad4_matrices`)."""
     ne = xyz.shape[0]
     R, xy, h = _quad_frame(xyz)
@@ -288,7 +300,7 @@ def _quad4_block(xyz: np.ndarray, section: ShellSection, theta: np.ndarray, lump
     dNc = inv0 @ _quad_shape(0.0, 0.0)[1]
     b_omega[:, 1:24:6] = 0.5 * dNc[:, 0]
     b_omega[:, 0:24:6] = -0.5 * dNc[:, 1]
-    Kc += _drill_stiffness(b_omega, _drill_k(A, D, area), 4)
+    Kc += _drill_stiffness(b_omega, _drill_k(A, D, area, k6rot), 4)
     Kb = _to_basic(_warp_offsets(Kc, h) if np.any(h) else Kc, R)
     m = section.mass_per_area
     if lumped:
@@ -340,7 +352,8 @@ def _dkt_nodal_rotations(xy: np.ndarray) -> np.ndarray:
 
 
 def tria3_matrices(xyz: np.ndarray, section: ShellSection, theta: np.ndarray,
-                   lumped: bool = False) -> tuple[np.ndarray, np.ndarray]:
+                   lumped: bool = False,
+                   k6rot: float = K6ROT_DEFAULT) -> tuple[np.ndarray, np.ndarray]:
     """Stiffness and mass of CTRIA3 elements (CST membrane + DKT bending) in the basic frame.
 
     Parameters
@@ -353,6 +366,8 @@ def tria3_matrices(xyz: np.ndarray, section: ShellSection, theta: np.ndarray,
         Material angle [rad] from the element x axis G1 -> G2.
     lumped : bool
         Lumped translational mass (area/3 per grid) instead of consistent.
+    k6rot : float
+        Nastran PARAM K6ROT, scale of the drilling penalty (>= 0).
 
     Returns
     -------
@@ -360,10 +375,11 @@ def tria3_matrices(xyz: np.ndarray, section: ShellSection, theta: np.ndarray,
         DOFs node-major [T1, T2, T3, R1, R2, R3] per grid, basic frame.
     """
     xyz, theta = _check_xyz(xyz, section, theta, 3, "tria3_matrices")
-    return _chunked(_tria3_block, xyz, section, theta, lumped, 18)
+    return _chunked(_tria3_block, xyz, section, theta, lumped, k6rot, 18)
 
 
-def _tria3_block(xyz: np.ndarray, section: ShellSection, theta: np.ndarray, lumped: bool):
+def _tria3_block(xyz: np.ndarray, section: ShellSection, theta: np.ndarray, lumped: bool,
+                 k6rot: float):
     """CTRIA3 K, M of one chunk of elements (see :func:`tria3_matrices`)."""
     ne = xyz.shape[0]
     R, xy = _tria_frame(xyz)
@@ -401,7 +417,7 @@ def _tria3_block(xyz: np.ndarray, section: ShellSection, theta: np.ndarray, lump
     b_omega = np.zeros((ne, 18))
     b_omega[:, 1::6] = 0.5 * dL[:, 0]
     b_omega[:, 0::6] = -0.5 * dL[:, 1]
-    K += _drill_stiffness(b_omega, _drill_k(A, D, area), 3)
+    K += _drill_stiffness(b_omega, _drill_k(A, D, area, k6rot), 3)
     Kb = _to_basic(K, R)
     m = section.mass_per_area * area
     if lumped:
