@@ -233,13 +233,14 @@ def _tuning(table: dict, path: Path, case_name: str, configs: tuple) -> TuningSe
         variables.append(_built(DesignVariable, at, name=v["name"],
                                 fields=tuple(tuple(f) for f in v["fields"]), lower=v.get("lower"),
                                 upper=v.get("upper"), scale=v.get("scale")))
-    objective = tuple(
-        (t["index"], float(t.get("weight", 1.0))) for i, t in enumerate(table.get("objective", []))
-        if _checked(t, OBJECTIVE_KEYS, f"file {path}, [[tuning.objective]] #{i + 1}", ("index",)))
-    constraints = tuple(
-        (t["index"], float(t["limit"])) for i, t in enumerate(table.get("constraints", []))
-        if _checked(t, CONSTRAINT_KEYS, f"file {path}, [[tuning.constraints]] #{i + 1}",
-                    ("index", "limit")))
+    objective, constraints = [], []
+    for i, term in enumerate(table.get("objective", [])):
+        _checked(term, OBJECTIVE_KEYS, f"file {path}, [[tuning.objective]] #{i + 1}", ("index",))
+        objective.append((term["index"], float(term.get("weight", 1.0))))
+    for i, term in enumerate(table.get("constraints", [])):
+        _checked(term, CONSTRAINT_KEYS, f"file {path}, [[tuning.constraints]] #{i + 1}",
+                 ("index", "limit"))
+        constraints.append((term["index"], float(term["limit"])))
     names = {c.name for c in configs}
     per = []
     for name, sub in table.get("configurations", {}).items():
@@ -256,7 +257,8 @@ def _tuning(table: dict, path: Path, case_name: str, configs: tuple) -> TuningSe
         per.append((name, MappingProxyType(dict(sub))))
     restart = table.get("restart")
     return _built(
-        TuningSettings, where, variables=tuple(variables), objective=objective, constraints=constraints,
+        TuningSettings, where, variables=tuple(variables), objective=tuple(objective),
+        constraints=tuple(constraints),
         method=table.get("method", "slsqp"), maxiter=table.get("maxiter", 50),
         shape_method=table.get("shape_method", "nelson"),
         restart=None if not restart else _existing(base, restart, where, "restart history"),

@@ -195,6 +195,24 @@ def test_tuning_maxiter_type(tmp_path, capsys):
     assert not (tmp_path / "run").exists() and not (tmp_path / "bah_tuning").exists()
 
 
+@pytest.mark.parametrize("tuning, needles", [
+    ('[[tuning.objective]]\nindex = 3\n', ["[[tuning.objective]] #1", "index = 3 is an integer"]),
+    ('[[tuning.objective]]\nindex = "*"\nweight = "big"\n', ["weight = 'big' is a string"]),
+    ('[[tuning.constraints]]\nindex = "*"\n', ["[[tuning.constraints]] #1", "'limit' is required"]),
+    ('[[tuning.variables]]\nname = "I1"\nfields = [["PBAR", "11", "I1"]]\n',
+     ["[[tuning.variables]] #1", "is not [card, id, field]"]),
+    ('method = "newton"\n', ["[tuning]", "method = 'newton'; valid: slsqp"]),
+    ('restart = "old/history.nc"\n', ["restart history 'old/history.nc'", "does not exist"]),
+    ('[tuning.configurations.cruise]\ntest_modes = [7]\n', ["names no configuration; valid"]),
+])
+def test_tuning_section_is_validated_at_read(tmp_path, capsys, tuning, needles):
+    head = "[tuning]\n" if not tuning.startswith(("[[", "[tuning.")) else "[tuning]\nmaxiter = 5\n"
+    case = _case(tmp_path, BASE + 'gvt = "gvt.unv"\n' + head + tuning, gvt=True)
+    failed(["tune", case], capsys, "case.toml", *needles)
+    failed(["run", case, "--out", tmp_path / "run"], capsys, "case.toml", *needles)
+    assert not (tmp_path / "run").exists()
+
+
 def test_missing_gvt_is_found_before_the_modes_stage(tmp_path, capsys):
     case = _case(tmp_path, BASE + 'gvt = "gvt.unv"\n')
     failed(["run", case, "--out", tmp_path / "run"], capsys, "gvt 'gvt.unv'", "does not exist")
