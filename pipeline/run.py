@@ -54,7 +54,7 @@ class Run:
 
     def __init__(self, out_dir):
         self.dir = check_output(out_dir, folder=True)
-        self.new = not self.dir.exists()
+        self.created = [p for p in (self.dir, *self.dir.parents) if not p.exists()]
         self.dir.mkdir(parents=True, exist_ok=True)
         self.before = {p for p in self.dir.rglob("*")}
         self.manifest_path = self.dir / "manifest.json"
@@ -84,7 +84,8 @@ class Run:
         write_json(self.manifest, self.manifest_path)
 
     def discard_unfinished(self) -> None:
-        """Remove what this run wrote outside finished stages (the folder too if it is empty)."""
+        """Remove what this run wrote outside finished stages (and the folders it created, if
+        empty)."""
         kept = {self.dir / f for entry in self.manifest.values() for f in entry["outputs"]}
         kept |= {self.manifest_path} if self.manifest else set()
         kept |= {folder for path in kept for folder in path.parents}
@@ -93,8 +94,9 @@ class Run:
                 shutil.rmtree(path, ignore_errors=True)
             elif path.exists():
                 path.unlink()
-        if self.new and not any(self.dir.iterdir()):
-            self.dir.rmdir()
+        for folder in self.created:
+            if folder.is_dir() and not any(folder.iterdir()):
+                folder.rmdir()
 
 
 def configuration_modes(config: Configuration, nmodes: int | None = None) -> tuple:

@@ -222,8 +222,8 @@ def test_missing_gvt_is_found_before_the_modes_stage(tmp_path, capsys):
 def test_bad_deck_in_a_case_leaves_no_run_folder(tmp_path, capsys):
     case = _case(tmp_path, BASE)
     (tmp_path / "bah_plane.bdf").write_text("")
-    failed(["run", case, "--out", tmp_path / "run"], capsys, "bah_plane.bdf", "empty")
-    assert not (tmp_path / "run").exists()
+    failed(["run", case, "--out", tmp_path / "new" / "run"], capsys, "bah_plane.bdf", "empty")
+    assert not (tmp_path / "new").exists()
 
 
 def test_failed_flutter_of_a_case_writes_nothing(tmp_path, capsys, pt145):
