@@ -33,6 +33,8 @@ import numpy as np
 import scipy.sparse as sp
 import xarray as xr
 
+from structures.errors import InputError
+
 #: Nastran's PARAM EPZERO default: stiffness ratios below it are singular.
 EPZERO_DEFAULT = 1.0e-8
 #: Cosine above which a singular direction counts as aligned with a component.
@@ -76,7 +78,8 @@ class SingularityTable:
             object.__setattr__(self, name, arr)
         if len({len(getattr(self, n)) for n in ("grid", "component", "ratio", "action", "oblique",
                                                   "dof")}) != 1:
-            raise ValueError("SingularityTable columns must have the same length.")
+            raise InputError("SingularityTable columns have different lengths. Fix: give one "
+                             "entry per singular direction in every column.")
 
     def __len__(self) -> int:
         return len(self.grid)
