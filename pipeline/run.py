@@ -16,10 +16,8 @@ import json
 import shutil
 from pathlib import Path
 
-import matplotlib.pyplot as plt
 import numpy as np
 
-from flutter.plots import plot_vg
 from flutter.run import run_flutter
 from pipeline.case import Case, Configuration, FlutterSettings
 from pipeline.report import write_report
@@ -166,8 +164,6 @@ def correlation_stage(run: Run, config: Configuration, modes, log=print) -> dict
             corr = corr.merge(comparison.rename({v: f"mass_{v}" for v in comparison.data_vars}))
         write_dataset(corr, run.dir / corr_file)
         figures = save_correlation_figures(corr, run.dir / config.name / "correlation")
-        for fig in plt.get_fignums():
-            plt.close(fig)
         run.finish(stage, fp, [corr_file, *(f.relative_to(run.dir) for f in figures)])
         worst = float(np.nanmax(np.abs(corr["frequency_error"].values)))
         log(f"[{stage}] {corr.sizes['test_mode']} test modes paired, largest frequency error "
@@ -181,8 +177,9 @@ def flutter_stage(run: Run, config: Configuration, settings: FlutterSettings, mo
                   log=print, units: str | None = None) -> dict:
     """GAFs and flutter of one configuration from its deck's FLUTTER cards (on the stage's modes).
 
-    Writes ``<config>/flutter/{flutter.nc, summary.json, gaf.nc, modes.nc}`` and the V-g / V-f
-    figures ``<config>/flutter/vg_<case>.png``.
+    Writes the outputs of :func:`flutter.results.write_flutter` (``flutter.nc``, ``summary.json``,
+    ``flutter_summary.txt``, V-g / V-f figures ``vg_<case>.png``) and ``gaf.nc``, ``modes.nc`` to
+    ``<config>/flutter/``.
     """
     stage = f"flutter/{config.name}"
     fp = hashlib.sha256(json.dumps([_deck_fingerprint(config.deck), config.nmodes, config.mass,
@@ -193,19 +190,10 @@ def flutter_stage(run: Run, config: Configuration, settings: FlutterSettings, mo
         log(f"[{stage}] up to date, skipped")
     else:
         log(f"[{stage}] GAFs ({settings.kernel} kernel) and flutter")
-        figures = []
         with staged_folder(run.dir / folder) as staged:
             result = configuration_flutter(config, settings, modes, staged, units=units)
-            for n, (label, ds) in enumerate(result["results"]):
-                if "sweep" not in ds.attrs:
-                    continue
-                title = (f"{config.name}: {label.get('configuration', '')} Mach "
-                         f"{label['mach']:.3g}, density {label['density']:.4g}")
-                fig = plot_vg(ds, title=title)
-                figures.append(folder / f"vg_{n + 1}.png")
-                fig.savefig(staged / figures[-1].name, dpi=90)
-                plt.close(fig)
-        outputs = [folder / "summary.json", folder / "gaf.nc", *figures]
+            written = sorted(p.name for p in Path(staged).iterdir() if p.is_file())
+        outputs = [folder / name for name in written]
         run.finish(stage, fp, outputs)
         flutter = [c for c in result["summary"] if c["kind"] == "flutter"]
         log(f"[{stage}] {len(flutter)} flutter crossing(s)" +
