@@ -47,14 +47,18 @@ class Frame:
     cid: int
     origin: np.ndarray
     axes: np.ndarray
+    filename: str | None = None
 
     def __post_init__(self):
         origin = _frozen(self.origin)
         axes = np.array(self.axes, dtype=float).reshape(3, 3)
-        if origin.shape != (3,) or not np.allclose(axes @ axes.T, np.eye(3), atol=1e-9):
-            raise InputError(card_message("coordinate system is not a rectangular orthonormal "
-                                          "frame.", card="CORD2R", card_id=self.cid,
-                                          fix="use a CORD2R/CORD1R (rectangular) system here."))
+        if origin.shape != (3,) or not np.all(np.isfinite(origin)) or \
+                not np.allclose(axes @ axes.T, np.eye(3), atol=1e-9):
+            raise InputError(card_message("coordinate system is not a finite rectangular "
+                                          "orthonormal frame.", card="CORD2R", card_id=self.cid,
+                                          filename=self.filename,
+                                          fix="use a CORD2R/CORD1R (rectangular) system with "
+                                              "distinct, finite points A, B, C here."))
         axes.setflags(write=False)
         object.__setattr__(self, "origin", origin)
         object.__setattr__(self, "axes", axes)
@@ -90,6 +94,7 @@ class Caero1Panel:
     x43: float
     span_fractions: np.ndarray
     chord_fractions: np.ndarray
+    filename: str | None = None
 
     def __post_init__(self):
         for name in ("p1", "p4", "span_fractions", "chord_fractions"):
@@ -99,7 +104,7 @@ class Caero1Panel:
                     np.any(np.diff(frac) <= 0):
                 raise InputError(card_message(
                     f"{name}wise division fractions {frac.tolist()} must increase from 0.0 to 1.0.",
-                    card="CAERO1", card_id=self.eid,
+                    card="CAERO1", card_id=self.eid, filename=self.filename,
                     fix=f"correct NSPAN/NCHORD or the AEFACT referenced by L{name.upper()}."))
 
     @property
@@ -138,26 +143,29 @@ class Spline:
     dthx: float = 0.0
     dthy: float = 0.0
     frame: Frame = field(default=BASIC)
+    filename: str | None = None
 
     def __post_init__(self):
         card = "SPLINE1" if self.kind == "IPS" else "SPLINE2"
+        where = dict(card=card, card_id=self.eid, filename=self.filename)
         object.__setattr__(self, "grid_ids", _frozen(self.grid_ids, dtype=int))
         object.__setattr__(self, "grid_xyz", _frozen(self.grid_xyz, shape_tail=(3,)))
         if self.kind not in ("IPS", "BEAM"):
-            raise InputError(card_message(f"spline kind {self.kind!r} unknown.", card=card,
-                                          card_id=self.eid, fix="use 'IPS' or 'BEAM'."))
+            raise InputError(card_message(f"spline kind {self.kind!r} unknown.", **where,
+                                          fix="use 'IPS' or 'BEAM'."))
         if self.usage not in SPLINE_USAGES:
-            raise InputError(card_message(f"USAGE={self.usage!r} unknown.", card=card,
-                                          card_id=self.eid, fix=f"use one of {SPLINE_USAGES}."))
+            raise InputError(card_message(f"USAGE={self.usage!r} unknown.", **where,
+                                          fix=f"use one of {SPLINE_USAGES}."))
         if self.box2 < self.box1:
-            raise InputError(card_message(f"BOX2={self.box2} < BOX1={self.box1}.", card=card,
-                                          card_id=self.eid, fix="give BOX1 <= BOX2."))
-        if self.dz < 0 or self.dtor <= 0:
-            raise InputError(card_message(f"DZ={self.dz} must be >= 0 and DTOR={self.dtor} > 0.",
-                                          card=card, card_id=self.eid, fix="correct the fields."))
+            raise InputError(card_message(f"BOX2={self.box2} < BOX1={self.box1}.", **where,
+                                          fix="give BOX1 <= BOX2."))
+        if not (self.dz >= 0 and 0 < self.dtor < np.inf and np.isfinite(self.dz + self.dthx
+                                                                          + self.dthy)):
+            raise InputError(card_message(
+                f"DZ={self.dz} must be >= 0, DTOR={self.dtor} > 0 and DTHX={self.dthx}, "
+                f"DTHY={self.dthy} finite.", **where, fix="correct the fields."))
         if self.grid_ids.size == 0 or self.grid_xyz.shape != (self.grid_ids.size, 3):
-            raise InputError(card_message("the spline lists no structural grid points.", card=card,
-                                          card_id=self.eid,
+            raise InputError(card_message("the spline lists no structural grid points.", **where,
                                           fix=f"list grids on the SET1 {self.setg} it references."))
 
     @property
@@ -187,9 +195,11 @@ class AeroModel:
     mach_k: np.ndarray
 
     def __post_init__(self):
-        if not self.refc > 0:
-            raise InputError(card_message(f"REFC={self.refc} must be > 0.", card="AERO",
-                                          filename=self.filename, fix="give the reference chord."))
+        if not 0 < self.refc < np.inf or not 0 < self.rhoref < np.inf:
+            raise InputError(card_message(f"REFC={self.refc} and RHOREF={self.rhoref} must be "
+                                          "positive and finite.", card="AERO",
+                                          filename=self.filename,
+                                          fix="give the reference chord and density."))
         if self.symxz not in (-1, 0, 1) or self.symxy not in (-1, 0, 1):
             raise InputError(card_message(f"SYMXZ={self.symxz}, SYMXY={self.symxy} must be -1, "
                                           "0 or 1.", card="AERO", filename=self.filename,
@@ -235,7 +245,8 @@ def _frame(bdf, cid: int, card: str, card_id, filename: str) -> Frame:
             f"coordinate system {cid} is a {coord.type}; only rectangular systems are allowed "
             "here.",
             card=card, card_id=card_id, filename=filename, fix=f"make {cid} a CORD2R."))
-    return Frame(cid, np.asarray(coord.origin, dtype=float), np.asarray(coord.beta(), dtype=float))
+    return Frame(cid, np.asarray(coord.origin, dtype=float), np.asarray(coord.beta(), dtype=float),
+                 filename)
 
 
 def _check_cards(bdf, filename: str) -> None:
@@ -285,7 +296,8 @@ def _panels(bdf, aero_frame: Frame, filename: str) -> list:
             eid=eid, pid=c.pid, cp=c.cp or 0, igid=c.igroup or 0, p1=p1, x12=float(c.x12), p4=p4,
             x43=float(c.x43),
             span_fractions=_fractions(bdf, c.nspan, c.lspan, "SPAN", eid, filename),
-            chord_fractions=_fractions(bdf, c.nchord, c.lchord, "CHORD", eid, filename)))
+            chord_fractions=_fractions(bdf, c.nchord, c.lchord, "CHORD", eid, filename),
+            filename=filename))
     return panels
 
 
@@ -319,7 +331,8 @@ def _splines(bdf, panels: list, filename: str) -> list:
                 fix="define those GRIDs or remove them from the SET1."))
         xyz = np.array([bdf.nodes[g].get_position() for g in gids], dtype=float)
         common = dict(eid=eid, caero=s.caero, box1=s.box1, box2=s.box2, setg=s.setg, grid_ids=gids,
-                      grid_xyz=xyz, dz=float(s.dz or 0.0), usage=(s.usage or "BOTH").upper())
+                      grid_xyz=xyz, dz=float(s.dz or 0.0), usage=(s.usage or "BOTH").upper(),
+                      filename=filename)
         if card == "SPLINE1":
             method = (s.method or "IPS").upper()
             if method != "IPS":
@@ -358,9 +371,10 @@ def _mach_k(bdf, filename: str) -> np.ndarray:
         else:
             pairs += list(zip(machs, ks))
     mk = np.array(pairs, dtype=float).reshape(-1, 2)
-    if np.any(mk[:, 0] < 0) or np.any(mk[:, 1] < 0):
-        raise InputError(card_message("negative Mach number or reduced frequency.", card="MKAERO1",
-                                      filename=filename, fix="use Mach >= 0 and k >= 0."))
+    if not np.all(np.isfinite(mk)) or np.any(mk < 0):
+        raise InputError(card_message("negative or non-finite Mach number or reduced frequency.",
+                                      card="MKAERO1", filename=filename,
+                                      fix="use finite Mach >= 0 and k >= 0."))
     return mk
 
 
@@ -416,7 +430,7 @@ def read_aero_model(path_or_bdf) -> AeroModel:
         raise InputError(card_message("no CAERO1 panels.", filename=filename,
                                       fix="add CAERO1/PAERO1 cards for the lifting surfaces."))
     meshes = [caero1_boxes(p.eid, p.p1, p.x12, p.p4, p.x43, p.span_fractions, p.chord_fractions,
-                           first_box_id=p.eid) for p in panels]
+                           first_box_id=p.eid, filename=filename) for p in panels]
     return AeroModel(filename=filename, aero_frame=aero_frame, refc=refc, rhoref=rhoref,
                      velocity=velocity, symxz=symxz, symxy=symxy, panels=tuple(panels),
                      splines=tuple(_splines(bdf, panels, filename)), mesh=concat(meshes),

@@ -105,13 +105,13 @@ class BoxMesh:
         return self.n
 
 
-def _check_fractions(values, what: str, panel_id: int) -> np.ndarray:
+def _check_fractions(values, what: str, panel_id: int, filename: str | None) -> np.ndarray:
     f = np.asarray(values, dtype=float).ravel()
     if f.size < 2 or not np.all(np.isfinite(f)) or abs(f[0]) > 1e-9 or abs(f[-1] - 1.0) > 1e-9 \
             or np.any(np.diff(f) <= 0.0):
         raise InputError(card_message(
             f"{what} fractions {f.tolist()} must increase strictly from 0 to 1.",
-            card="CAERO1", card_id=panel_id,
+            card="CAERO1", card_id=panel_id, filename=filename,
             fix=f"give NSPAN/NCHORD > 0 or an AEFACT list running from 0.0 to 1.0 ({what})."))
     f = f.copy()
     f[0], f[-1] = 0.0, 1.0
@@ -119,7 +119,8 @@ def _check_fractions(values, what: str, panel_id: int) -> np.ndarray:
 
 
 def caero1_boxes(panel_id: int, p1, x12: float, p4, x43: float, span_fractions,
-                 chord_fractions, first_box_id: int | None = None) -> BoxMesh:
+                 chord_fractions, first_box_id: int | None = None,
+                 filename: str | None = None) -> BoxMesh:
     """Divide one CAERO1 panel into doublet-lattice boxes.
 
     Parameters
@@ -137,6 +138,8 @@ def caero1_boxes(panel_id: int, p1, x12: float, p4, x43: float, span_fractions,
         as on the CAERO1 card).
     first_box_id : int, optional
         Id of the first box; defaults to ``panel_id`` (Nastran numbering).
+    filename : str, optional
+        The deck the CAERO1 comes from (named in error messages).
 
     Returns
     -------
@@ -146,25 +149,30 @@ def caero1_boxes(panel_id: int, p1, x12: float, p4, x43: float, span_fractions,
     Raises
     ------
     InputError
-        Zero-area panel (zero span in the y-z plane or zero chords), negative chords or bad
-        fractions; the message names the CAERO1 id and the fix.
+        Non-finite points or chords, zero-area panel (zero span in the y-z plane or zero
+        chords), negative chords or bad fractions; the message names the CAERO1 id and the fix.
     """
     pid = int(panel_id)
     p1 = np.asarray(p1, dtype=float).reshape(3)
     p4 = np.asarray(p4, dtype=float).reshape(3)
     x12, x43 = float(x12), float(x43)
+    if not (np.all(np.isfinite(p1)) and np.all(np.isfinite(p4)) and np.isfinite(x12 + x43)):
+        raise InputError(card_message(
+            f"P1={p1.tolist()}, X12={x12}, P4={p4.tolist()}, X43={x43} must be finite.",
+            card="CAERO1", card_id=pid, filename=filename,
+            fix="give real corner points and chords (and a valid CP coordinate system)."))
     if x12 < 0.0 or x43 < 0.0:
         raise InputError(card_message(f"negative chord (X12={x12}, X43={x43}).", card="CAERO1",
-                                      card_id=pid, fix="give chords >= 0."))
+                                      card_id=pid, filename=filename, fix="give chords >= 0."))
     width = float(np.hypot(p4[1] - p1[1], p4[2] - p1[2]))
     scale = max(abs(x12), abs(x43), float(np.linalg.norm(p4 - p1)), 1e-300)
     if width <= 1e-12 * scale or x12 + x43 <= 1e-12 * scale:
         raise InputError(card_message(
             f"zero-area panel (span in the y-z plane {width:g}, chords X12={x12:g}, X43={x43:g}).",
-            card="CAERO1", card_id=pid,
+            card="CAERO1", card_id=pid, filename=filename,
             fix="make P1 and P4 differ in y or z and give a non-zero chord; chords run along x."))
-    fs = _check_fractions(span_fractions, "span", pid)
-    fc = _check_fractions(chord_fractions, "chord", pid)
+    fs = _check_fractions(span_fractions, "span", pid, filename)
+    fc = _check_fractions(chord_fractions, "chord", pid, filename)
     ns, nc = fs.size - 1, fc.size - 1
 
     def point(s, c):

@@ -340,6 +340,15 @@ def _constrained(model: FEModel, m_dofs) -> np.ndarray:
     return fixed
 
 
+def _check_finite(filename: str, *matrices: sp.spmatrix) -> None:
+    """Raise when finite but huge inputs overflowed an assembled matrix."""
+    if not all(np.all(np.isfinite(m.data)) for m in matrices):
+        raise InputError(card_message(
+            "the assembled stiffness or mass overflows (non-finite entries).", filename=filename,
+            fix="check for huge values (such as 1e300) in GRID coordinates, properties, "
+                "materials and masses."))
+
+
 def assemble(model: FEModel, mass: str = "deck", *, warn: bool = True) -> AssembledSystem:
     """Assemble and reduce to the free (a-set) system.
 
@@ -376,6 +385,7 @@ def assemble(model: FEModel, mass: str = "deck", *, warn: bool = True) -> Assemb
         k_nn = (t_gn.T @ k_cd @ t_gn).tocsr()
     else:
         k_nn = k_cd[n_dofs][:, n_dofs]
+    _check_finite(model.filename, k_nn, m_cd)
     diag = np.abs(k_nn.diagonal())
     rot_dof = (n_dofs % 6) >= 3
     scale = np.array([diag[~rot_dof].max(initial=0.0), diag[rot_dof].max(initial=0.0)])
@@ -399,6 +409,7 @@ def assemble(model: FEModel, mass: str = "deck", *, warn: bool = True) -> Assemb
         a_dofs = n_dofs[free]
         k_aa = k_cd[a_dofs][:, a_dofs].tocsc()
         m_aa = m_cd[a_dofs][:, a_dofs].tocsc()
+    _check_finite(model.filename, k_aa, m_aa)
     if k_aa.shape[0] == 0:
         raise InputError(card_message("the model has no free degrees of freedom.",
                                       filename=model.filename,

@@ -34,6 +34,8 @@ NON_STRUCTURAL_CARDS = frozenset({
 })
 
 _SHELL_MIN = ("CQUAD4", "CTRIA3")
+#: CBAR/CBEAM OFFT values (orientation vector, end A offset, end B offset frames; MSC QRG CBAR).
+_OFFT = ("GGG", "BGG", "GGO", "BGO", "GOG", "BOG", "GOO", "BOO")
 
 #: An OP2 file starts with a Fortran record marker (4) and holds NUL bytes near its start.
 _OP2_MARKER = b"\x04\x00\x00\x00"
@@ -256,7 +258,12 @@ def _line_elements(model, kind, filename):
         vector.append(np.zeros(3) if e.x is None else np.asarray(e.x, float))
         flag = getattr(e, "offt", "GGG")
         # An integer in the OFFT field is the legacy "F" flag (1: X vector, 2: G0): default frames.
-        offt.append(flag if isinstance(flag, str) and flag else "GGG")
+        flag = flag if isinstance(flag, str) and flag else "GGG"
+        if flag not in _OFFT:
+            raise InputError(card_message(f"OFFT = {flag!r} is not a valid offset flag.", card=kind,
+                                          card_id=e.eid, filename=filename,
+                                          fix=f"use one of {', '.join(_OFFT)} (or leave it blank)."))
+        offt.append(flag)
         pa.append(_comp_mask(e.pa))
         pb.append(_comp_mask(e.pb))
         wa.append(np.asarray(e.wa, float))
@@ -350,6 +357,11 @@ def _conm2(model, grids: Grids, filename: str) -> ConcentratedMass:
     cards = [m for m in model.masses.values() if m.type == "CONM2"]
     eids, gids, mass, offset, inertia = [], [], [], [], []
     for m in cards:
+        values = np.array([m.mass, *m.X, *m.I], float)
+        if not np.all(np.isfinite(values)):
+            raise InputError(card_message(f"mass, offset or inertia {values.tolist()} holds a "
+                                          "non-finite number.", card="CONM2", card_id=m.eid,
+                                          filename=filename, fix="give real values."))
         if m.mass < 0 or (m.mass == 0 and not np.any(m.I)):
             raise InputError(card_message(f"mass {m.mass} is not positive.", card="CONM2",
                                           card_id=m.eid, filename=filename,
