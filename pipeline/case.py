@@ -35,8 +35,8 @@ from typing import Mapping
 from structures.assembly import MASS_OPTIONS
 from structures.errors import InputError
 from structures.massprops import check_measured_mass
+from structures.units import UNIT_SYSTEMS
 
-UNIT_SYSTEMS = ("si", "english_in", "english_ft")
 KERNELS = ("quartic", "parabolic")
 
 # expected type -> (test, words for the message, example value)

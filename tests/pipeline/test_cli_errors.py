@@ -179,6 +179,13 @@ def test_case_value_types(tmp_path, capsys, extra, needles):
     assert listing(tmp_path) == before  # nothing computed, nothing written
 
 
+def test_case_unit_system_lists_the_valid_ones(tmp_path, capsys):
+    case = _case(tmp_path, 'units = "imperial"\n' + BASE)
+    failed(["run", case, "--out", tmp_path / "run"], capsys, "units = 'imperial'",
+           "si, english_in, english_ft")
+    assert not (tmp_path / "run").exists()
+
+
 def test_case_name_must_be_a_string(tmp_path, capsys):
     case = _case(tmp_path, "name = 7\n" + BASE.split("\n", 1)[1])
     failed(["run", case, "--out", tmp_path / "run"], capsys, "case.toml",
