@@ -46,9 +46,10 @@ def run(args) -> int:
         check_output(args.out, folder=True)
     if target.suffix.lower() == ".toml":
         from pipeline.case import FlutterSettings, read_case
-        from pipeline.run import configuration_flutter, configuration_modes
+        from pipeline.run import check_flutter_requests, configuration_flutter, configuration_modes
 
         case = read_case(target)
+        check_flutter_requests(case, args.flutter_id)
         settings = case.flutter or FlutterSettings()
         done = []
         with staged_folder(args.out) if args.out else nullcontext() as staged:

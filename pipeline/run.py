@@ -18,12 +18,12 @@ from pathlib import Path
 
 import numpy as np
 
-from flutter.run import run_flutter
+from flutter.run import read_flutter_requests, run_flutter
 from pipeline.case import Case, Configuration, FlutterSettings
 from pipeline.report import write_report
 from pipeline.stage import running
 from structures.assembly import assemble
-from structures.bdf import read_model
+from structures.bdf import read_model, read_pynastran
 from structures.correlation import CorrelationSettings, correlate
 from structures.correlation_plots import save_correlation_figures
 from structures.errors import InputError
@@ -122,6 +122,23 @@ def configuration_flutter(config: Configuration, settings: FlutterSettings, mode
                        flutter_ids=list(flutter_ids or settings.flutter_ids) or None, units=units)
 
 
+def check_flutter_requests(case: Case, flutter_ids=None) -> None:
+    """Before any computation: every configuration's deck defines the FLUTTER cards (and their
+    FLFACT lists) that the case's ``[flutter]`` (or the ``flutter_ids`` override) selects.
+
+    Raises
+    ------
+    InputError
+        Naming the deck, the FLUTTER id and the fix (:func:`flutter.run.read_flutter_requests`).
+    """
+    if case.flutter is None and not flutter_ids:
+        return
+    settings = case.flutter or FlutterSettings()
+    for config in case.configurations:
+        read_flutter_requests(read_pynastran(config.deck), str(config.deck),
+                              list(flutter_ids or settings.flutter_ids) or None)
+
+
 def modes_stage(run: Run, config: Configuration, log=print) -> dict:
     """Modes and mass properties of one configuration."""
     stage = f"modes/{config.name}"
@@ -206,6 +223,7 @@ def flutter_stage(run: Run, config: Configuration, settings: FlutterSettings, mo
 
 def run_case(case: Case, out_dir, log=print) -> Path:
     """Run every stage of a case into ``out_dir``; returns the HTML report's path."""
+    check_flutter_requests(case)
     run = Run(out_dir)
     results = {}
     try:
