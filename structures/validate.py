@@ -74,8 +74,9 @@ def _check_material(mat, filename: str) -> None:
 def _check_property(model: FEModel, card: str, eid: int, pid: int) -> None:
     prop = model.property(pid, card=card, eid=eid)
     if prop.card not in _PROPERTY_OF[card]:
-        raise _fail(f"references {prop.card} {pid}; {card} needs {' or '.join(_PROPERTY_OF[card])}.",
-                    card, eid, model.filename, "correct the PID field.")
+        needs = " or ".join(_PROPERTY_OF[card])
+        raise _fail(f"references {prop.card} {pid}; {card} needs {needs}.", card, eid,
+                    model.filename, "correct the PID field.")
     for name in _SECTION_FIELDS.get(prop.card, ()):
         value = prop.fields.get(name)
         if value is None or not value > 0:
@@ -182,9 +183,9 @@ def validate_model(model: FEModel) -> None:
         raise _fail(f"position {grids.xyz[g].tolist()} or displacement frame CD={grids.cd[g]} is "
                     "not finite.", "GRID", grids.ids[g], model.filename,
                     "give real coordinates and a valid (non-degenerate) coordinate system.")
-    for mid, mat in model.materials.items():
+    for mat in model.materials.values():
         _check_material(mat, model.filename)
-    for pid, prop in model.properties.items():
+    for prop in model.properties.values():
         _check_section(prop, model.filename)
     for card, es in model.elements.items():
         for row, eid in zip(es.nodes, es.eids):

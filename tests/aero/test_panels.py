@@ -102,3 +102,11 @@ def test_bad_fractions_raise(fs):
 def test_negative_chord_raises():
     with pytest.raises(InputError, match=r"CAERO1 3.*negative chord"):
         caero1_boxes(3, [0, 0, 0], -1.0, [0, 1, 0], 1.0, U3, U3)
+
+
+@pytest.mark.parametrize("p1, x12, fs", [([0, np.nan, 0], 1.0, U3), ([0, 0, 0], np.inf, U3),
+                                         ([0, 0, 0], 1.0, [0.0, 1.0, 0.5])])
+def test_bad_panel_names_the_deck(p1, x12, fs):
+    """Non-finite corners or chords and bad fractions raise naming the deck that holds the CAERO1."""
+    with pytest.raises(InputError, match=r"file wing\.bdf, card CAERO1 4: .*Fix"):
+        caero1_boxes(4, p1, x12, [0, 1, 0], 1.0, fs, U3, filename="wing.bdf")

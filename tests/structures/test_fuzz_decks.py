@@ -194,11 +194,6 @@ def _negate(text: str) -> str:
     return text[1:] if text.startswith("-") else "-" + (text or "1.")
 
 
-def _include_lines(files: dict) -> list:
-    return [(name, i) for name, lines in files.items() for i, line in enumerate(lines)
-            if line.strip().upper().startswith("INCLUDE")]
-
-
 @st.composite
 def mutated_decks(draw, kinds=KINDS, counts=(1, 1, 1, 2, 3)) -> MutatedDeck:
     """A seed deck with mutations of the given kinds, as many as one of ``counts`` (see the module
