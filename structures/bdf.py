@@ -413,6 +413,10 @@ def _rigid(model, filename: str) -> tuple:
                                                         fix="leave the UM fields blank."))
             indep, weights = [], []
             for wt, comp, gids in zip(r.weights, r.comps, r.Gijs):
+                if not (np.isfinite(wt) and wt > 0):
+                    raise InputError(card_message(f"weight WT = {wt} is not a positive number.",
+                                                  card="RBE3", card_id=eid, filename=filename,
+                                                  fix="give positive, finite weights."))
                 for g in gids:
                     indep.append((g, str(comp)))
                     weights.append(float(wt))

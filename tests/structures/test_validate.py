@@ -68,6 +68,9 @@ def test_good_deck_gives_modes(tmp_path):
     ("CONM2,5,3,,2.0", "CONM2,5,3,,2.0,nan", ["CONM2 5", "non-finite"]),
     ("CONM2,5,3,,2.0", "CONM2,5,3,,2.0\nCMASS2,6,inf,3,3", ["CMASS2 6", "not positive"]),
     ("CONM2,5,3,,2.0", "CONM2,5,3,,2.0\nCELAS2,7,nan,3,3", ["CELAS2 7", "not a finite"]),
+    ("CONM2,5,3,,2.0", "CONM2,5,3,,2.0\nGRID,9,,4.,0.,0.\nRBE3,60,,9,123456,nan,123,3,6",
+     ["RBE3 60", "WT = nan"]),
+    ("CBAR,1,10,1,2,0.,1.,0.", "CBAR,1,10,1,2,0.,1.,0.,XYZ", ["CBAR 1", "OFFT = 'XYZ'"]),
 ])
 def test_bad_value_raises_naming_file_card_and_fix(tmp_path, old, new, words):
     assert old in GOOD
