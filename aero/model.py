@@ -30,6 +30,9 @@ UNSUPPORTED_AERO_CARDS = frozenset({
     "AESURF", "AESURFS", "AELINK", "MONPNT1", "CSSCHD", "AEPRESS", "AEFORCE", "SET2",
 })
 SPLINE_USAGES = ("BOTH", "DISP", "FORCE")
+#: Sanity bound on the number of boxes of a deck: the doublet-lattice AIC of n boxes takes
+#: 16 n^2 bytes (40 GB at 50,000), so more boxes are a typing error in NSPAN/NCHORD or an AEFACT.
+MAX_BOXES = 50_000
 
 
 def _frozen(values, dtype=float, shape_tail=()) -> np.ndarray:
@@ -272,6 +275,10 @@ def _fractions(bdf, n, aefact_id, what: str, eid: int, filename: str) -> np.ndar
                                           f"L{what}.", card="CAERO1", card_id=eid,
                                           filename=filename,
                                           fix=f"set N{what} or L{what}."))
+        if n > MAX_BOXES:
+            raise InputError(card_message(f"N{what}={n} divisions exceed the {MAX_BOXES} boxes a "
+                                          "deck may have.", card="CAERO1", card_id=eid,
+                                          filename=filename, fix=f"correct N{what}."))
         return np.linspace(0.0, 1.0, int(n) + 1)
     if aefact_id not in bdf.aefacts:
         raise MissingReferenceError(card_message(f"L{what}={aefact_id} refers to a missing AEFACT.",
@@ -429,6 +436,12 @@ def read_aero_model(path_or_bdf) -> AeroModel:
     if not panels:
         raise InputError(card_message("no CAERO1 panels.", filename=filename,
                                       fix="add CAERO1/PAERO1 cards for the lifting surfaces."))
+    nbox = sum(p.nspan * p.nchord for p in panels)
+    if nbox > MAX_BOXES:
+        raise InputError(card_message(
+            f"the CAERO1 panels divide into {nbox} boxes, more than {MAX_BOXES} (the "
+            f"doublet-lattice AIC would take {16e-9 * nbox ** 2:.0f} GB).", filename=filename,
+            fix="correct NSPAN/NCHORD or the AEFACT division lists."))
     meshes = [caero1_boxes(p.eid, p.p1, p.x12, p.p4, p.x43, p.span_fractions, p.chord_fractions,
                            first_box_id=p.eid, filename=filename) for p in panels]
     return AeroModel(filename=filename, aero_frame=aero_frame, refc=refc, rhoref=rhoref,

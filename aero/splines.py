@@ -238,6 +238,7 @@ def spline_frame(spline, normal: np.ndarray, p1: np.ndarray,
         if np.linalg.norm(ex) < 1e-9:
             raise InputError(card_message("the panel is normal to the free stream.",
                                           card=spline.card, card_id=spline.eid,
+                                          filename=spline.filename,
                                           fix="check the CAERO1 geometry."))
         ex /= np.linalg.norm(ex)
         return p1, np.vstack([ex, np.cross(n, ex), n])
@@ -246,6 +247,7 @@ def spline_frame(spline, normal: np.ndarray, p1: np.ndarray,
     if np.linalg.norm(ey) < 1e-9:
         raise InputError(card_message(f"the y axis of CID {spline.frame.cid} is normal to the "
                                       "panel.", card=spline.card, card_id=spline.eid,
+                                      filename=spline.filename,
                                       fix="choose a CID whose y axis lies along the elastic axis."))
     ey /= np.linalg.norm(ey)
     origin = aero_frame.from_basic(spline.frame.origin)
@@ -275,7 +277,8 @@ def spline_transform(spline, *, grid_aero: np.ndarray, colloc: np.ndarray, load:
     h_colloc, slope_colloc, h_load : ndarray, shape (nb, 6 * ng)
         Columns ordered grid-major, components 1..6 (basic frame).
     """
-    label = card_message("", card=spline.card, card_id=spline.eid).rstrip(": ")
+    label = card_message("", card=spline.card, card_id=spline.eid,
+                         filename=spline.filename).rstrip(": ")
 
     def local(points):
         return (np.asarray(points, dtype=float) - frame_origin) @ frame_axes.T

@@ -123,3 +123,20 @@ def test_symxy_and_missing_aero_rejected(tmp_path):
         read_aero_model(write_deck(tmp_path / "a.bdf", PANEL, aero="AERO,0,1.,2.,1.225,0,1"))
     with pytest.raises(InputError, match=r"no AERO or AEROS"):
         read_aero_model(write_deck(tmp_path / "b.bdf", PANEL, aero=""))
+
+
+@pytest.mark.parametrize("caero, words", [
+    ("CAERO1,101,1,0,99999999,2,,,1", r"bad\.bdf, card CAERO1 101: NSPAN=99999999"),
+    ("CAERO1,101,1,0,30000,2,,,1", r"bad\.bdf: the CAERO1 panels divide into 60000 boxes"),
+])
+def test_absurd_box_counts_rejected_before_meshing(tmp_path, caero, words):
+    """A mistyped NSPAN fails at read, before the box arrays (and an AIC of 16 n^2 bytes)."""
+    with pytest.raises(InputError, match=words):
+        read_aero_model(_deck(tmp_path, PANEL.replace("CAERO1,101,1,0,4,2,,,1", caero)))
+
+
+def test_bad_spline_values_name_the_deck(tmp_path):
+    """Spline flexibilities are checked with the deck named in the message."""
+    splines = PANEL + "\nSET1,5,1,THRU,12\nSPLINE2,201,101,101,108,5,nan,1.,0"
+    with pytest.raises(InputError, match=r"bad\.bdf, card SPLINE2 201: DZ=nan"):
+        read_aero_model(_deck(tmp_path, splines))

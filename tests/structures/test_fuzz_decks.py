@@ -54,6 +54,10 @@ VALUES = {
     "other": ("ABC", "", "0", "1.", "NaN"),
 }
 PRINTABLE = st.characters(min_codepoint=32, max_codepoint=126)
+#: The GAF step runs on meshes up to this size (the seeds have 24 to 228 boxes): a garbled NSPAN
+#: of a few thousand is a legal deck whose AIC would need tens of GB (the reader stops at
+#: aero.model.MAX_BOXES; the doublet lattice itself does not check memory).
+GAF_MAX_BOXES = 1000
 #: Mutation kinds, repeated to weight them: field values most often (they reach the project's
 #: own checks; a missing or self-including file stops in pyNastran's INCLUDE handling).
 KINDS = ("value",) * 6 + ("garble", "shift") * 2 + ("drop", "drop", "duplicate", "cut",
@@ -270,14 +274,15 @@ def _modes(path: Path):
 def check_deck(deck: MutatedDeck) -> None:
     """The property: the structural path (read, assemble, 6 modes), the aerodynamic reader and,
     when both give a result, the generalized aerodynamic forces at the deck's first MKAERO Mach-k
-    pair (splines and doublet lattice) each end in a result or a PipelineError naming the deck
+    pair (splines and doublet lattice; meshes up to GAF_MAX_BOXES) each end in a result or a PipelineError naming the deck
     or one of its included files."""
     names = tuple(deck.files)
     with tempfile.TemporaryDirectory() as tmp:
         path = deck.write(Path(tmp))
         modes = _result_or_named_error(lambda: _modes(path), names)
         aero = _result_or_named_error(lambda: read_aero_model(path), names)
-        if modes is not None and aero is not None and len(aero.mach_k):
+        if modes is not None and aero is not None and len(aero.mach_k) and \
+                len(aero.mesh) <= GAF_MAX_BOXES:
             mach, k = aero.mach_k[0]
             _result_or_named_error(lambda: generalized_aero_forces(aero, modes, [mach], [k]),
                                    names)
