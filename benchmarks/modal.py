@@ -1,21 +1,27 @@
-"""Modal benchmark: a ~60,000-DOF stiffened plate solved by our solver and (if installed) MYSTRAN.
+"""Modal benchmark: stiffened plates of ~60,000 and ~240,000 DOF solved by our solver and MYSTRAN.
 
 The deck: a 2 m x 1 m aluminium CQUAD4 plate (MAT1 E = 70 GPa, nu = 0.33, rho = 2700 kg/m^3,
-PSHELL T = 3 mm with MID3 for transverse shear), ``--nx`` x ``--ny`` elements, CBAR edge stiffeners
-(30 mm x 10 mm rectangular bars) along both long edges, clamped (123456) along the short edge x = 0,
-EIGRL for ``--modes`` modes. SI units.
+PSHELL T = 3 mm with MID3 for transverse shear), n x n elements with n = round(sqrt(size / 6))
+for each ``--sizes`` entry (100 x 100: 61,206 g-set DOF; 200 x 200: 242,406), CBAR edge stiffeners
+(30 mm x 10 mm rectangular bars) along both long edges, clamped (123456) along the short edge
+x = 0, EIGRL for ``--modes`` modes. SI units.
 
 Each solver runs in its own subprocess, so that its wall time and peak resident memory (``ru_maxrss``
-from ``os.wait4``) are its own. Our solver reports the wall seconds of each phase (read, assemble,
-solve, write). Output: one ``key: value`` per line.
+from ``os.wait4``) are its own; ours and MYSTRAN alternate ``--repeat`` times per size (the cores
+are shared, so single runs are noisy) and the figures are the minimum and median over the runs.
+Our solver reports the wall seconds of each phase (read, assemble, solve, write) and the sparse
+factorisation backend (``--backend`` forces one, as ``FTP_SPARSE_BACKEND``). Output: one
+``key: value`` per line, keys prefixed by the size (``dof60000_...``).
 
-Usage: ``PYTHONPATH=. python benchmarks/modal.py [--nx 100 --ny 100 --modes 40 --no-mystran]``
+Usage: ``PYTHONPATH=. python benchmarks/modal.py [--sizes 60000,240000 --modes 40 --repeat 2
+--backend pardiso --no-mystran]``
 """
 from __future__ import annotations
 
 import argparse
 import json
 import os
+import statistics
 import subprocess
 import sys
 import tempfile
@@ -70,6 +76,7 @@ def worker(deck: Path, out: Path, nmodes: int) -> None:
     from structures.bdf import read_model
     from structures.modal import compute_modes
     from structures.modes import write_modes
+    from structures.sparse_factor import choose_backend
 
     times = {}
     t0 = time.perf_counter()
@@ -85,59 +92,81 @@ def worker(deck: Path, out: Path, nmodes: int) -> None:
     write_modes(ds, out)
     times["write"] = time.perf_counter() - t0
     print(json.dumps({"times": times, "frequencies": [float(f) for f in ds["frequency"].values],
-                      "a_set_dof": int(system.K.shape[0])}))
+                      "a_set_dof": int(system.K.shape[0]), "backend": choose_backend()}))
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--nx", type=int, default=100)
-    parser.add_argument("--ny", type=int, default=100)
+    parser.add_argument("--sizes", default="60000,240000",
+                        help="comma-separated target g-set DOF counts (default 60000,240000)")
     parser.add_argument("--modes", type=int, default=40)
+    parser.add_argument("--repeat", type=int, default=2, help="runs of each solver per size")
+    parser.add_argument("--backend", help="force the sparse factorisation backend")
     parser.add_argument("--no-mystran", action="store_true")
     parser.add_argument("--worker", nargs=3, metavar=("DECK", "OUT", "NMODES"), help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.worker:
         worker(Path(args.worker[0]), Path(args.worker[1]), int(args.worker[2]))
         return
-    with tempfile.TemporaryDirectory(prefix="modal_bench_") as tmp:
-        folder = Path(tmp)
-        deck = folder / "plate.bdf"
-        ngrid = write_deck(deck, args.nx, args.ny, args.modes)
-        print(f"grids: {ngrid}")
-        print(f"dof_g_set: {6 * ngrid}")
-        print(f"elements_cquad4: {args.nx * args.ny}")
-        print(f"elements_cbar: {2 * args.nx}")
-        print(f"modes: {args.modes}")
-        print(f"cpu_count: {os.cpu_count()}")
-        print(f"load_average_1min_before: {os.getloadavg()[0]:.2f}")
-        env = dict(os.environ, PYTHONPATH=str(Path(__file__).resolve().parents[1]))
-        wall, cpu, peak, out = run_measured([sys.executable, str(Path(__file__).resolve()), "--worker",
-                                        str(deck), str(folder / "modes.nc"), str(args.modes)],
-                                       folder, env)
+    env = dict(os.environ, PYTHONPATH=str(Path(__file__).resolve().parents[1]))
+    if args.backend:
+        env["FTP_SPARSE_BACKEND"] = args.backend
+    exe = None if args.no_mystran else mystran_executable()
+    print(f"cpu_count: {os.cpu_count()}")
+    print(f"modes: {args.modes}")
+    print(f"repeat: {args.repeat}")
+    for size in (int(text) for text in args.sizes.split(",")):
+        with tempfile.TemporaryDirectory(prefix="modal_bench_") as tmp:
+            compare(Path(tmp), size, args.modes, args.repeat, env, exe)
+
+
+def compare(folder: Path, size: int, nmodes: int, repeat: int, env: dict, exe: str | None) -> None:
+    """Alternate our solver and MYSTRAN ``repeat`` times on one deck; print the figures."""
+    n = round(np.sqrt(size / 6))
+    deck = folder / "plate.bdf"
+    ngrid = write_deck(deck, n, n, nmodes)
+    key = f"dof{size}"
+    print(f"{key}_grids: {ngrid}")
+    print(f"{key}_dof_g_set: {6 * ngrid}")
+    print(f"{key}_elements_cquad4: {n * n}")
+    print(f"{key}_elements_cbar: {2 * n}")
+    print(f"{key}_load_average_1min_before: {os.getloadavg()[0]:.2f}")
+    runs = {"ours": [], "mystran": []}
+    for _ in range(repeat):
+        wall, cpu, peak, out = run_measured([sys.executable, str(Path(__file__).resolve()),
+                                             "--worker", str(deck), str(folder / "modes.nc"),
+                                             str(nmodes)], folder, env)
         ours = json.loads(out.strip().splitlines()[-1])
-        for phase, seconds in ours["times"].items():
-            print(f"ours_{phase}_s: {seconds:.3f}")
-        print(f"ours_a_set_dof: {ours['a_set_dof']}")
-        print(f"ours_total_wall_s: {wall:.3f}")
-        print(f"ours_total_cpu_s: {cpu:.3f}")
-        print(f"ours_peak_rss_mb: {peak:.0f}")
-        print("ours_first5_hz: " + " ".join(f"{f:.5g}" for f in ours["frequencies"][:5]))
-        exe = None if args.no_mystran else mystran_executable()
-        if exe is None:
-            print("mystran: not run")
-            return
-        wall_m, cpu_m, peak_m, _ = run_measured([exe, deck.name], folder, dict(os.environ))
-        theirs = mystran_frequencies(deck)
-        print(f"mystran_total_wall_s: {wall_m:.3f}")
-        print(f"mystran_total_cpu_s: {cpu_m:.3f}")
-        print(f"mystran_peak_rss_mb: {peak_m:.0f}")
-        print("mystran_first5_hz: " + " ".join(f"{f:.5g}" for f in theirs[:5]))
-        n = min(len(theirs), len(ours["frequencies"]))
-        diff = np.max(np.abs(np.array(ours["frequencies"][:n]) / theirs[:n] - 1.0))
-        print(f"max_relative_frequency_difference_{n}_modes: {diff:.4f}")
-        print(f"speedup_mystran_over_ours_wall: {wall_m / wall:.2f}")
-        print(f"speedup_mystran_over_ours_cpu: {cpu_m / cpu:.2f}")
-        print(f"load_average_1min_after: {os.getloadavg()[0]:.2f}")
+        runs["ours"].append((wall, cpu, peak))
+        if exe is not None:
+            runs["mystran"].append(run_measured([exe, deck.name], folder, dict(os.environ))[:3])
+    for phase, seconds in ours["times"].items():
+        print(f"{key}_ours_{phase}_s_last: {seconds:.3f}")
+    print(f"{key}_ours_backend: {ours['backend']}")
+    print(f"{key}_ours_a_set_dof: {ours['a_set_dof']}")
+    for name, figures in runs.items():
+        for label, index, fmt in (("wall_s", 0, ".3f"), ("cpu_s", 1, ".3f"), ("peak_rss_mb", 2, ".0f")):
+            values = [f[index] for f in figures]
+            if values:
+                print(f"{key}_{name}_{label}_runs: " + " ".join(f"{v:{fmt}}" for v in values))
+                print(f"{key}_{name}_{label}_min: {min(values):{fmt}}")
+                print(f"{key}_{name}_{label}_median: {statistics.median(values):{fmt}}")
+    print(f"{key}_ours_first5_hz: " + " ".join(f"{f:.5g}" for f in ours["frequencies"][:5]))
+    if exe is None:
+        print(f"{key}_mystran: not run")
+        return
+    theirs = mystran_frequencies(deck)
+    print(f"{key}_mystran_first5_hz: " + " ".join(f"{f:.5g}" for f in theirs[:5]))
+    count = min(len(theirs), len(ours["frequencies"]))
+    diff = np.max(np.abs(np.array(ours["frequencies"][:count]) / theirs[:count] - 1.0))
+    print(f"{key}_max_relative_frequency_difference_{count}_modes: {diff:.2e}")
+    for label, index in (("wall", 0), ("cpu", 1)):
+        ours_t = [f[index] for f in runs["ours"]]
+        theirs_t = [f[index] for f in runs["mystran"]]
+        print(f"{key}_speedup_mystran_over_ours_{label}_median: "
+              f"{statistics.median(theirs_t) / statistics.median(ours_t):.2f}")
+        print(f"{key}_speedup_mystran_over_ours_{label}_min: {min(theirs_t) / min(ours_t):.2f}")
+    print(f"{key}_load_average_1min_after: {os.getloadavg()[0]:.2f}")
 
 
 def run_measured(cmd: list[str], cwd: Path, env: dict) -> tuple[float, float, float, str]:

@@ -1,8 +1,10 @@
-"""Normal modes: K phi = lambda M phi for the lowest modes, by shift-invert Lanczos.
+"""Normal modes: K phi = lambda M phi for the lowest modes, by block shift-invert Lanczos.
 
 The shift sigma is negative (default -(2 pi 0.1 Hz)^2), so K - sigma M is positive definite even for
-free-free models, whose rigid-body modes come out near 0 Hz. The factorisation uses SuperLU with a
-symmetric ordering; small systems use a dense solver on the same shifted pencil. Modes are
+free-free models, whose rigid-body modes come out near 0 Hz. The factorisation is
+:func:`structures.sparse_factor.factorize` (MKL PARDISO when installed, else SuperLU) and the
+eigensolver :func:`structures.block_lanczos.block_lanczos`; small systems use a dense solver on
+the same shifted pencil. Modes are
 mass-normalised (Phi^T M Phi = I) and returned as the modes Dataset (basic-frame shapes).
 
 Mechanisms are reported, not hidden: a direction with neither stiffness nor mass makes the shifted
@@ -14,11 +16,11 @@ from __future__ import annotations
 import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 import xarray as xr
 from threadpoolctl import threadpool_limits
 
 from structures.assembly import AssembledSystem, assemble
+from structures.block_lanczos import block_lanczos
 from structures.errors import SolverError, card_message
 from structures.frames import rigid_offset
 from structures.model import FEModel
@@ -60,27 +62,21 @@ def solve_eigen(k: sp.spmatrix, m: sp.spmatrix, nmodes: int, *, shift: float = D
         mu, vec = sla.eigh(m.toarray(), dense)
         order = np.argsort(-mu)[:nmodes]
         mu, vec = mu[order], vec[:, order]
-        if np.any(mu <= 0):
-            raise SolverError(card_message(
-                f"only {int(np.sum(mu > 0))} degrees of freedom carry mass; {nmodes} modes were "
-                "asked for.", filename=filename, fix="ask for fewer modes or add mass."))
-        lam = shift + 1.0 / mu
     else:
         factor = factorize(shifted, groups=groups, filename=filename)
-        op = spla.LinearOperator((n, n), matvec=factor.solve, dtype=float)
-        ncv = min(n, max(2 * nmodes + 1, nmodes + 20))
-        try:
-            # ARPACK's small dense steps gain nothing from BLAS threads and lose a lot when the
-            # cores are shared: run OpenBLAS on one thread (MKL PARDISO's solves keep theirs).
-            with threadpool_limits(limits={"openblas": 1}):
-                lam, vec = spla.eigsh(k, k=nmodes, M=m, sigma=shift, which="LM", OPinv=op,
-                                      ncv=ncv, tol=1e-9)
-        except spla.ArpackNoConvergence as exc:
-            raise SolverError(card_message(f"the eigensolver did not converge ({exc}).",
-                                           filename=filename,
-                                           fix="ask for fewer modes or check the model.")) from None
-        order = np.argsort(lam)
-        lam, vec = lam[order], vec[:, order]
+        # The small dense steps gain nothing from BLAS threads and lose a lot when the cores are
+        # shared: run OpenBLAS on one thread (MKL PARDISO's solves keep theirs).
+        with threadpool_limits(limits={"openblas": 1}):
+            mu, vec, converged = block_lanczos(factor.solve, m, nmodes, tol=1e-9)
+        if not converged:
+            raise SolverError(card_message(
+                f"the block Lanczos eigensolver did not converge for {nmodes} modes.",
+                filename=filename, fix="ask for fewer modes or check the model."))
+    if np.any(mu <= 0):
+        raise SolverError(card_message(
+            f"only {int(np.sum(mu > 0))} degrees of freedom carry mass; {nmodes} modes were "
+            "asked for.", filename=filename, fix="ask for fewer modes or add mass."))
+    lam = shift + 1.0 / mu
     gm = np.einsum("ij,ij->j", vec, m @ vec)
     return lam, vec / np.sqrt(gm)
 

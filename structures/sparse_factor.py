@@ -80,7 +80,7 @@ def factorize(a: sp.spmatrix, *, groups: np.ndarray | None = None, filename: str
     InputError
         ``backend`` is unknown or not installed.
     """
-    name = _choose_backend(backend)
+    name = choose_backend(backend)
     a = sp.csr_matrix(a, dtype=float)
     diag = a.diagonal()
     if not np.all(np.isfinite(diag)) or np.any(diag <= 0.0):
@@ -90,7 +90,9 @@ def factorize(a: sp.spmatrix, *, groups: np.ndarray | None = None, filename: str
     return SuperLUFactor(a.tocsc(), groups, filename)
 
 
-def _choose_backend(backend: str | None) -> str:
+def choose_backend(backend: str | None = None) -> str:
+    """The backend :func:`factorize` uses: ``backend``, else ``$FTP_SPARSE_BACKEND``, else the
+    first available one; InputError for an unknown or missing one."""
     name = backend or os.environ.get(ENV_VAR, "").strip().lower()
     available = available_backends()
     if not name:
