@@ -17,20 +17,21 @@ from structures.errors import InputError, MissingReferenceError, UnsupportedCard
 from structures.frames import displacement_axes
 from structures.model import (ConcentratedMass, ElementSet, FEModel, Grids, Material, Property,
                               RigidElement)
+from structures.sections import pbeaml_fields
 
 #: Structural cards this project models.
 SUPPORTED_CARDS = frozenset({
     "GRID", "CORD1R", "CORD1C", "CORD1S", "CORD2R", "CORD2C", "CORD2S",
-    "CBAR", "CBEAM", "PBAR", "PBARL", "PBEAM", "CROD", "PROD", "CELAS1", "CELAS2", "PELAS",
-    "CBUSH", "PBUSH", "CONM2", "CMASS2", "RBE2", "RBAR", "RBE3", "CQUAD4", "CTRIA3", "PSHELL",
-    "MAT1", "MAT2", "MAT8", "SPC", "SPC1", "SPCADD", "SUPORT", "EIGRL", "EIGR", "PARAM",
+    "CBAR", "CBEAM", "PBAR", "PBARL", "PBEAM", "PBEAML", "CROD", "PROD", "CELAS1", "CELAS2",
+    "PELAS", "CBUSH", "PBUSH", "CONM2", "CMASS2", "RBE2", "RBAR", "RBE3", "CQUAD4", "CTRIA3",
+    "PSHELL", "MAT1", "MAT2", "MAT8", "SPC", "SPC1", "SPCADD", "SUPORT", "EIGRL", "EIGR", "PARAM",
 })
 
 #: Cards read elsewhere (aerodynamics, flutter, output control) and ignored by the structures.
 NON_STRUCTURAL_CARDS = frozenset({
     "ENDDATA", "AERO", "AEROS", "CAERO1", "PAERO1", "SPLINE1", "SPLINE2", "SET1", "SET2", "AEFACT",
     "MKAERO1", "MKAERO2", "FLUTTER", "FLFACT", "TABDMP1", "MDLPRM", "AELIST", "AESTAT", "TRIM",
-    "DTI", "DMI", "DMIG",
+    "DTI", "DMI", "DMIG", "PLOTEL",
 })
 
 _SHELL_MIN = ("CQUAD4", "CTRIA3")
@@ -224,6 +225,9 @@ def _properties(model, filename: str) -> dict:
             fields = dict(MID=prop.mid, A=mean(prop.A), I1=mean(prop.i1), I2=mean(prop.i2),
                           I12=mean(prop.i12), J=mean(prop.j), NSM=mean(prop.nsm),
                           K1=prop.k1, K2=prop.k2)
+        elif kind == "PBEAML":
+            fields = pbeaml_fields(pid, prop.mid, prop.beam_type, prop.dim, prop.xxb, prop.nsm,
+                                   filename)
         elif kind == "PROD":
             fields = dict(MID=prop.mid, A=prop.A, J=prop.j, NSM=prop.nsm)
         elif kind == "PELAS":
@@ -240,7 +244,7 @@ def _properties(model, filename: str) -> dict:
                                                     card=kind, card_id=pid, filename=filename))
         if kind in ("PBAR", "PBARL", "PBEAM") and (fields["K1"] is not None and fields["K1"] >= 1e8):
             fields["K1"] = fields["K2"] = None  # pyNastran's blank default: no shear flexibility
-        out[pid] = Property(pid, "PBAR" if kind == "PBARL" else kind, fields)
+        out[pid] = Property(pid, {"PBARL": "PBAR", "PBEAML": "PBEAM"}.get(kind, kind), fields)
     return out
 
 
