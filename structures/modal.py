@@ -89,7 +89,7 @@ def rigid_body_basis(model: FEModel, system: AssembledSystem) -> np.ndarray:
 
 
 def _check_mechanisms(model, system, lam, phi, scale):
-    zero = np.abs(lam) <= 1e-10 * scale
+    zero = np.abs(lam) <= 1e-12 * scale
     if not np.any(zero):
         return
     rb = rigid_body_basis(model, system)

@@ -3,9 +3,10 @@
 :func:`factorize` returns an object with ``solve(b)`` and a ``backend`` name. The backend is the
 first importable one of:
 
-- ``"pardiso"``: Intel MKL PARDISO through ``pypardiso`` (the ``fast`` extra): a supernodal,
-  threaded Cholesky factorisation (matrix type 2, real symmetric positive definite) with METIS
-  nested-dissection ordering, given the upper triangle only.
+- ``"pardiso"``: Intel MKL PARDISO through ``pypardiso`` (a dependency on x86-64 Linux and
+  Windows, where the ``mkl`` wheels exist): a supernodal, threaded Cholesky factorisation
+  (matrix type 2, real symmetric positive definite) with METIS nested-dissection ordering, given
+  the upper triangle only.
 - ``"superlu"``: scipy's SuperLU (always installed), used as a Cholesky-like LU: no pivoting,
   symmetric mode, ordered by minimum degree on the graph of DOF groups (grids).
 
@@ -104,7 +105,7 @@ def choose_backend(backend: str | None = None) -> str:
     if name not in available:
         raise InputError(card_message(
             f"the sparse factorisation backend {name!r} is not installed.",
-            fix=f"install it (pip install 'flutter-tuning-pipeline[fast]') or use one of "
+            fix=f"install it (pip install pypardiso; x86-64 Linux or Windows) or use one of "
                 f"{', '.join(available)}."))
     return name
 
