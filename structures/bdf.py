@@ -17,7 +17,7 @@ from structures.errors import InputError, MissingReferenceError, UnsupportedCard
 from structures.frames import displacement_axes
 from structures.model import (ConcentratedMass, ElementSet, FEModel, Grids, Material, Property,
                               RigidElement)
-from structures.sections import pbeaml_fields
+from structures.sections import section_fields
 
 #: Structural cards this project models.
 SUPPORTED_CARDS = frozenset({
@@ -27,11 +27,16 @@ SUPPORTED_CARDS = frozenset({
     "PSHELL", "MAT1", "MAT2", "MAT8", "SPC", "SPC1", "SPCADD", "SUPORT", "EIGRL", "EIGR", "PARAM",
 })
 
-#: Cards read elsewhere (aerodynamics, flutter, output control) and ignored by the structures.
+#: Cards read elsewhere (aerodynamics, flutter, output control) and ignored by the structures;
+#: SOL 200 design-model cards too: the analysis model is the deck's initial design, as in SOL 103;
+#: static loads do not enter normal modes.
 NON_STRUCTURAL_CARDS = frozenset({
     "ENDDATA", "AERO", "AEROS", "CAERO1", "PAERO1", "SPLINE1", "SPLINE2", "SET1", "SET2", "AEFACT",
     "MKAERO1", "MKAERO2", "FLUTTER", "FLFACT", "TABDMP1", "MDLPRM", "AELIST", "AESTAT", "TRIM",
     "DTI", "DMI", "DMIG", "PLOTEL",
+    "DESVAR", "DLINK", "DVPREL1", "DVPREL2", "DVMREL1", "DVGRID", "DRESP1", "DRESP2", "DCONSTR",
+    "DCONADD", "DSCREEN", "DOPTPRM",
+    "FORCE", "MOMENT", "LOAD", "GRAV", "PLOAD2", "PLOAD4",
 })
 
 _SHELL_MIN = ("CQUAD4", "CTRIA3")
@@ -216,8 +221,8 @@ def _properties(model, filename: str) -> dict:
             fields = dict(MID=prop.mid, A=prop.A, I1=prop.i1, I2=prop.i2, I12=prop.i12, J=prop.j,
                           NSM=prop.nsm, K1=prop.k1, K2=prop.k2)
         elif kind == "PBARL":
-            fields = dict(MID=prop.mid, A=prop.Area(), I1=prop.I11(), I2=prop.I22(), I12=prop.I12(),
-                          J=prop.J(), NSM=prop.nsm, K1=None, K2=None)
+            fields = section_fields("PBARL", pid, prop.mid, prop.beam_type, [prop.dim], [0.0],
+                                    [prop.nsm], filename)
         elif kind == "PBEAM":
             # Tapered PBEAMs use the mean of the end-station values (a stated approximation).
             def mean(values):
@@ -226,8 +231,8 @@ def _properties(model, filename: str) -> dict:
                           I12=mean(prop.i12), J=mean(prop.j), NSM=mean(prop.nsm),
                           K1=prop.k1, K2=prop.k2)
         elif kind == "PBEAML":
-            fields = pbeaml_fields(pid, prop.mid, prop.beam_type, prop.dim, prop.xxb, prop.nsm,
-                                   filename)
+            fields = section_fields("PBEAML", pid, prop.mid, prop.beam_type, prop.dim, prop.xxb,
+                                    prop.nsm, filename)
         elif kind == "PROD":
             fields = dict(MID=prop.mid, A=prop.A, J=prop.j, NSM=prop.nsm)
         elif kind == "PELAS":

@@ -1,10 +1,11 @@
-"""Beam-library cross-sections (PBEAML TYPE + DIMi) as equivalent PBEAM section properties.
+"""Beam-library cross-sections (PBARL / PBEAML TYPE + DIMi) as equivalent PBAR / PBEAM properties.
 
 Nastran derives an internal PBAR/PBEAM from the TYPE and the dimensions DIMi of a PBARL/PBEAML
 (MSC QRG PBARL/PBEAML, remark "A function of this entry is to derive an equivalent internal PBAR
 entry"). Area and the bending moments of inertia come from pyNastran's section functions
 (``pyNastran.bdf.cards.properties.bars``, the DIMi conventions of the QRG figures); pyNastran gives
-no torsion constant for PBEAML, so :func:`torsion_constant` supplies Saint-Venant's J:
+no torsion constant for PBEAML, and its ``PBARL.J()`` is the polar moment I1 + I2 (not the torsion
+constant) for every non-circular section, so :func:`torsion_constant` supplies Saint-Venant's J:
 
 * ROD (DIM1 = r): J = pi r^4 / 2; TUBE (DIM1 = r_o, DIM2 = r_i): J = pi (r_o^4 - r_i^4) / 2.
 * BAR (DIM1 x DIM2, a >= b the longer and shorter side): J = a b^3 [1/3 - 0.21 (b/a)
@@ -24,7 +25,8 @@ import numpy as np
 
 from structures.errors import UnsupportedCardError, card_message
 
-#: Section TYPEs whose A, I1, I2, I12 pyNastran computes and whose J is derived here.
+#: Section TYPEs whose A, I1, I2, I12 pyNastran computes and whose J is derived here (PBARL and
+#: PBEAML alike).
 SECTION_TYPES = ("ROD", "TUBE", "BAR", "BOX", "L")
 
 
@@ -58,15 +60,16 @@ def torsion_constant(beam_type: str, dim) -> float:
     raise ValueError(f"no torsion constant for section TYPE {beam_type!r}; known: {SECTION_TYPES}")
 
 
-def pbeaml_fields(pid: int, mid: int, beam_type: str, stations, xxb, nsm,
-                  filename: str | None = None) -> dict:
-    """Equivalent PBEAM fields (MID, A, I1, I2, I12, J, NSM, K1, K2) of a PBEAML.
+def section_fields(card: str, pid: int, mid: int, beam_type: str, stations, xxb, nsm,
+                   filename: str | None = None) -> dict:
+    """Equivalent PBAR / PBEAM fields (MID, A, I1, I2, I12, J, NSM, K1, K2) of a PBARL / PBEAML.
 
     Parameters
     ----------
-    pid, mid : PBEAML PID and MID
-    beam_type : PBEAML TYPE
-    stations : sequence (nstation,) of DIMi sequences
+    card : "PBARL" or "PBEAML" (for messages)
+    pid, mid : the card's PID and MID
+    beam_type : the card's TYPE
+    stations : sequence (nstation,) of DIMi sequences (one station for a PBARL)
     xxb : (nstation,) station positions X/XB, 0 to 1
     nsm : (nstation,) non-structural mass per length at each station
     filename : deck name for error messages
@@ -80,12 +83,12 @@ def pbeaml_fields(pid: int, mid: int, beam_type: str, stations, xxb, nsm,
 
     if beam_type not in SECTION_TYPES:
         raise UnsupportedCardError(card_message(
-            f"section TYPE {beam_type} is not supported.", card="PBEAML", card_id=pid,
+            f"section TYPE {beam_type} is not supported.", card=card, card_id=pid,
             filename=filename, fix=f"use a TYPE among {', '.join(SECTION_TYPES)} or give the "
-            "section properties on a PBEAM."))
+            f"section properties on a {card[:-1]}."))
     section = {"ROD": bars.rod_section, "TUBE": bars.tube_section, "BAR": bars.bar_section,
                "BOX": bars.box_section, "L": bars.l_section}[beam_type]
-    per_station = np.array([list(section("PBEAML", beam_type, np.asarray(dim, float), None))
+    per_station = np.array([list(section(card, beam_type, np.asarray(dim, float), None))
                             + [torsion_constant(beam_type, dim)] for dim in stations])
     x = [float(v) for v in xxb]
     if len(x) == 1:

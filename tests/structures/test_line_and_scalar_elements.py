@@ -2,8 +2,10 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from structures.bdf import read_model
+from structures.errors import UnsupportedCardError
 from structures.modal import compute_modes
 
 
@@ -90,3 +92,30 @@ def test_pin_flag_equals_rbe2_hinge(tmp_path):
     f_pin = _modes(tmp_path, pinned, 6, "p.bdf")
     np.testing.assert_allclose(f_pin, _modes(tmp_path, hinge, 6, "h.bdf"), rtol=1e-9)
     assert np.max(np.abs(f_pin / _modes(tmp_path, rigid, 6, "r.bdf") - 1)) > 0.05
+
+
+def test_pbarl_bar_torsion_constant_is_saint_venant(tmp_path):
+    """PBARL BAR 30 x 10 mm: J is Saint-Venant's torsion constant (Roark, Table 10.7 case 4,
+    a b^3 [1/3 - 0.21 (b/a)(1 - b^4/(12 a^4))] = 7.90e-9 m^4), not the polar moment I1 + I2
+    (2.50e-8 m^4) that pyNastran's PBARL.J() returns: a free-free bar with its torsion mode among
+    the lowest six elastic modes equals the PBAR with Roark's J."""
+    a, b = 0.03, 0.01
+    j = a * b ** 3 * (1 / 3 - 0.21 * (b / a) * (1 - b ** 4 / (12 * a ** 4)))
+    area, i1, i2 = a * b, a * b ** 3 / 12, b * a ** 3 / 12   # QRG: DIM1 along the 2-axis
+    bar = ("MAT1,1,7.e10,,0.3,2700.\nPARAM,COUPMASS,1\n" +
+           "".join(f"GRID,{i + 1},,{0.1 * i!r},0.,0.\n" for i in range(11)) +
+           "".join(f"CBAR,{i + 1},1,{i + 1},{i + 2},0.,1.,0.\n" for i in range(10)) +
+           # CBAR carries no torsional inertia: a small rotary inertia about the axis at each grid
+           "".join(f"CONM2,{i + 101},{i + 1},,0.\n,1.e-3,,1.e-9,,,1.e-9\n" for i in range(11)))
+    pbarl = _modes(tmp_path, bar + f"PBARL,1,1,,BAR\n,{a},{b}\n", 12, "b.bdf")
+    pbar = _modes(tmp_path, bar + f"PBAR,1,1,{area!r},{i1!r},{i2!r},{j!r}\n", 12, "c.bdf")
+    np.testing.assert_allclose(pbarl[6:], pbar[6:], rtol=1e-8)  # elastic modes, torsion among them
+    assert np.all(pbarl[:6] < 1e-3 * pbarl[6])
+
+
+def test_pbarl_section_type_without_properties_is_refused(tmp_path):
+    path = tmp_path / "i.bdf"
+    path.write_text("MAT1,1,7.e10,,0.3,2700.\nGRID,1,,0.,0.,0.\nGRID,2,,1.,0.,0.\n"
+                    "CBAR,1,1,1,2,0.,1.,0.\nPBARL,1,1,,I\n,0.2,0.1,0.1,0.01,0.01,0.01\n")
+    with pytest.raises(UnsupportedCardError, match=r"i\.bdf.*PBARL 1.*TYPE I.*Fix"):
+        read_model(path)

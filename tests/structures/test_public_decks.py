@@ -32,7 +32,7 @@ from structures.massprops import mass_properties
 from structures.modal import compute_modes
 from structures.nastran_results import read_f06_eigenvalues
 from structures.rigid import element_constraints
-from structures.sections import pbeaml_fields
+from structures.sections import section_fields
 from test_mystran import needs_mystran, run_mystran
 
 DATA = Path(__file__).resolve().parents[1] / "data"
@@ -252,7 +252,7 @@ def _fwt_mystran_deck(folder: Path) -> Path:
     """The WINDY deck as MYSTRAN 18 reads it, in one file (SOL 103, DISP(PLOT), MPC = 1).
 
     Equivalent rewrites: PBEAML -> PBAR with the same section (:func:`structures.sections.
-    pbeaml_fields`), CBEAM -> CBAR (no warping, no taper), the coincident hinge grids 208/209
+    section_fields`), CBEAM -> CBAR (no warping, no taper), the coincident hinge grids 208/209
     (tied 123456 by RBE2 300, same CD) merged, PLOTEL/DMI/output PARAMs dropped. MYSTRAN's RBE3
     ignores rotational independent components (measured on a cantilever with an RBE3 on three
     grids: its frequencies are the same with C = 123 and C = 123456, ours differ by up to 0.5 %),
@@ -269,7 +269,8 @@ def _fwt_mystran_deck(folder: Path) -> Path:
     bdf.read_bdf(str(DATA / FWT), xref=False)
     for pid, prop in list(bdf.properties.items()):
         if prop.type == "PBEAML":
-            f = pbeaml_fields(pid, prop.mid, prop.beam_type, prop.dim, prop.xxb, prop.nsm)
+            f = section_fields("PBEAML", pid, prop.mid, prop.beam_type, prop.dim, prop.xxb,
+                               prop.nsm)
             del bdf.properties[pid]
             bdf.add_pbar(pid, f["MID"], A=f["A"], i1=f["I1"], i2=f["I2"], i12=f["I12"], j=f["J"])
     for eid, elem in list(bdf.elements.items()):

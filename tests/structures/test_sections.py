@@ -9,7 +9,7 @@ import pytest
 from structures.bdf import read_model
 from structures.errors import UnsupportedCardError
 from structures.modal import compute_modes
-from structures.sections import pbeaml_fields, torsion_constant
+from structures.sections import section_fields, torsion_constant
 
 
 def test_torsion_constants_against_closed_forms():
@@ -33,12 +33,13 @@ def test_pbeaml_fields_single_and_two_stations():
     """One station: the BAR's b h, b h^3/12, h b^3/12; two stations of a linearly tapered BAR:
     the mean of the end values (pyNastran integrates X/XB linearly between two stations)."""
     b, h = 0.03, 0.005
-    one = pbeaml_fields(7, 1, "BAR", [[b, h]], [0.0], [0.2])
+    one = section_fields("PBEAML", 7, 1, "BAR", [[b, h]], [0.0], [0.2])
     assert (one["A"], one["I1"], one["I2"], one["I12"], one["NSM"]) == pytest.approx(
         (b * h, b * h ** 3 / 12, h * b ** 3 / 12, 0.0, 0.2), rel=1e-14)
     assert one["K1"] is None and one["K2"] is None
-    two = pbeaml_fields(7, 1, "BAR", [[b, h], [b, 2 * h]], [0.0, 1.0], [0.2, 0.4])
-    ends = [pbeaml_fields(7, 1, "BAR", [[b, hh]], [0.0], [0.0]) for hh in (h, 2 * h)]
+    two = section_fields("PBEAML", 7, 1, "BAR", [[b, h], [b, 2 * h]], [0.0, 1.0], [0.2, 0.4])
+    ends = [section_fields("PBEAML", 7, 1, "BAR", [[b, hh]], [0.0], [0.0])
+            for hh in (h, 2 * h)]
     for key in ("A", "I1", "I2", "J"):
         assert two[key] == pytest.approx(0.5 * (ends[0][key] + ends[1][key]), rel=1e-12)
     assert two["NSM"] == pytest.approx(0.3, rel=1e-12)
@@ -46,7 +47,8 @@ def test_pbeaml_fields_single_and_two_stations():
 
 def test_unsupported_section_type_names_the_card():
     with pytest.raises(UnsupportedCardError, match=r"PBEAML 12.*TYPE I .*ROD, TUBE, BAR, BOX, L"):
-        pbeaml_fields(12, 1, "I", [[1.0, 1.0, 1.0, 0.1, 0.1, 0.1]], [0.0], [0.0], "wing.bdf")
+        section_fields("PBEAML", 12, 1, "I", [[1.0, 1.0, 1.0, 0.1, 0.1, 0.1]], [0.0], [0.0],
+                       "wing.bdf")
 
 
 def _cantilever(path: Path, prop: str) -> Path:
@@ -64,7 +66,7 @@ def test_pbeaml_deck_equals_explicit_pbeam_and_euler_bernoulli(tmp_path):
     PBEAML, no shear flexibility), and its first bending frequency is Euler-Bernoulli's
     (1.8751^2 / 2 pi) sqrt(E I / (rho A L^4)) to 0.1 %."""
     b, h = 0.03, 0.005
-    fields = pbeaml_fields(1, 1, "BAR", [[b, h]], [0.0], [0.0])
+    fields = section_fields("PBEAML", 1, 1, "BAR", [[b, h]], [0.0], [0.0])
     pbeaml = _cantilever(tmp_path / "pbeaml.bdf", f"PBEAML,1,1,,BAR\n,{b},{h}")
     pbeam = _cantilever(tmp_path / "pbeam.bdf", "PBEAM,1,1,{A!r},{I1!r},{I2!r},0.,{J!r}\n"
                         ",,,,,,,,\n,0.,0.".format(**fields))          # K1 = K2 = 0: no shear
