@@ -378,10 +378,11 @@ def _mach_k(bdf, filename: str) -> np.ndarray:
         else:
             pairs += list(zip(machs, ks))
     mk = np.array(pairs, dtype=float).reshape(-1, 2)
-    if not np.all(np.isfinite(mk)) or np.any(mk < 0):
-        raise InputError(card_message("negative or non-finite Mach number or reduced frequency.",
-                                      card="MKAERO1", filename=filename,
-                                      fix="use finite Mach >= 0 and k >= 0."))
+    if not np.all(np.isfinite(mk)) or np.any(mk < 0) or np.any(mk[:, 0] >= 1.0):
+        raise InputError(card_message(
+            "a Mach number or reduced frequency is negative or not finite, or a Mach number is "
+            ">= 1 (the doublet-lattice method is subsonic).", card="MKAERO1", filename=filename,
+            fix="use finite Mach numbers 0 <= M < 1 and reduced frequencies k >= 0."))
     return mk
 
 

@@ -140,3 +140,10 @@ def test_bad_spline_values_name_the_deck(tmp_path):
     splines = PANEL + "\nSET1,5,1,THRU,12\nSPLINE2,201,101,101,108,5,nan,1.,0"
     with pytest.raises(InputError, match=r"bad\.bdf, card SPLINE2 201: DZ=nan"):
         read_aero_model(_deck(tmp_path, splines))
+
+
+def test_supersonic_mkaero_rejected_at_read(tmp_path):
+    """The doublet lattice is subsonic: an MKAERO1 Mach of 1.2 fails at read, naming the deck."""
+    path = _deck(tmp_path, PANEL + "\nMKAERO1,0.5,1.2\n,0.1,0.2")
+    with pytest.raises(InputError, match=r"bad\.bdf, card MKAERO1: .*>= 1"):
+        read_aero_model(path)
