@@ -84,6 +84,46 @@ def _deck_text(path: Path) -> str:
     return raw.decode("latin-1")
 
 
+def _check_includes(path: Path, text: str, include_dir: str, chain: tuple = ()) -> None:
+    """Every INCLUDE of ``path`` (and of the files it includes) names an existing file, and no file
+    includes itself. pyNastran would otherwise dump ``pyNastran_crash.bdf`` into the current folder
+    (or recurse without end) before failing; its own resolution rule is used
+    (:func:`pyNastran.bdf.bdf_interface.include_file.get_include_filename`, relative to the main
+    deck's folder)."""
+    from pyNastran.bdf.bdf_interface.include_file import get_include_filename
+
+    chain = chain + (path.resolve(),)
+    lines = text.splitlines()
+    i = 0
+    while i < len(lines):
+        if not lines[i].lstrip().upper().startswith("INCLUDE"):
+            i += 1
+            continue
+        first, card = i + 1, [lines[i].split("$")[0]]
+        while "".join(card).count("'") == 1 and i + 1 < len(lines):
+            i += 1
+            card.append(lines[i].split("$")[0])
+        i += 1
+        try:
+            target = Path(get_include_filename(card, include_dir=include_dir))
+        except Exception as exc:  # pyNastran's parse of the statement: any failure is the deck's
+            raise InputError(card_message(
+                f"line {first}: cannot read the INCLUDE statement {' '.join(card).strip()!r} "
+                f"({exc}).", filename=str(path), fix="write INCLUDE 'file name' with the name in "
+                "single quotes.")) from None
+        if not target.is_file():
+            raise InputError(card_message(
+                f"line {first}: INCLUDE names {target.name!r}, which does not exist (looked for "
+                f"{target}).", filename=str(path), fix="copy the included file there or correct "
+                "the name (relative names are relative to the main deck's folder)."))
+        if target.resolve() in chain:
+            raise InputError(card_message(
+                f"line {first}: INCLUDE {target.name!r} includes a file that is already being "
+                f"read ({' -> '.join(p.name for p in chain)} -> {target.name}).",
+                filename=str(path), fix="remove the circular INCLUDE."))
+        _check_includes(target, _deck_text(target), include_dir, chain)
+
+
 def read_pynastran(path):
     """Parse a deck with pyNastran (INCLUDEs followed, grids cross-referenced): the one reader.
 
@@ -108,7 +148,9 @@ def read_pynastran(path):
     from pyNastran.bdf.bdf import BDF
 
     path = Path(path)
-    text = _deck_text(path).upper()
+    text = _deck_text(path)
+    _check_includes(path, text, str(path.resolve().parent))
+    text = text.upper()
     # A file without an executive/case control section is bulk data only (a "punch" file).
     lines = [line.strip() for line in text.splitlines()]
     punch = not any(line.startswith("CEND") for line in lines)

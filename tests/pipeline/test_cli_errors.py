@@ -320,3 +320,26 @@ def test_damaged_run_manifest(tmp_path, capsys):
     (tmp_path / "run" / "manifest.json").write_text("{ half")
     failed(["run", case, "--out", tmp_path / "run"], capsys, "manifest.json",
            "the run manifest is damaged")
+
+
+# ------------------------------------------------------------------ INCLUDE files
+@pytest.mark.parametrize("edit, needles", [
+    (lambda folder: (folder / "aero_bah.inc").unlink(),
+     ["bah_plane.bdf", "INCLUDE names 'aero_bah.inc', which does not exist"]),
+    (lambda folder: (folder / "structure_bah.inc").write_text(
+        (DATA / "bah_plane" / "structure_bah.inc").read_text() + "\nINCLUDE 'bah_plane.bdf'\n"),
+     ["structure_bah.inc", "bah_plane.bdf -> structure_bah.inc -> bah_plane.bdf"]),
+])
+def test_include_missing_or_circular(tmp_path, capsys, monkeypatch, edit, needles):
+    """Named before pyNastran reads: it would dump pyNastran_crash.bdf into the current folder."""
+    deck_dir, work = tmp_path / "deck", tmp_path / "work"
+    work.mkdir()
+    deck_dir.mkdir()
+    for name in BAH:
+        shutil.copy(DATA / "bah_plane" / name, deck_dir / name)
+    edit(deck_dir)
+    monkeypatch.chdir(work)
+    for argv in (["modes", deck_dir / "bah_plane.bdf"], ["flutter", deck_dir / "bah_plane.bdf"],
+                 ["check", deck_dir / "bah_plane.bdf"]):
+        failed(argv, capsys, *needles)
+        assert listing(work) == set()
