@@ -1,12 +1,12 @@
 """Reference and value checks of an FE model, run when it is read (before any solve).
 
 Each check raises the project's error naming the file, the card, the id and the fix, so that a bad
-deck fails early and nothing is half-written. Values: every number must be finite; sections,
-moduli and densities must not be negative (area and shell thickness positive); Poisson's ratio lies
-in (-1, 0.5]. Geometry: rods have a length; shells have an area and a convex outline (a CQUAD4 is
-projected on its mean plane, normal d13 x d24 as in the element) and are not folded (corners no
-farther from the mean plane than the mean half-diagonal). The element kernels keep their own checks
-for callers that bypass the reader.
+deck fails early and nothing is half-written. Values: every number must be finite and at most
+HUGE (1e40) in magnitude; sections, moduli and densities must not be negative (area and shell
+thickness positive); Poisson's ratio lies in (-1, 0.5]. Geometry: rods have a length; shells have
+an area and a convex outline (a CQUAD4 is projected on its mean plane, normal d13 x d24 as in the
+element) and are not folded (corners no farther from the mean plane than the mean half-diagonal).
+The element kernels keep their own checks for callers that bypass the reader.
 """
 from __future__ import annotations
 
@@ -29,9 +29,18 @@ _NON_NEGATIVE = {"PBAR": ("I1", "I2", "J"), "PBEAM": ("I1", "I2", "J"), "PROD": 
 _GROUNDED = ("CELAS", "CMASS2", "CBUSH")
 #: Per-element data that must be finite (others use NaN as a "blank" marker).
 _FINITE_DATA = ("v", "wa", "wb", "theta", "zoffset", "s")
+#: Largest magnitude of an input value: no unit system needs more, and element matrices take
+#: products such as E T^3 or m r^2 that overflow double precision (1.8e308) from about 1e100 on.
+HUGE = 1e40
 #: A CQUAD4 whose corners lie farther from its mean plane than this fraction of its mean
 #: half-diagonal is folded, not warped (Nastran only warns above a warping coefficient of 0.05).
 FOLDED_WARP = 1.0
+
+
+def _sane(values) -> np.ndarray:
+    """True where a value is finite and at most HUGE in magnitude."""
+    values = np.asarray(values, float)
+    return np.isfinite(values) & (np.abs(np.where(np.isfinite(values), values, 0.0)) <= HUGE)
 
 
 def _fail(problem: str, card: str, card_id, filename: str, fix: str) -> InputError:
@@ -42,9 +51,9 @@ def _fail(problem: str, card: str, card_id, filename: str, fix: str) -> InputErr
 def _check_fields(card: str, cid, fields, filename: str) -> None:
     """Every numeric field finite; the card's non-negative fields not negative."""
     for name, value in fields.items():
-        if isinstance(value, numbers.Real) and not np.isfinite(value):
-            raise _fail(f"{name} = {value} is not a finite number.", card, cid, filename,
-                        f"give {card} {cid} a real value of {name}.")
+        if isinstance(value, numbers.Real) and not _sane(value):
+            raise _fail(f"{name} = {value} is not a finite number of at most {HUGE:g}.", card,
+                        cid, filename, f"give {card} {cid} a real value of {name}.")
     for name in _NON_NEGATIVE.get(card, ()):
         value = fields.get(name)
         if value is not None and value < 0:
@@ -149,8 +158,9 @@ def _check_shells(model: FEModel, es) -> None:
                     "give the grids in order round the perimeter, without repeats, "
                     "and check their coordinates.")
     t = np.asarray(es.data["t_nodal"], float)
-    for e in np.flatnonzero(np.any(np.isinf(t) | (t <= 0), axis=1)):
-        raise _fail(f"corner thicknesses T1..T{nn} = {t[e].tolist()} must be positive.", es.card,
+    for e in np.flatnonzero(np.any((~np.isnan(t) & ~_sane(t)) | (t <= 0), axis=1)):
+        raise _fail(f"corner thicknesses T1..T{nn} = {t[e].tolist()} must be positive and at "
+                    f"most {HUGE:g}.", es.card,
                     es.eids[e], model.filename, "give positive corner thicknesses or leave them "
                     "blank (PSHELL T).")
 
@@ -160,17 +170,18 @@ def _check_element_values(model: FEModel, es) -> None:
         if key not in es.data:
             continue
         values = np.asarray(es.data[key], float).reshape(len(es), -1)
-        for e in np.flatnonzero(~np.all(np.isfinite(values), axis=1)):
-            raise _fail(f"a field holds a non-finite number ({key} = {values[e].tolist()}).",
-                        es.card, es.eids[e], model.filename, "give real values.")
+        for e in np.flatnonzero(~np.all(_sane(values), axis=1)):
+            raise _fail(f"a field holds a non-finite or huge number ({key} = "
+                        f"{values[e].tolist()}).", es.card, es.eids[e], model.filename,
+                        "give real values.")
     if es.card == "CELAS":
         k = np.asarray(es.data["k"], float)
-        for e in np.flatnonzero((es.pids == 0) & ~np.isfinite(k)):
-            raise _fail(f"stiffness K = {k[e]} is not a finite number.", "CELAS2", es.eids[e],
-                        model.filename, "give a real stiffness.")
+        for e in np.flatnonzero((es.pids == 0) & ~_sane(k)):
+            raise _fail(f"stiffness K = {k[e]} is not a finite number of at most {HUGE:g}.",
+                        "CELAS2", es.eids[e], model.filename, "give a real stiffness.")
     if es.card == "CMASS2":
         for eid, m in zip(es.eids, es.data["mass"]):
-            if not (np.isfinite(m) and m > 0):
+            if not (_sane(m) and m > 0):
                 raise _fail(f"mass {m} is not positive.", "CMASS2", eid, model.filename,
                             "give a positive mass (or remove the card).")
 
@@ -178,11 +189,17 @@ def _check_element_values(model: FEModel, es) -> None:
 def validate_model(model: FEModel) -> None:
     """Check every reference and value an assembly will use; raise on the first problem."""
     grids = model.grids
-    bad = ~np.all(np.isfinite(grids.xyz), axis=1) | ~np.all(np.isfinite(grids.cd_axes), axis=(1, 2))
+    bad = ~np.all(_sane(grids.xyz), axis=1) | ~np.all(np.isfinite(grids.cd_axes), axis=(1, 2))
     for g in np.flatnonzero(bad):
         raise _fail(f"position {grids.xyz[g].tolist()} or displacement frame CD={grids.cd[g]} is "
-                    "not finite.", "GRID", grids.ids[g], model.filename,
+                    f"not finite (or beyond {HUGE:g}).", "GRID", grids.ids[g], model.filename,
                     "give real coordinates and a valid (non-degenerate) coordinate system.")
+    cm = model.masses
+    bad = ~(_sane(cm.mass) & np.all(_sane(cm.offset), axis=1)
+            & np.all(_sane(cm.inertia), axis=(1, 2)))
+    for m in np.flatnonzero(bad):
+        raise _fail(f"mass {cm.mass[m]}, offset or inertia exceeds {HUGE:g}.", "CONM2", cm.eids[m],
+                    model.filename, "give real values.")
     for mat in model.materials.values():
         _check_material(mat, model.filename)
     for prop in model.properties.values():

@@ -87,10 +87,19 @@ def test_negative_grid_id_in_shell_is_a_missing_reference(tmp_path):
     assert "CQUAD4 40" in str(info.value) and "deck.bdf" in str(info.value)
 
 
+@pytest.mark.parametrize("old, new", [("GRID,5,,1.,1.,0.", "GRID,5,,1.,1.e300,0."),
+                                      ("PSHELL,30,20,0.002", "PSHELL,30,20,1.e300"),
+                                      ("CONM2,5,3,,2.0", "CONM2,5,3,,2.e41")])
+def test_huge_values_rejected_at_read(tmp_path, old, new):
+    """Values beyond HUGE (1e40): products like E T^3 would overflow in the element matrices."""
+    with pytest.raises(InputError, match=r"deck\.bdf, card (GRID 5|PSHELL 30|CONM2 5): .*1e\+?40"):
+        _read(tmp_path, GOOD.replace(old, new))
+
+
 def test_overflowing_values_raise_at_assembly(tmp_path):
-    """Finite but huge inputs overflow K: E A / L = 1e300 * 1e10 / 1."""
-    model = _read(tmp_path, GOOD.replace("MAT1,20,7.e10", "MAT1,20,1.e300").replace(
-        "PBAR,10,20,0.01", "PBAR,10,20,1.e10"))
+    """A design change past the read checks (tuning's with_property) that overflows K:
+    E A / L = 7e10 * 1e300 / 1."""
+    model = _read(tmp_path, GOOD).with_property(10, A=1e300)
     with pytest.raises(InputError) as info:
         compute_modes(model, 4)
     assert "overflows" in str(info.value) and "deck.bdf" in str(info.value)
