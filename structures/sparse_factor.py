@@ -99,8 +99,9 @@ def choose_backend(backend: str | None = None) -> str:
     if not name:
         return available[0]
     if name not in BACKENDS:
+        source = "backend=" if backend else ENV_VAR
         raise InputError(card_message(
-            f"unknown sparse factorisation backend {name!r} (from {'backend=' if backend else ENV_VAR}).",
+            f"unknown sparse factorisation backend {name!r} (from {source}).",
             fix=f"use one of {', '.join(BACKENDS)}."))
     if name not in available:
         raise InputError(card_message(
@@ -176,7 +177,9 @@ class PardisoFactor:
             diag.ctypes.data_as(ctypes.c_void_p), ctypes.byref(ctypes.c_int32(1)),
             ctypes.byref(error))
         if error.value != 0:
-            raise SolverError(card_message(f"MKL PARDISO returned no pivots (error {error.value})."))
+            raise SolverError(card_message(
+                f"MKL PARDISO returned no pivots (error {error.value}).",
+                fix=f"set {ENV_VAR}=superlu to use scipy's SuperLU instead."))
         return pivots, diag
 
     def solve(self, b: np.ndarray) -> np.ndarray:
@@ -209,10 +212,18 @@ class SuperLUFactor:
             raise massless_mechanism(filename)
 
     def solve(self, b: np.ndarray) -> np.ndarray:
-        """x = A^-1 b for b of shape (n,) or (n, k)."""
+        """x = A^-1 b for b of shape (n,) or (n, k).
+
+        Column by column: SuperLU's own multi-right-hand-side solve is ~4x slower than a loop
+        (1.18 s against 0.28 s for 12 columns at 60,744 DOF).
+        """
         b = np.asarray(b, dtype=float)
         out = np.empty_like(b)
-        out[self.perm] = self.lu.solve(b[self.perm])
+        if b.ndim == 1:
+            out[self.perm] = self.lu.solve(b[self.perm])
+        else:
+            for j in range(b.shape[1]):
+                out[self.perm, j] = self.lu.solve(b[self.perm, j])
         return out
 
 
