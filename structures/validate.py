@@ -27,7 +27,7 @@ _NON_NEGATIVE = {"PBAR": ("I1", "I2", "J"), "PBEAM": ("I1", "I2", "J"), "PROD": 
                  "MAT2": ("RHO",), "MAT8": ("G12", "G1Z", "G2Z", "RHO")}
 #: Elements whose grid fields may be blank (0): a grounded end.
 _GROUNDED = ("CELAS", "CMASS2", "CBUSH")
-#: Per-element data that must be finite (others use NaN as a "blank" marker).
+#: Per-element data that must be finite and at most HUGE (others use NaN as a "blank" marker).
 _FINITE_DATA = ("v", "wa", "wb", "theta", "zoffset", "s")
 #: Largest magnitude of an input value: no unit system needs more, and element matrices take
 #: products such as E T^3 or m r^2 that overflow double precision (1.8e308) from about 1e100 on.
@@ -39,8 +39,7 @@ FOLDED_WARP = 1.0
 
 def _sane(values) -> np.ndarray:
     """True where a value is finite and at most HUGE in magnitude."""
-    values = np.asarray(values, float)
-    return np.isfinite(values) & (np.abs(np.where(np.isfinite(values), values, 0.0)) <= HUGE)
+    return np.abs(np.asarray(values, float)) <= HUGE  # False for NaN and inf
 
 
 def _fail(problem: str, card: str, card_id, filename: str, fix: str) -> InputError:
@@ -49,7 +48,8 @@ def _fail(problem: str, card: str, card_id, filename: str, fix: str) -> InputErr
 
 
 def _check_fields(card: str, cid, fields, filename: str) -> None:
-    """Every numeric field finite; the card's non-negative fields not negative."""
+    """Every numeric field finite and at most HUGE; the card's non-negative fields not
+    negative."""
     for name, value in fields.items():
         if isinstance(value, numbers.Real) and not _sane(value):
             raise _fail(f"{name} = {value} is not a finite number of at most {HUGE:g}.", card,
