@@ -145,7 +145,8 @@ def compare(folder: Path, size: int, nmodes: int, repeat: int, env: dict, exe: s
     print(f"{key}_ours_backend: {ours['backend']}")
     print(f"{key}_ours_a_set_dof: {ours['a_set_dof']}")
     for name, figures in runs.items():
-        for label, index, fmt in (("wall_s", 0, ".3f"), ("cpu_s", 1, ".3f"), ("peak_rss_mb", 2, ".0f")):
+        for label, index, fmt in (("wall_s", 0, ".3f"), ("cpu_s", 1, ".3f"),
+                                  ("peak_rss_mb", 2, ".0f")):
             values = [f[index] for f in figures]
             if values:
                 print(f"{key}_{name}_{label}_runs: " + " ".join(f"{v:{fmt}}" for v in values))
