@@ -219,8 +219,7 @@ def _shells(model, es, lumped):
     nn = xyz.shape[1]
     mats = {mid: shell_materials.material_from_fields(mid, m.card, m.fields)
             for mid, m in model.materials.items()}
-    k = np.zeros((len(es), 6 * nn, 6 * nn))
-    m = np.zeros_like(k)
+    k = m = None
     order = np.argsort(es.pids, kind="stable")
     for pid in np.unique(es.pids):
         prop = model.property(pid, card=es.card, eid=es.eids[es.pids == pid][0])
@@ -246,6 +245,11 @@ def _shells(model, es, lumped):
                     t[:, 6 * node:6 * node + 6, 6 * node:6 * node + 6] = off
                 kp = np.einsum("eji,ejk,ekl->eil", t, kp, t)
                 mp = np.einsum("eji,ejk,ekl->eil", t, mp, t)
+            if len(part) == len(es):             # one property and thickness: no copy
+                k, m = kp, mp
+                continue
+            if k is None:
+                k, m = np.zeros((2, len(es), 6 * nn, 6 * nn))
             k[part], m[part] = kp, mp
     return gi, k, m
 
@@ -280,12 +284,19 @@ def element_matrices(model: FEModel, mass: str = "deck"):
 
 
 def _scatter(entries, n_g):
+    """Sum element matrices (ne, nd, nd) on grid indices (ne, nn) into a CSR (n_g, n_g).
+
+    Only the nonzero entries are scattered (a flat shell's membrane and bending blocks do not
+    couple, lumped masses are diagonal), with 32-bit indices when they fit: the sums are the same.
+    """
+    index = np.int32 if n_g < np.iinfo(np.int32).max else np.int64
     rows, cols, vals = [], [], []
     for gi, mat in entries:
-        dofs = (6 * gi[:, :, None] + np.arange(6)).reshape(len(gi), -1)
-        rows.append(np.broadcast_to(dofs[:, :, None], mat.shape).ravel())
-        cols.append(np.broadcast_to(dofs[:, None, :], mat.shape).ravel())
-        vals.append(mat.ravel())
+        dofs = (6 * gi[:, :, None] + np.arange(6)).reshape(len(gi), -1).astype(index)
+        nonzero = mat != 0.0
+        rows.append(np.broadcast_to(dofs[:, :, None], mat.shape)[nonzero])
+        cols.append(np.broadcast_to(dofs[:, None, :], mat.shape)[nonzero])
+        vals.append(mat[nonzero])
     if not rows:
         return sp.csr_matrix((n_g, n_g))
     out = sp.coo_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),

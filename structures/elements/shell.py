@@ -109,11 +109,8 @@ def _to_basic(K_local: np.ndarray, R: np.ndarray) -> np.ndarray:
     """K_basic = T^T K_local T with T = blockdiag(R, R, ...) (3x3 blocks, rows of R = local axes)."""
     ne, n = K_local.shape[:2]
     nb = n // 3
-    T = np.zeros((ne, nb, 3, nb, 3))
-    for a in range(nb):
-        T[:, a, :, a, :] = R
-    T = T.reshape(ne, n, n)
-    return np.swapaxes(T, 1, 2) @ K_local @ T
+    KT = (K_local.reshape(ne, n, nb, 3) @ R[:, None]).reshape(ne, nb, 3, n)   # K T, block by block
+    return (np.swapaxes(R, 1, 2)[:, None] @ KT).reshape(ne, n, n)           # T^T (K T)
 
 
 def _jacobian(dN: np.ndarray, xy: np.ndarray):
