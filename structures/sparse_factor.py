@@ -153,6 +153,8 @@ class PardisoFactor:
                               (56, 1)):          # keep the pivots for pardiso_getdiag
             solver.set_iparm(number, value)
         self.solver = solver
+        self._index = (self.upper.indptr.astype(np.int32) + 1,  # PARDISO's 1-based ia, ja
+                       self.upper.indices.astype(np.int32) + 1)
         weakref.finalize(self, solver.free_memory, True)
         try:
             solver.factorize(self.upper)
@@ -183,8 +185,34 @@ class PardisoFactor:
         return pivots, diag
 
     def solve(self, b: np.ndarray) -> np.ndarray:
-        """x = A^-1 b for b of shape (n,) or (n, k)."""
-        return self.solver.solve(self.upper, np.asarray(b, dtype=float))
+        """x = A^-1 b for b of shape (n,) or (n, k).
+
+        PARDISO's solve phase (33) called directly on the stored factor, with the 1-based index
+        arrays built once: ``PyPardisoSolver.solve`` re-checks and compares the whole matrix with
+        the factorised one and rebuilds those arrays on every call, 1.5-2.5 ms of each ~11 ms
+        solve at 60,744 DOF (measured), which a Lanczos run of ~100 solves repeats.
+        """
+        b = np.asfortranarray(b, dtype=float)
+        x = np.zeros_like(b)
+        error = ctypes.c_int32(0)
+        solver, one = self.solver, ctypes.byref(ctypes.c_int32(1))
+        int_p = ctypes.POINTER(ctypes.c_int32)
+        solver.set_iparm(12, 0)                  # iparm(12) = 0: A x = b with A given by rows
+        solver._mkl_pardiso(
+            solver.pt.ctypes.data_as(ctypes.POINTER(solver._pt_type[0])), one, one,
+            ctypes.byref(ctypes.c_int32(PARDISO_SPD)), ctypes.byref(ctypes.c_int32(33)),
+            ctypes.byref(ctypes.c_int32(self.upper.shape[0])), self.upper.data.ctypes.data_as(
+                ctypes.c_void_p), self._index[0].ctypes.data_as(int_p),
+            self._index[1].ctypes.data_as(int_p), solver.perm.ctypes.data_as(int_p),
+            ctypes.byref(ctypes.c_int32(1 if b.ndim == 1 else b.shape[1])),
+            solver.iparm.ctypes.data_as(int_p), ctypes.byref(ctypes.c_int32(0)),
+            b.ctypes.data_as(ctypes.c_void_p), x.ctypes.data_as(ctypes.c_void_p),
+            ctypes.byref(error))
+        if error.value != 0:
+            raise SolverError(card_message(
+                f"MKL PARDISO failed to solve with its factor (error {error.value}).",
+                fix=f"set {ENV_VAR}=superlu to use scipy's SuperLU instead."))
+        return np.ascontiguousarray(x)
 
 
 class SuperLUFactor:
