@@ -9,7 +9,6 @@ from __future__ import annotations
 
 from structures.assembly import assemble
 from structures.bdf import NON_STRUCTURAL_CARDS, SUPPORTED_CARDS, read_model, read_pynastran
-from structures.checks import model_checks
 from structures.errors import SolverError, UnsupportedCardError
 from structures.massprops import mass_properties
 from structures.modal import compute_modes
@@ -36,6 +35,8 @@ def _card_table(card_count) -> str:
 
 
 def run(args) -> int:
+    from structures.checks import model_checks   # scipy.spatial: here, not in every parser
+
     print("cards read")
     print(_card_table(read_pynastran(args.deck).card_count))
     try:

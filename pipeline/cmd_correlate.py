@@ -17,7 +17,6 @@ import numpy as np
 
 from structures.acceptance import DEFAULT_CRITERIA
 from structures.assembly import MASS_OPTIONS
-from structures.correlation import CorrelationSettings, correlate, default_nmodes
 from structures.errors import InputError
 from structures.gvt import load_gvt
 from structures.netcdf import check_output, staged_folder, write_dataset
@@ -62,6 +61,7 @@ def _analysis_modes(path: Path, gvt, nmodes, mass):
         from structures.modes import read_modes
         return read_modes(path)
     from structures.bdf import read_model
+    from structures.correlation import default_nmodes
     from structures.modal import compute_modes
     model = read_model(path)
     return compute_modes(model, nmodes or default_nmodes(gvt), mass=mass)
@@ -86,6 +86,8 @@ def _from_case(args):
 
 
 def run(args) -> int:
+    from structures.correlation import CorrelationSettings, correlate   # scipy.optimize: here,
+                                                                         # not in every parser
     if args.out:
         check_output(args.out, folder=False)
     if args.figures:

@@ -4,7 +4,6 @@ from __future__ import annotations
 from contextlib import nullcontext
 from pathlib import Path
 
-from flutter.run import run_flutter
 from pipeline.cli import positive_int
 from pipeline.stage import running
 from structures.netcdf import check_output, staged_folder
@@ -41,6 +40,8 @@ def run(args) -> int:
     configuration's nmodes and mass option, :func:`pipeline.run.configuration_flutter` with the
     case's ``[flutter]`` kernel and FLUTTER ids); ``--nmodes`` / ``--flutter-id`` override them.
     All outputs are written only when every configuration has finished."""
+    from flutter.run import run_flutter           # here, not when every command's parser is built
+
     target = Path(args.target)
     if args.out:
         check_output(args.out, folder=True)

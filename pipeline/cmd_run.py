@@ -3,8 +3,6 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from pipeline.case import read_case
-from pipeline.run import EXAMPLE_CASE, run_case
 from structures.errors import InputError
 
 
@@ -16,6 +14,9 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> int:
+    from pipeline.case import read_case          # the whole chain (matplotlib, flutter): here,
+    from pipeline.run import EXAMPLE_CASE, run_case  # not when the parser of every command is built
+
     path = Path(args.case) if args.case else EXAMPLE_CASE
     if args.case is None and not path.exists():
         raise InputError(f"the shipped example {path} is missing. Fix: run from a checkout of the "
