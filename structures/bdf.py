@@ -367,29 +367,29 @@ def _elements(model, filename: str) -> dict:
         shells = [e for e in model.elements.values() if e.type == kind]
         if not shells:
             continue
-        theta, mcid, mcid_x, zoff, tnodal = [], [], [], [], []
         for e in shells:
-            mcid_x.append(np.zeros(3))
-            if isinstance(e.theta_mcid, int):
-                if e.theta_mcid not in coords:
-                    raise MissingReferenceError(card_message(
-                        f"material coordinate system MCID={e.theta_mcid} is not defined.",
-                        card=kind, card_id=e.eid, filename=filename,
-                        fix=f"add CORD2R {e.theta_mcid} or give THETA instead."))
-                theta.append(0.0)
-                mcid.append(e.theta_mcid)
-                mcid_x[-1] = coords[e.theta_mcid].beta()[0]
-            else:
-                theta.append(np.deg2rad(e.theta_mcid or 0.0))
-                mcid.append(-1)
-            zoff.append(e.zoffset or 0.0)
-            tn = [getattr(e, f"T{i + 1}") for i in range(nn)]
-            tnodal.append([np.nan if t is None or t == -1.0 else t for t in tn])
+            if isinstance(e.theta_mcid, int) and e.theta_mcid not in coords:
+                raise MissingReferenceError(card_message(
+                    f"material coordinate system MCID={e.theta_mcid} is not defined.",
+                    card=kind, card_id=e.eid, filename=filename,
+                    fix=f"add CORD2R {e.theta_mcid} or give THETA instead."))
             if getattr(e, "tflag", 0):
                 raise UnsupportedCardError(card_message("TFLAG=1 (relative thicknesses) is not "
                                                         "supported.", card=kind, card_id=e.eid,
                                                         filename=filename,
                                                         fix="give absolute corner thicknesses."))
+        # Whole-family arrays: MCID (-1 for THETA), THETA [rad], ZOFFS, corner thicknesses
+        # (blank or -1: the PSHELL T, as NaN).
+        mcid = np.array([e.theta_mcid if isinstance(e.theta_mcid, int) else -1 for e in shells])
+        theta = np.deg2rad([0.0 if isinstance(e.theta_mcid, int) else e.theta_mcid or 0.0
+                            for e in shells])
+        mcid_x = np.zeros((len(shells), 3))
+        for i in np.flatnonzero(mcid >= 0):
+            mcid_x[i] = coords[mcid[i]].beta()[0]
+        zoff = np.array([e.zoffset or 0.0 for e in shells], dtype=float)
+        corners = [f"T{i + 1}" for i in range(nn)]
+        tnodal = np.array([[getattr(e, t) for t in corners] for e in shells], dtype=float)
+        tnodal[tnodal == -1.0] = np.nan
         sets[kind] = ElementSet(kind, [e.eid for e in shells], [e.pid for e in shells],
                                 [e.nodes for e in shells],
                                 dict(theta=theta, mcid=mcid, mcid_x=mcid_x, zoffset=zoff,
