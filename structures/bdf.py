@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import io
 import logging
+import re
 from contextlib import redirect_stdout
 from pathlib import Path
 
@@ -39,7 +40,6 @@ NON_STRUCTURAL_CARDS = frozenset({
     "FORCE", "MOMENT", "LOAD", "GRAV", "PLOAD2", "PLOAD4",
 })
 
-_SHELL_MIN = ("CQUAD4", "CTRIA3")
 #: CBAR/CBEAM OFFT values (orientation vector, end A offset, end B offset frames; MSC QRG CBAR).
 _OFFT = ("GGG", "BGG", "GGO", "BGO", "GOG", "BOG", "GOO", "BOO")
 
@@ -85,13 +85,15 @@ def _deck_text(path: Path) -> str:
 
 
 def _check_includes(path: Path, text: str, include_dir: str, chain: tuple = ()) -> None:
-    """Every INCLUDE of ``path`` (and of the files it includes) names an existing file, and no file
-    includes itself. pyNastran would otherwise dump ``pyNastran_crash.bdf`` into the current folder
-    (or recurse without end) before failing; its own resolution rule is used
+    """Every INCLUDE of ``path`` (and of the files it includes) names an existing file, no file
+    includes itself, and no THRU range is absurd (:func:`_check_thru_ranges`). pyNastran would
+    otherwise dump ``pyNastran_crash.bdf`` into the current folder (or recurse without end, or
+    expand 1e8 ids) before failing; its own INCLUDE resolution rule is used
     (:func:`pyNastran.bdf.bdf_interface.include_file.get_include_filename`, relative to the main
     deck's folder)."""
     from pyNastran.bdf.bdf_interface.include_file import get_include_filename
 
+    _check_thru_ranges(path, text)
     chain = chain + (path.resolve(),)
     lines = text.splitlines()
     i = 0
@@ -111,10 +113,15 @@ def _check_includes(path: Path, text: str, include_dir: str, chain: tuple = ()) 
                 f"line {first}: cannot read the INCLUDE statement {' '.join(card).strip()!r} "
                 f"({exc}).", filename=str(path), fix="write INCLUDE 'file name' with the name in "
                 "single quotes.")) from None
-        if not target.is_file():
+        try:
+            exists = target.is_file()
+        except OSError:  # e.g. a name that swallowed the following lines: too long for the system
+            exists = False
+        if not exists:
+            shown = target.name if len(target.name) <= 80 else target.name[:80] + "..."
             raise InputError(card_message(
-                f"line {first}: INCLUDE names {target.name!r}, which does not exist (looked for "
-                f"{target}).", filename=str(path), fix="copy the included file there or correct "
+                f"line {first}: INCLUDE names {shown!r}, which does not exist (looked for "
+                f"{target.parent / shown}).", filename=str(path), fix="copy the included file there or correct "
                 "the name (relative names are relative to the main deck's folder)."))
         if target.resolve() in chain:
             raise InputError(card_message(
@@ -122,6 +129,25 @@ def _check_includes(path: Path, text: str, include_dir: str, chain: tuple = ()) 
                 f"read ({' -> '.join(p.name for p in chain)} -> {target.name}).",
                 filename=str(path), fix="remove the circular INCLUDE."))
         _check_includes(target, _deck_text(target), include_dir, chain)
+
+
+#: Largest id range of a "THRU" list (SET1, SPC1, ...) read: pyNastran expands the range into a list
+#: (1e6 ids take 0.3 s; 1e8 did not finish in 200 s and took over 5 GB).
+MAX_THRU_RANGE = 10_000_000
+_THRU = re.compile(r"([+-]?\d+)[,\s]*THRU[,\s]*([+-]?\d+)", re.IGNORECASE)
+
+
+def _check_thru_ranges(path: Path, text: str) -> None:
+    """Refuse id ranges ``a THRU b`` longer than :data:`MAX_THRU_RANGE` before pyNastran expands
+    them."""
+    for number, line in enumerate(text.splitlines(), 1):
+        for match in _THRU.finditer(line.split("$")[0]):
+            low, high = int(match.group(1)), int(match.group(2))
+            if high - low > MAX_THRU_RANGE:
+                raise InputError(card_message(
+                    f"line {number}: the id range {low} THRU {high} spans {high - low + 1:,} ids "
+                    f"(at most {MAX_THRU_RANGE:,} are read).", filename=str(path),
+                    fix="list the ids that exist, or correct the range's end."))
 
 
 def read_pynastran(path):
@@ -170,7 +196,11 @@ def read_pynastran(path):
     except Exception as exc:  # pyNastran signals bad decks with many exception types
         if isinstance(exc, InputError):
             raise
-        said = " ".join(str(exc).split())
+        try:
+            with redirect_stdout(io.StringIO()):  # pyNastran prints while formatting some cards
+                said = " ".join(str(exc).split())
+        except ValueError:  # some pyNastran messages fail to format a card holding inf
+            said = "(pyNastran's message could not be formatted)"
         said = said if len(said) <= 400 else said[:400] + " ..."
         raise InputError(card_message(
             f"pyNastran could not read the deck ({type(exc).__name__}: {said}).",

@@ -343,3 +343,30 @@ def test_include_missing_or_circular(tmp_path, capsys, monkeypatch, edit, needle
                  ["check", deck_dir / "bah_plane.bdf"]):
         failed(argv, capsys, *needles)
         assert listing(work) == set()
+
+
+def test_absurd_thru_range_refused_before_pynastran(pt145, capsys):
+    """pyNastran expands SET1 ... THRU 99999999 into 1e8 ids (minutes, > 5 GB) before failing."""
+    deck = _deck_with(pt145, "thru.bdf", lambda lines: [
+        ln if not ln.startswith("SET1") else "SET1    1001    1       THRU    99999999\n"
+        for ln in lines])
+    failed(["modes", deck], capsys, "thru.bdf", "1 THRU 99999999", "99,999,999 ids")
+
+
+def test_include_name_swallowing_the_deck(tmp_path, capsys, monkeypatch):
+    """An unclosed quote makes the INCLUDE name run on over the following lines."""
+    deck = tmp_path / "open_quote.bdf"
+    deck.write_text("SOL 103\nCEND\nBEGIN BULK\nINCLUDE 'geometry\n" + "GRID,1,,0.,0.,0.\n" * 60 +
+                    "ENDDATA\n")
+    monkeypatch.chdir(tmp_path)
+    failed(["modes", deck], capsys, "open_quote.bdf", "line 4: INCLUDE names", "...")
+    assert listing(tmp_path) == {Path("open_quote.bdf")}
+
+
+def test_pynastran_message_that_cannot_be_formatted(pt145, capsys):
+    """pyNastran's own message about a card holding inf raises ValueError when formatted."""
+    deck = _deck_with(pt145, "inf.bdf", lambda lines: [
+        ln if not ln.startswith("SPLINE2 100") else
+        "SPLINE2 0       101     101     124     100     inf     1.0     1       +SP\n"
+        for ln in lines])
+    failed(["flutter", deck], capsys, "inf.bdf", "pyNastran could not read the deck")

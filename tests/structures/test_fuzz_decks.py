@@ -47,12 +47,12 @@ TEXTS = {folder: {name: (DATA / folder / name).read_text().splitlines()
 
 #: Replacement values of one field, by the kind of the value it replaces (real, integer, other):
 #: mostly values that still parse (NaN, inf, negated, zero, huge), sometimes the wrong type.
-#: No huge integers: pyNastran expands "SET1,1,1,THRU,99999999" into 1e8 ids and does not return
-#: for minutes (a hang before the project's reader sees the card).
+#: "99999999" in an integer field also makes absurd THRU ranges (SET1,1,1,THRU,99999999: pyNastran
+#: would expand 1e8 ids; structures.bdf refuses them before it reads).
 VALUES = {
     "real": ("NaN", "nan", "inf", "-inf", "0.", "1e300", "1.+300", "-1e300", "negate", "negate",
              "ABC", ""),
-    "int": ("0", "-1", "negate", "negate", "1.5", "NaN", ""),
+    "int": ("0", "-1", "negate", "negate", "1.5", "NaN", "", "99999999"),
     "other": ("ABC", "", "0", "1.", "NaN"),
 }
 PRINTABLE = st.characters(min_codepoint=32, max_codepoint=126)
