@@ -86,8 +86,9 @@ def _from_case(args):
 
 
 def run(args) -> int:
-    from structures.correlation import CorrelationSettings, correlate   # scipy.optimize: here,
-                                                                         # not in every parser
+    # Imported here (it loads scipy.optimize), not when every command's parser is built.
+    from structures.correlation import CorrelationSettings, correlate
+
     if args.out:
         check_output(args.out, folder=False)
     if args.figures:

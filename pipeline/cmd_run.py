@@ -14,8 +14,10 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> int:
-    from pipeline.case import read_case          # the whole chain (matplotlib, flutter): here,
-    from pipeline.run import EXAMPLE_CASE, run_case  # not when the parser of every command is built
+    # The whole chain (matplotlib, flutter) is imported here, not when every command's parser is
+    # built.
+    from pipeline.case import read_case
+    from pipeline.run import EXAMPLE_CASE, run_case
 
     path = Path(args.case) if args.case else EXAMPLE_CASE
     if args.case is None and not path.exists():
