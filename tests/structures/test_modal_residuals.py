@@ -47,7 +47,7 @@ def test_stiff_plate_low_modes_need_no_second_solve(tmp_path, monkeypatch):
     ||K||) are accurate: the backward error, normalised by |K||phi|, stays at round-off (4e-16)
     and the solve is not repeated (normalised by ||K phi|| it read 1.6e-8 on this plate and 4e-7
     on the 60,000-DOF benchmark plate, and forced a second solve)."""
-    deck = plate_deck(tmp_path / "plate.bdf", nx=60, ny=36)
+    deck = plate_deck(tmp_path / "plate.bdf", nx=60, ny=36, boundary="cantilever")
     model = read_model(deck)
     system = assemble(model)
     calls = _count_factorisations(monkeypatch)
