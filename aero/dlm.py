@@ -42,7 +42,7 @@ from scipy.sparse import csr_matrix
 from aero import dlm_kernel as dk
 from aero.panels import BoxMesh, mirror_xz
 from aero.vlm import check_mach, check_symxz, steady_aic
-from structures.errors import InputError, card_message
+from structures.common.errors import InputError, card_message
 
 __all__ = ["dlm_aic", "check_mesh_for_k", "METHODS"]
 

@@ -33,8 +33,8 @@ from scipy.interpolate import CubicSpline
 
 from aero import dlm as _dlm
 from aero.splines import SplineMatrices, spline_frame, spline_transform
-from structures.errors import InputError, MissingReferenceError, card_message
-from structures.netcdf import read_dataset, write_dataset
+from structures.common.errors import InputError, MissingReferenceError, card_message
+from structures.common.files import read_dataset, write_dataset
 
 K_CONVENTION = "k = omega*b/V, b = refc/2"
 METHODS = ("quartic", "parabolic")

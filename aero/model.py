@@ -20,8 +20,9 @@ from pathlib import Path
 import numpy as np
 
 from aero.panels import BoxMesh, caero1_boxes, concat
-from structures.bdf import read_pynastran
-from structures.errors import InputError, MissingReferenceError, UnsupportedCardError, card_message
+from structures.common.nastran import read_pynastran
+from structures.common.errors import (InputError, MissingReferenceError, UnsupportedCardError,
+                                      card_message)
 
 #: Aerodynamic cards whose effect on the forces this project does not model.
 UNSUPPORTED_AERO_CARDS = frozenset({

@@ -23,7 +23,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from structures.errors import InputError, card_message
+from structures.common.errors import InputError, card_message
 
 __all__ = ["BoxMesh", "caero1_boxes", "concat", "mirror_xz"]
 

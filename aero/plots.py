@@ -17,7 +17,7 @@ from matplotlib.figure import Figure
 
 from aero import dlm as _dlm
 from aero.gaf import K_CONVENTION, modal_box_motion, pressure_coefficients
-from structures.errors import InputError
+from structures.common.errors import InputError
 
 PARTS = ("real", "imag", "abs", "phase")
 

@@ -18,7 +18,7 @@ import control
 import numpy as np
 import xarray as xr
 
-from structures.errors import InputError
+from structures.common.errors import InputError
 
 
 @dataclass(frozen=True)

@@ -47,7 +47,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from structures.errors import InputError, card_message
+from structures.common.errors import InputError, card_message
 
 _REL_RANK_TOL = 1e-9
 

@@ -17,7 +17,7 @@ import numpy as np
 import xarray as xr
 from scipy.special import hankel2
 
-from structures.errors import InputError
+from structures.common.errors import InputError
 
 
 def theodorsen(k: np.ndarray | float) -> np.ndarray:

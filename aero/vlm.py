@@ -26,7 +26,7 @@ from __future__ import annotations
 import numpy as np
 
 from aero.panels import BoxMesh, mirror_xz
-from structures.errors import InputError, card_message
+from structures.common.errors import InputError, card_message
 
 __all__ = ["steady_aic"]
 

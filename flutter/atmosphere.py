@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import brentq
 
-from structures.errors import InputError
+from structures.common.errors import InputError
 
 G0 = 9.80665                  # m/s^2, standard gravity
 R_AIR = 8.31432e3 / 28.9644   # J/(kg K), R* / M0 (US76 eq. 1 constants)

@@ -14,7 +14,7 @@ import numpy as np
 import xarray as xr
 from scipy.interpolate import CubicSpline
 
-from structures.errors import InputError
+from structures.common.errors import InputError
 
 INTERPOLATIONS = ("linear", "cubic")
 _K_EPS = 1e-6  # k used for Q^I/k at k = 0 when Q is given as a callable

@@ -22,7 +22,7 @@ from flutter.gafinterp import GafInterpolator
 from flutter.results import attach_crossings, vg_dataset
 from flutter.system import ModalSystem
 from flutter.tracking import assign
-from structures.errors import InputError
+from structures.common.errors import InputError
 
 
 def k_solve(system: ModalSystem, gaf, k, *, density: float, mach: float,

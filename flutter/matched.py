@@ -16,7 +16,7 @@ import xarray as xr
 from flutter.atmosphere import Units, atmosphere, flight_labels
 from flutter.pk import pk_solve
 from flutter.system import ModalSystem
-from structures.errors import InputError, SolverError
+from structures.common.errors import InputError, SolverError
 
 
 def _label_crossings(ds: xr.Dataset, units: Units) -> xr.Dataset:

@@ -17,7 +17,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from structures.errors import InputError
+from structures.common.errors import InputError
 
 
 def participation_factors(u: np.ndarray, mass: np.ndarray) -> np.ndarray:

@@ -30,7 +30,7 @@ from flutter.parallel import map_cases
 from flutter.pk_solver import PKSolver, RootState
 from flutter.results import vg_dataset, attach_crossings
 from flutter.system import ModalSystem
-from structures.errors import InputError
+from structures.common.errors import InputError
 
 def check_sweep(velocity: np.ndarray, density: np.ndarray, mach: np.ndarray, sweep: str):
     """Validate a sweep of flight points; the swept variable must increase strictly."""

@@ -23,7 +23,7 @@ import numpy as np
 from flutter.gafinterp import GafInterpolator
 from flutter.linalg import inverse_iteration, path_length, pencil_system, rayleigh
 from flutter.system import ModalSystem
-from structures.errors import InputError
+from structures.common.errors import InputError
 
 LN2 = np.log(2.0)
 NEWTON_ITER = 12  # Newton k-matching normally converges in 2-4 iterations; slower roots are retried

@@ -30,7 +30,7 @@ import numpy as np
 import xarray as xr
 
 from flutter.crossings import Crossing
-from structures.netcdf import write_dataset, write_json, write_text
+from structures.common.files import write_dataset, write_json, write_text
 from structures.units import unit_labels
 
 KINDS = ("flutter", "divergence")

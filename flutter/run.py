@@ -21,8 +21,8 @@ from flutter.kmethod import k_solve
 from flutter.pk import pk_solve, pk_solve_many
 from flutter.results import label_units, summary_entries, write_flutter
 from flutter.system import ModalSystem, StructuralDamping
-from structures.errors import InputError, UnsupportedCardError, card_message
-from structures.netcdf import write_dataset
+from structures.common.errors import InputError, UnsupportedCardError, card_message
+from structures.common.files import write_dataset
 from structures.units import system_of, unit_labels
 
 METHODS = {"PK": "pk", "PKNL": "pknl", "K": "k", "KE": "k"}
@@ -204,7 +204,7 @@ def run_flutter(deck: str | os.PathLike, out_dir: str | os.PathLike | None = Non
         the Datasets labelled with the unit system), ``modes``, ``gaf``, ``units`` (the system
         used, None for "model units").
     """
-    from structures.bdf import read_pynastran
+    from structures.common.nastran import read_pynastran
 
     unit_labels(units)  # an unknown name fails before any work
     deck = Path(deck)

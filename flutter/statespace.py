@@ -16,7 +16,7 @@ from aero.rfa import RogerRFA, aeroelastic_statespace
 from flutter.crossings import find_brackets, interpolate_zero
 from flutter.system import ModalSystem
 from flutter.tracking import assign
-from structures.errors import InputError
+from structures.common.errors import InputError
 
 
 def statespace_solve(system: ModalSystem, rfa: RogerRFA, velocity, *, density: float) -> xr.Dataset:

@@ -19,7 +19,7 @@ import numpy as np
 import xarray as xr
 
 from flutter.participation import crossing_participation
-from structures.errors import InputError
+from structures.common.errors import InputError
 
 MARGIN_FACTOR = 1.15
 

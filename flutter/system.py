@@ -10,7 +10,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.linalg as sla
 
-from structures.errors import InputError
+from structures.common.errors import InputError
 
 DAMPING_KINDS = ("hysteretic", "viscous")
 

@@ -33,7 +33,7 @@ from types import MappingProxyType
 from typing import Mapping
 
 from structures.assembly import MASS_OPTIONS
-from structures.errors import InputError
+from structures.common.errors import InputError
 from structures.massprops import check_measured_mass
 from structures.units import UNIT_SYSTEMS
 

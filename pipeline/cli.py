@@ -13,7 +13,7 @@ import sys
 import warnings
 
 from pipeline.stage import Interrupted, running
-from structures.errors import PipelineError
+from structures.common.errors import PipelineError
 
 #: Subcommand modules, in the order ``pipeline --help`` lists them.
 COMMANDS = ("pipeline.cmd_run", "pipeline.cmd_modes", "pipeline.cmd_correlate",

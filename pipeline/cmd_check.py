@@ -8,8 +8,9 @@ Nothing else is computed, so it runs in seconds on a model of a few thousand gri
 from __future__ import annotations
 
 from structures.assembly import assemble
-from structures.bdf import NON_STRUCTURAL_CARDS, SUPPORTED_CARDS, read_model, read_pynastran
-from structures.errors import SolverError, UnsupportedCardError
+from structures.bdf import NON_STRUCTURAL_CARDS, SUPPORTED_CARDS, read_model
+from structures.common.nastran import read_pynastran
+from structures.common.errors import SolverError, UnsupportedCardError
 from structures.massprops import mass_properties
 from structures.modal import compute_modes
 from pipeline.cli import positive_int

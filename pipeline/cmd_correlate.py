@@ -17,9 +17,9 @@ import numpy as np
 
 from structures.acceptance import DEFAULT_CRITERIA
 from structures.assembly import MASS_OPTIONS
-from structures.errors import InputError
+from structures.common.errors import InputError
 from structures.gvt import load_gvt
-from structures.netcdf import check_output, staged_folder, write_dataset
+from structures.common.files import check_output, staged_folder, write_dataset
 from pipeline.cli import positive_int
 
 _FAIL_CODES = (("pass_frequency", "f"), ("pass_cross_orthogonality_diagonal", "d"),

@@ -6,7 +6,7 @@ from pathlib import Path
 
 from pipeline.cli import positive_int
 from pipeline.stage import running
-from structures.netcdf import check_output, staged_folder
+from structures.common.files import check_output, staged_folder
 from structures.units import unit_labels
 
 

@@ -6,7 +6,7 @@ from structures.bdf import read_model
 from structures.massprops import mass_properties
 from structures.modal import compute_modes
 from structures.modes import write_modes
-from structures.netcdf import check_output
+from structures.common.files import check_output
 from pipeline.cli import positive_int
 from pipeline.tables import frequency_table, mass_table
 

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from structures.errors import InputError
+from structures.common.errors import InputError
 
 
 def add_parser(sub) -> None:

@@ -52,7 +52,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from pipeline.cli import positive_int
-from structures.errors import InputError
+from structures.common.errors import InputError
 
 
 def read_tuning(path) -> tuple:
@@ -104,7 +104,7 @@ def add_parser(subparsers) -> None:
 
 def run(args) -> int:
     from structures.design import write_tuned_bdf
-    from structures.netcdf import (check_output, read_dataset, staged_folder, write_dataset,
+    from structures.common.files import (check_output, read_dataset, staged_folder, write_dataset,
                                    write_text)
     from structures.tuning import best_from_history, tune
     from structures.tuning_report import tuning_report

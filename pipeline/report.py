@@ -4,7 +4,7 @@ from __future__ import annotations
 import html
 from pathlib import Path
 
-from structures.netcdf import write_text
+from structures.common.files import write_text
 from structures.units import UnitLabels, unit_labels
 
 

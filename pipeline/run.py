@@ -23,15 +23,16 @@ from pipeline.case import Case, Configuration, FlutterSettings
 from pipeline.report import write_report
 from pipeline.stage import running
 from structures.assembly import assemble
-from structures.bdf import read_model, read_pynastran
+from structures.bdf import read_model
+from structures.common.nastran import read_pynastran
 from structures.correlation import CorrelationSettings, correlate
 from structures.correlation_plots import save_correlation_figures
-from structures.errors import InputError
+from structures.common.errors import InputError
 from structures.gvt import load_gvt
 from structures.massprops import compare_mass_properties, mass_properties
 from structures.modal import compute_modes
 from structures.modes import read_modes, write_modes
-from structures.netcdf import (check_output, read_dataset, staged_folder, write_dataset,
+from structures.common.files import (check_output, read_dataset, staged_folder, write_dataset,
                                write_json)
 
 EXAMPLE_CASE = Path(__file__).resolve().parents[1] / "data" / "bah_wing" / "case.toml"

@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 import xarray as xr
 
-from structures.errors import InputError
+from structures.common.errors import InputError
 
 
 @dataclass(frozen=True)

@@ -19,7 +19,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from structures.elements import beam, scalar, shell, shell_materials
-from structures.errors import InputError, card_message
+from structures.common.errors import InputError, card_message
 from structures.frames import rigid_offset
 from structures.model import FEModel
 from structures.rigid import solve_constraints

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from structures.errors import InputError
+from structures.common.errors import InputError
 
 
 def real8(value: float) -> str:

@@ -41,7 +41,7 @@ import scipy.linalg
 import xarray as xr
 
 from structures.acceptance import DEFAULT_CRITERIA, evaluate_checks
-from structures.errors import InputError
+from structures.common.errors import InputError
 from structures.gvt import check_dofs_in_model, validate_gvt
 from structures.modes import check_modes
 from structures.pairing import pair_modes

@@ -27,7 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
-from structures.errors import InputError, MissingReferenceError, card_message
+from structures.common.errors import InputError, MissingReferenceError, card_message
 from structures.model import ElementSet, FEModel, Material, Property
 
 #: Tunable fields per card.

@@ -44,8 +44,8 @@ import numpy as np
 import pyuff
 import xarray as xr
 
-from structures.errors import InputError
-from structures.netcdf import read_dataset, write_dataset
+from structures.common.errors import InputError
+from structures.common.files import read_dataset, write_dataset
 
 _UFF_SUFFIXES = (".unv", ".uff", ".uf")
 # A real number as Fortran writes it, possibly run together with its neighbour ("1.0E+00-2.0E+00")

@@ -34,7 +34,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from structures.correlation import cross_orthogonality, mac, orthogonality, serep_coordinates
-from structures.errors import InputError
+from structures.common.errors import InputError
 from structures.massprops import properties_from_rigid_body_mass
 from structures.pairing import pair_modes
 

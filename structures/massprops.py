@@ -17,7 +17,7 @@ import numpy as np
 import xarray as xr
 
 from structures.assembly import assemble_g
-from structures.errors import InputError, card_message
+from structures.common.errors import InputError, card_message
 from structures.frames import rigid_offset, skew
 from structures.model import FEModel
 

@@ -28,7 +28,7 @@ import xarray as xr
 from threadpoolctl import ThreadpoolController
 
 from structures.assembly import AssembledSystem, assemble
-from structures.errors import SolverError, card_message
+from structures.common.errors import SolverError, card_message
 from structures.frames import rigid_offset
 from structures.model import FEModel
 from structures.modes import modes_dataset

@@ -16,7 +16,7 @@ from typing import Mapping
 
 import numpy as np
 
-from structures.errors import InputError, MissingReferenceError, card_message
+from structures.common.errors import InputError, MissingReferenceError, card_message
 
 
 def _frozen_array(values, dtype, shape_tail=()) -> np.ndarray:

@@ -10,8 +10,8 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from structures.errors import InputError
-from structures.netcdf import read_dataset, write_dataset
+from structures.common.errors import InputError
+from structures.common.files import read_dataset, write_dataset
 
 REQUIRED = ("frequency", "shape", "generalized_mass")
 

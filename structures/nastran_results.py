@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from structures.errors import InputError
+from structures.common.errors import InputError
 from structures.modes import modes_dataset
 
 _F06_TABLE = "R E A L   E I G E N V A L U E S"

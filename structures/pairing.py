@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
-from structures.errors import InputError
+from structures.common.errors import InputError
 
 
 @dataclass(frozen=True)

@@ -16,7 +16,7 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from structures.errors import InputError, card_message
+from structures.common.errors import InputError, card_message
 from structures.frames import rigid_offset
 
 

@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from structures.errors import UnsupportedCardError, card_message
+from structures.common.errors import UnsupportedCardError, card_message
 
 #: Section TYPEs whose A, I1, I2, I12 pyNastran computes and whose J is derived here (PBARL and
 #: PBEAML alike).

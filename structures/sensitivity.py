@@ -34,7 +34,7 @@ import numpy as np
 import scipy.linalg as sla
 import scipy.sparse.linalg as spla
 
-from structures.errors import InputError, SolverError, card_message
+from structures.common.errors import InputError, SolverError, card_message
 from structures.modal import DEFAULT_SHIFT
 from structures.subassembly import SubAssembly
 

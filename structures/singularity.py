@@ -33,7 +33,7 @@ import numpy as np
 import scipy.sparse as sp
 import xarray as xr
 
-from structures.errors import InputError
+from structures.common.errors import InputError
 
 #: Nastran's PARAM EPZERO default: stiffness ratios below it are singular.
 EPZERO_DEFAULT = 1.0e-8

@@ -32,7 +32,7 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from structures.errors import InputError, SolverError, card_message
+from structures.common.errors import InputError, SolverError, card_message
 
 BACKENDS = ("pardiso", "superlu")
 ENV_VAR = "FTP_SPARSE_BACKEND"

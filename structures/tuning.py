@@ -47,7 +47,7 @@ import xarray as xr
 from threadpoolctl import threadpool_limits
 
 from structures.design import DesignSpace, bind
-from structures.errors import InputError, SolverError
+from structures.common.errors import InputError, SolverError
 from structures.gvt import check_dofs_in_model, validate_gvt
 from structures.indices import build_catalogue, correlation_terms, index_values, mass_quantities
 from structures.model import FEModel

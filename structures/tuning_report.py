@@ -17,7 +17,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from structures.errors import InputError
+from structures.common.errors import InputError
 
 
 def _iteration(history: xr.Dataset, which) -> int:

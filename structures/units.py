@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, fields
 
-from structures.errors import InputError
+from structures.common.errors import InputError
 
 MODEL_UNITS = "model units"
 

@@ -14,7 +14,7 @@ import numbers
 
 import numpy as np
 
-from structures.errors import InputError, card_message
+from structures.common.errors import InputError, card_message
 from structures.model import FEModel
 
 _PROPERTY_OF = {"CBAR": ("PBAR", "PBEAM"), "CBEAM": ("PBAR", "PBEAM"), "CROD": ("PROD",),

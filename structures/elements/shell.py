@@ -39,7 +39,7 @@ from __future__ import annotations
 import numpy as np
 
 from structures.elements.shell_materials import ShellSection
-from structures.errors import InputError
+from structures.common.errors import InputError
 
 KIRCHHOFF_PENALTY = 1.0e4
 #: Nastran PARAM K6ROT default (MSC Nastran 2004 and later, linear solutions included).

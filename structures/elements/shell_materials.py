@@ -23,7 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from structures.errors import InputError, MissingReferenceError, card_message
+from structures.common.errors import InputError, MissingReferenceError, card_message
 
 
 def _check_finite(card: str, mid: int, **values: float) -> None:

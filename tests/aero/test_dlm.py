@@ -16,7 +16,7 @@ from scipy.integrate import quad
 from aero.dlm import check_mesh_for_k, dlm_aic
 from aero.panels import caero1_boxes, concat, mirror_xz
 from aero.vlm import steady_aic
-from structures.errors import InputError
+from structures.common.errors import InputError
 
 A12 = [0.000319759140, -0.000055461471, 0.002726074362, 0.005749551566, 0.031455895072,
        0.106031126212, 0.406838011567, 0.798112357155, -0.417749229098, 0.077480713894,

@@ -12,7 +12,7 @@ from aero.dlm import check_mesh_for_k
 from aero.gaf import generalized_aero_forces, interpolate_q, read_gaf, write_gaf
 from aero.model import read_aero_model
 from aero_decks import DATA, write_deck
-from structures.errors import InputError
+from structures.common.errors import InputError
 from structures.modes import modes_dataset
 
 BAH_QHH = DATA / "bah_plane" / "bah_plane_qhh.bdf"
@@ -287,7 +287,7 @@ def test_plots_and_pressure_consistent_with_q(tmp_path):
 
 def test_modes_must_hold_the_spline_grids(tmp_path):
     """A modes Dataset without some spline grid, or with the grids elsewhere, is rejected."""
-    from structures.errors import MissingReferenceError
+    from structures.common.errors import MissingReferenceError
 
     half, _ = half_and_full_decks(tmp_path, 1)
     modes = synthetic_modes(half, [lambda x, y: np.ones_like(x)])

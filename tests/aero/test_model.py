@@ -6,7 +6,7 @@ import pytest
 
 from aero.model import read_aero_model
 from aero_decks import BAH, wing_grids, write_deck
-from structures.errors import InputError, MissingReferenceError, UnsupportedCardError
+from structures.common.errors import InputError, MissingReferenceError, UnsupportedCardError
 
 PANEL = "PAERO1,1\nCAERO1,101,1,0,4,2,,,1\n,0.,0.,0.,2.,0.,6.,0.,2."
 

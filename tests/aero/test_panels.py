@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from aero.panels import caero1_boxes, concat, mirror_xz
-from structures.errors import InputError
+from structures.common.errors import InputError
 
 U3 = np.linspace(0.0, 1.0, 4)
 

@@ -8,7 +8,7 @@ from aero.gaf import spline_matrices
 from aero.model import read_aero_model
 from aero.splines import beam_weights, ips_weights
 from aero_decks import BAH, DATA, wing_grids, write_deck
-from structures.errors import InputError
+from structures.common.errors import InputError
 
 RNG = np.random.default_rng(7)
 TOL = 1e-10  # exact reproduction up to round-off of the dense solves

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from aero.strip import section_gaf, strip_gaf, theodorsen
-from structures.errors import InputError
+from structures.common.errors import InputError
 
 
 def test_theodorsen_known_values():

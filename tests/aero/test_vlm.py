@@ -7,7 +7,7 @@ import pytest
 
 from aero.panels import caero1_boxes, concat
 from aero.vlm import steady_aic
-from structures.errors import InputError
+from structures.common.errors import InputError
 
 
 def lift_slope(mesh, sref, mach=0.0, symxz=1):

@@ -14,8 +14,8 @@ from flutter.participation import crossing_participation, participation_factors,
 from flutter.pk import pk_solve
 from flutter.results import write_flutter
 from flutter.system import ModalSystem
-from structures.errors import InputError
-from structures.netcdf import read_dataset
+from structures.common.errors import InputError
+from structures.common.files import read_dataset
 from flutter_nastran import DATA
 
 A, E, MU, R2, SIGMA = -0.2, -0.1, 20.0, 0.24, 0.4

@@ -11,7 +11,7 @@ import xarray as xr
 from aero.strip import section_gaf
 from flutter.parallel import map_cases
 from flutter.pk import pk_solve, pk_solve_many
-from structures.errors import InputError
+from structures.common.errors import InputError
 from test_pk_typical_section import A, B, RHO, gaf, section
 
 NUMBERS = ("eigenvalue", "damping", "frequency", "k", "eigenvector", "crossing_velocity",

@@ -17,7 +17,7 @@ from aero.strip import section_gaf
 from flutter.kmethod import k_solve
 from flutter.pk import pk_solve
 from flutter.system import ModalSystem, StructuralDamping
-from structures.errors import InputError
+from structures.common.errors import InputError
 import flutter_plain_pk as plain
 
 A, E, MU, R2, SIGMA = -0.2, -0.1, 20.0, 0.24, 0.4

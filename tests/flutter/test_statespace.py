@@ -11,7 +11,7 @@ from aero.strip import section_gaf
 from flutter.pk import pk_solve
 from flutter.statespace import statespace_solve
 from flutter.tracking import assign
-from structures.errors import InputError
+from structures.common.errors import InputError
 from test_pk_typical_section import A, B, section
 
 K = np.concatenate([[0.0, 0.01, 0.02, 0.05], np.linspace(0.1, 2.0, 20)])

@@ -15,8 +15,8 @@ from flutter.pk import pk_solve
 from flutter.summary import Envelope, flutter_summary
 from flutter.system import ModalSystem
 from flutter_nastran import DATA
-from structures.errors import InputError
-from structures.netcdf import read_dataset
+from structures.common.errors import InputError
+from structures.common.files import read_dataset
 
 A, E, MU, R2, SIGMA = -0.2, -0.1, 20.0, 0.24, 0.4
 

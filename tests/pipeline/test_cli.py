@@ -9,9 +9,9 @@ import pytest
 
 from pipeline.case import read_case
 from pipeline.cli import main
-from structures.errors import InputError
+from structures.common.errors import InputError
 from structures.modes import read_modes
-from structures.netcdf import read_dataset
+from structures.common.files import read_dataset
 
 DATA = Path(__file__).resolve().parents[1] / "data"
 

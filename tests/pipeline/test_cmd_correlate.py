@@ -9,10 +9,10 @@ import scipy.linalg
 import xarray as xr
 
 from pipeline import cmd_correlate
-from structures.errors import InputError
+from structures.common.errors import InputError
 from structures.gvt import make_gvt_dataset, write_uff
 from structures.modes import modes_dataset, write_modes
-from structures.netcdf import read_dataset
+from structures.common.files import read_dataset
 
 
 def parse(argv):

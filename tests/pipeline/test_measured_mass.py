@@ -10,11 +10,11 @@ import pytest
 from pipeline.case import read_case
 from pipeline.cli import main
 from structures.bdf import read_model
-from structures.errors import InputError
+from structures.common.errors import InputError
 from structures.gvt import make_gvt_dataset, write_uff
 from structures.massprops import compare_mass_properties, mass_properties
 from structures.modal import compute_modes
-from structures.netcdf import read_dataset
+from structures.common.files import read_dataset
 
 DATA = Path(__file__).resolve().parents[1] / "data"
 

@@ -9,7 +9,7 @@ import xarray as xr
 
 from structures.acceptance import (MIL_STD_1540C, NASA_STD_5002, AcceptanceCriteria, evaluate_checks,
                                    off_diagonal_maxima)
-from structures.errors import InputError
+from structures.common.errors import InputError
 
 
 def corr_dataset():

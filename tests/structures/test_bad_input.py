@@ -5,7 +5,7 @@ import pytest
 
 from pipeline.cli import main
 from structures.bdf import read_model
-from structures.errors import (InputError, MissingReferenceError, PipelineError, SolverError,
+from structures.common.errors import (InputError, MissingReferenceError, PipelineError, SolverError,
                                UnsupportedCardError)
 from structures.modal import compute_modes
 

@@ -121,7 +121,7 @@ def test_offset_conm2_equals_mass_on_rigidly_attached_grid(tmp_path):
 
 
 def test_free_free_cbar_without_rotary_inertia_is_a_massless_mechanism(tmp_path):
-    from structures.errors import SolverError
+    from structures.common.errors import SolverError
     model = read_model(beam_deck(tmp_path / "free_cbar.bdf", support="free", nmodes=8))
     with pytest.raises(SolverError, match="massless mechanism"):
         compute_modes(model, 8)

@@ -16,7 +16,7 @@ import xarray as xr
 from structures.acceptance import MIL_STD_1540C, NASA_STD_5002
 from structures.correlation import (CorrelationSettings, correlate, cross_orthogonality, expand_test_shapes,
                                     mac, orthogonality, serep_coordinates, serep_expand, serep_mass)
-from structures.errors import InputError
+from structures.common.errors import InputError
 from structures.gvt import make_gvt_dataset
 
 

@@ -14,7 +14,7 @@ from structures.assembly import assemble  # noqa: E402
 from structures.bdf import read_model  # noqa: E402
 from structures.design import (DesignVariable, FieldRef, affected_submodel, apply_design, bind,  # noqa: E402
                                element_groups, get_field, write_tuned_bdf)
-from structures.errors import InputError, MissingReferenceError  # noqa: E402
+from structures.common.errors import InputError, MissingReferenceError  # noqa: E402
 
 
 @pytest.fixture(scope="module")

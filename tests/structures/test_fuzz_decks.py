@@ -7,8 +7,8 @@ cut short), a field set to NaN / inf / a negated value / 0 / 1e300 / text / blan
 one, an INCLUDE target removed, a file that INCLUDEs itself -- and then runs ``read_model``,
 ``assemble`` and ``compute_modes(model, 6)``, separately ``read_aero_model``, and when both work
 the generalized aerodynamic forces at the deck's first Mach-k pair. Each either returns or raises
-a :class:`structures.errors.PipelineError` whose message names the deck or one of its included
-files; warnings are allowed; any other exception fails the test. The default tests are
+a :class:`structures.common.errors.PipelineError` whose message names the deck or one of its
+included files; warnings are allowed; any other exception fails the test. The default tests are
 derandomized (the same examples on every run); the ``slow`` ones draw thousands at random.
 
 Card boundaries are parsed properly: small-field (8-column), large-field (``*``, 16-column) and
@@ -30,7 +30,7 @@ from aero.gaf import generalized_aero_forces
 from aero.model import read_aero_model
 from structures.assembly import assemble
 from structures.bdf import read_model
-from structures.errors import PipelineError
+from structures.common.errors import PipelineError
 from structures.modal import compute_modes
 
 DATA = Path(__file__).resolve().parents[1] / "data"

@@ -18,7 +18,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from structures.errors import InputError
+from structures.common.errors import InputError
 from structures.gvt import read_uff, validate_gvt
 
 ROOT = Path(__file__).resolve().parents[2]

@@ -8,7 +8,7 @@ import pytest
 import pyuff
 import xarray as xr
 
-from structures.errors import InputError
+from structures.common.errors import InputError
 from structures.gvt import (check_dofs_in_model, load_gvt, make_gvt_dataset, read_gvt, read_uff, write_gvt,
                             write_uff)
 

@@ -14,7 +14,7 @@ from tuning_decks import synthetic_gvt, write_aircraft_deck  # noqa: E402
 from structures.bdf import read_model  # noqa: E402
 from structures.correlation import correlate  # noqa: E402
 from structures.design import DesignVariable, apply_design  # noqa: E402
-from structures.errors import InputError  # noqa: E402
+from structures.common.errors import InputError  # noqa: E402
 from structures.indices import MASS_QUANTITIES, build_catalogue, mass_quantities  # noqa: E402
 from structures.massprops import mass_properties  # noqa: E402
 from structures.modal import compute_modes  # noqa: E402

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from structures.bdf import read_model
-from structures.errors import UnsupportedCardError
+from structures.common.errors import UnsupportedCardError
 from structures.modal import compute_modes
 
 

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from structures.bdf import read_model
-from structures.errors import InputError
+from structures.common.errors import InputError
 from structures.modal import compute_modes
 from structures.modes import read_modes, write_modes
 from structures.nastran_results import modes_from_op2, read_f06_eigenvalues

@@ -6,7 +6,7 @@ import itertools
 import numpy as np
 import pytest
 
-from structures.errors import InputError
+from structures.common.errors import InputError
 from structures.pairing import detect_interchange, pair_modes
 
 

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from structures.bdf import read_model
-from structures.errors import InputError
+from structures.common.errors import InputError
 from structures.model import RigidElement
 from structures.rigid import element_constraints, solve_constraints
 

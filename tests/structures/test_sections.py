@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from structures.bdf import read_model
-from structures.errors import UnsupportedCardError
+from structures.common.errors import UnsupportedCardError
 from structures.modal import compute_modes
 from structures.sections import section_fields, torsion_constant
 

@@ -14,7 +14,7 @@ from structures.elements.shell import quad4_matrices, tria3_matrices
 from structures.elements.shell_materials import (Mat1, Mat2, Mat8, PShell, ShellSection,
                                                  material_from_fields, pshell_from_fields,
                                                  pshell_section, stack_sections)
-from structures.errors import InputError, MissingReferenceError
+from structures.common.errors import InputError, MissingReferenceError
 
 E, NU, RHO = 1.0e6, 0.25, 2.5
 MAT = {1: Mat1.from_fields(1, E, None, NU, RHO)}

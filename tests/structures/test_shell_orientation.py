@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from structures.bdf import read_model
-from structures.errors import MissingReferenceError
+from structures.common.errors import MissingReferenceError
 from structures.modal import compute_modes
 
 

@@ -18,7 +18,7 @@ from structures.assembly import assemble
 from structures.bdf import read_model
 from structures.elements.shell import quad4_matrices, tria3_matrices
 from structures.elements.shell_materials import pshell_from_fields, pshell_section, material_from_fields
-from structures.errors import SolverError
+from structures.common.errors import SolverError
 from structures.modal import compute_modes
 from structures.singularity import SingularityWarning, block_singularities, grid_point_singularities
 from test_mystran import needs_mystran, run_mystran

@@ -14,7 +14,7 @@ import scipy.sparse.linalg as spla
 from plate_decks import plate_deck
 from structures.assembly import assemble
 from structures.bdf import read_model
-from structures.errors import InputError, SolverError
+from structures.common.errors import InputError, SolverError
 from structures.modal import DEFAULT_SHIFT, solve_eigen
 from structures.sparse_factor import BACKENDS, ENV_VAR, available_backends, factorize
 

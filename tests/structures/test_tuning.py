@@ -15,10 +15,10 @@ from tuning_decks import synthetic_gvt, write_aircraft_deck, write_cantilever_de
 import structures.sensitivity as sensitivity  # noqa: E402
 from structures.bdf import read_model  # noqa: E402
 from structures.design import DesignVariable  # noqa: E402
-from structures.errors import InputError, MissingReferenceError  # noqa: E402
+from structures.common.errors import InputError, MissingReferenceError  # noqa: E402
 from structures.gvt import make_gvt_dataset  # noqa: E402
 from structures.modal import compute_modes  # noqa: E402
-from structures.netcdf import read_dataset, write_dataset  # noqa: E402
+from structures.common.files import read_dataset, write_dataset  # noqa: E402
 from structures.tuning import (Evaluator, TuningConfiguration, TuningProblem, best_from_history,  # noqa: E402
                                tune)
 

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import pytest
 
-from structures.errors import InputError
+from structures.common.errors import InputError
 from structures.units import MODEL_UNITS, UNIT_SYSTEMS, UnitLabels, system_of, unit_labels
 
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from structures.bdf import read_model
-from structures.errors import InputError, MissingReferenceError
+from structures.common.errors import InputError, MissingReferenceError
 from structures.modal import compute_modes
 
 #: A cantilever of two bars and a rod, a square plate of one CQUAD4 and one CTRIA3 beside it.

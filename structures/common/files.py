@@ -17,7 +17,7 @@ from pathlib import Path
 
 import xarray as xr
 
-from structures.errors import InputError
+from structures.common.errors import InputError
 
 
 def _atomic(path: Path, write) -> Path:
