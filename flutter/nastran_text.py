@@ -5,10 +5,11 @@ pt145.f06, two_mode_flutter/0012_flutter.f06): a header ``POINT = n  MACH NUMBER
 RATIO = ...  METHOD = PK`` (``POINT = n  METHOD = PKNL`` for a density sweep), then per flight
 point the columns KFREQ, 1./KFREQ, VELOCITY, DAMPING, FREQUENCY and the COMPLEX EIGENVALUE
 p = omega (g/2 + i) (real, imaginary); PKNL adds DENSITY and MACH NO. before VELOCITY. POINT is the
-root number. As Nastran does, a real root (|Im p| <= 1e-9 |p|, the p-k solver's rule) prints
-KFREQ 0, 1./KFREQ 9.9999996E+24 (Nastran's single-precision 1e25), frequency 0 and a zero
-imaginary part. The DENSITY RATIO is the density over the sweep's ``rhoref`` attribute (AERO RHOREF;
-1.0 when absent, as Nastran without RHOREF). The unit system (``unit_system`` attribute, see
+root number. As Nastran does, a real root (|Im p| <= 1e-9 |p|; the p-k solver bounds |p| below by
+its frequency scale, which only matters for p near 0) prints KFREQ 0, 1./KFREQ 9.9999996E+24
+(Nastran's single-precision 1e25), frequency 0 and a zero imaginary part. The DENSITY RATIO is
+the density over the sweep's ``rhoref`` attribute (AERO RHOREF; 1.0 when absent, as Nastran
+without RHOREF). The unit system (``unit_system`` attribute, see
 :func:`flutter.results.label_units`) is printed on each table's configuration line. k-method
 tables (K / KE) list the points in increasing k as Nastran's FLFACT order usually is, each root at
 its own velocity, and skip the k values where the root has no solution (rigid roots); their
@@ -25,7 +26,7 @@ import xarray as xr
 from structures.units import unit_labels
 
 INV_K_ZERO = float(np.float32(1e25))   # what Nastran prints as 1./KFREQ of a real root
-REAL_ROOT = 1e-9                       # |Im p| <= REAL_ROOT |p|: a real root (flutter.pk_solver)
+REAL_ROOT = 1e-9                       # |Im p| <= REAL_ROOT |p|: a real root
 
 _HEAD = ("       KFREQ            1./KFREQ         VELOCITY            DAMPING         FREQUENCY"
          "            COMPLEX   EIGENVALUE")

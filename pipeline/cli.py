@@ -1,9 +1,9 @@
 """The ``pipeline`` command: parses arguments and calls the library, nothing else.
 
 Each subcommand lives in its own module exposing ``add_parser(subparsers)`` and ``run(args)``.
-Exit codes: 0 success; 2 a project error (one line ``error: ...`` naming file, card or key and the
-fix) or a bad argument; 130 Ctrl-C (one line naming the stage that was running). Anything else is
-a bug and shows its traceback.
+Exit codes: 0 success; 1 ``pipeline check`` found a mechanism; 2 a project error (one line
+``error: ...`` naming file, card or key and the fix) or a bad argument; 130 Ctrl-C (one line naming
+the stage that was running). Anything else is a bug and shows its traceback.
 """
 from __future__ import annotations
 

@@ -393,7 +393,8 @@ def _params(model, filename: str) -> dict:
         return model.params[name].values[0] if name in model.params else default
     autospc = _case_value(model, "AUTOSPC")
     return dict(wtmass=float(value("WTMASS", 1.0)), coupmass=int(value("COUPMASS", -1)),
-                k6rot=float(value("K6ROT", 100.0)), epzero=float(value("EPZERO", 1.0e-8)),
+                k6rot=float(value("K6ROT", FEModel.k6rot)),
+                epzero=float(value("EPZERO", FEModel.epzero)),
                 autospc=_yes_no(value("AUTOSPC", "YES") if autospc is None else autospc,
                                 "AUTOSPC", filename))
 

@@ -22,12 +22,15 @@ in E, which :mod:`structures.subassembly` then re-assembles at every design).
 """
 from __future__ import annotations
 
+import io
 from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
 
 from structures.common.errors import InputError, MissingReferenceError, card_message
+from structures.common.files import write_text
+from structures.common.nastran import read_pynastran
 from structures.model import ElementSet, FEModel, Material, Property
 
 #: Tunable fields per card.
@@ -425,10 +428,7 @@ def write_tuned_bdf(deck_in, deck_out, space: DesignSpace, x) -> Path:
     space : DesignSpace
     x : (nvar,) tuned design values
     """
-    from pyNastran.bdf.bdf import BDF
-
-    bdf = BDF(debug=None)
-    bdf.read_bdf(str(deck_in), xref=False)
+    bdf = read_pynastran(deck_in)
     for ref, value in field_values(space, space.check(x)).items():
         try:
             obj = _card_object(bdf, ref)
@@ -455,7 +455,6 @@ def write_tuned_bdf(deck_in, deck_out, space: DesignSpace, x) -> Path:
             setattr(obj, attr, (old * (value / mean)).tolist())
         else:
             setattr(obj, _PYNASTRAN_ATTR[(ref.card, ref.field)], value)
-    deck_out = Path(deck_out)
-    deck_out.parent.mkdir(parents=True, exist_ok=True)
-    bdf.write_bdf(str(deck_out), size=16, is_double=False)
-    return deck_out
+    text = io.StringIO()
+    bdf.write_bdf(text, size=16, is_double=False, close=False)
+    return write_text(text.getvalue(), Path(deck_out))

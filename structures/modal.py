@@ -9,8 +9,8 @@ pencil. Modes are mass-normalised (Phi^T M Phi = I) and returned as the modes Da
 
 Every elastic eigenpair's residual is checked (:func:`eigen_residuals`): when the shift lies so far
 below the elastic eigenvalues that the factorisation loses them (rigid-body modes at 0 Hz, elastic
-ones at kHz), the solve is repeated at a tenth of the lowest elastic eigenvalue; modes that stay
-inaccurate are named in a warning.
+ones at kHz), the solve is repeated at sigma = -lambda_min / 10 (lambda_min the lowest elastic
+eigenvalue found); modes that stay inaccurate are named in a warning.
 
 Mechanisms are reported, not hidden: a direction with neither stiffness nor mass makes the shifted
 matrix singular, and a zero-frequency mode that is not a rigid-body motion of the structure is a
@@ -86,8 +86,8 @@ def solve_eigen(k: sp.spmatrix, m: sp.spmatrix, nmodes: int, *, shift: float = D
         if inaccurate.any() and -0.1 * lam[lam > ELASTIC_RATIO * lam.max()].min() < shift:
             # The shift is far below the elastic eigenvalues (e.g. rigid-body modes at 0 and
             # elastic modes at kHz): K - sigma M is then nearly singular along the rigid-body
-            # motions and the solves lose the elastic components. Shift to a tenth of the lowest
-            # elastic eigenvalue found and solve again.
+            # motions and the solves lose the elastic components. Solve again at
+            # sigma = -lambda_min / 10, lambda_min the lowest elastic eigenvalue found.
             shift = -0.1 * float(lam[lam > ELASTIC_RATIO * lam.max()].min())
             lam, vec = _shift_invert(k, m, nmodes, (k - shift * m).tocsc(), shift, groups,
                                      filename)

@@ -17,6 +17,8 @@ from typing import Mapping
 import numpy as np
 
 from structures.common.errors import InputError, MissingReferenceError, card_message
+from structures.elements.shell import K6ROT_DEFAULT
+from structures.singularity import EPZERO_DEFAULT
 
 
 def _frozen_array(values, dtype, shape_tail=()) -> np.ndarray:
@@ -246,8 +248,8 @@ class FEModel:
     coupmass: int = -1
     eigrl_nd: int | None = None
     units: str = "deck"
-    k6rot: float = 100.0
-    epzero: float = 1.0e-8
+    k6rot: float = K6ROT_DEFAULT
+    epzero: float = EPZERO_DEFAULT
     autospc: bool = True
 
     def __post_init__(self):

@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from structures.common.errors import UnsupportedCardError, card_message
+from structures.common.errors import InputError, UnsupportedCardError, card_message
 
 #: Section TYPEs whose A, I1, I2, I12 pyNastran computes and whose J is derived here (PBARL and
 #: PBEAML alike).
@@ -88,8 +88,15 @@ def section_fields(card: str, pid: int, mid: int, beam_type: str, stations, xxb,
             f"section properties on a {card[:-1]}."))
     section = {"ROD": bars.rod_section, "TUBE": bars.tube_section, "BAR": bars.bar_section,
                "BOX": bars.box_section, "L": bars.l_section}[beam_type]
-    per_station = np.array([list(section(card, beam_type, np.asarray(dim, float), None))
-                            + [torsion_constant(beam_type, dim)] for dim in stations])
+    try:
+        per_station = np.array([list(section(card, beam_type, np.asarray(dim, float), None))
+                                + [torsion_constant(beam_type, dim)] for dim in stations])
+    except AssertionError:  # pyNastran's section functions check their DIMi with assert
+        raise InputError(card_message(
+            f"the {beam_type} section dimensions {[list(map(float, d)) for d in stations]} do "
+            "not describe a section (e.g. walls thicker than half the box, inner radius above "
+            "the outer).", card=card, card_id=pid, filename=filename,
+            fix="correct the DIMi fields (MSC QRG PBARL/PBEAML figures).")) from None
     x = [float(v) for v in xxb]
     if len(x) == 1:
         a, i1, i2, i12, j = per_station[0]

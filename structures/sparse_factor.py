@@ -87,7 +87,7 @@ def factorize(a: sp.spmatrix, *, groups: np.ndarray | None = None, filename: str
     if not np.all(np.isfinite(diag)) or np.any(diag <= 0.0):
         raise massless_mechanism(filename)
     if name == "pardiso":
-        return PardisoFactor(a, diag, filename)
+        return PardisoFactor(a, filename)
     return SuperLUFactor(a.tocsc(), groups, filename)
 
 
@@ -142,7 +142,7 @@ class PardisoFactor:
 
     backend = "pardiso"
 
-    def __init__(self, a: sp.csr_matrix, diag: np.ndarray, filename: str):
+    def __init__(self, a: sp.csr_matrix, filename: str):
         pypardiso = _pardiso_module()
         self.upper = sp.triu(a, format="csr")
         self.upper.sort_indices()

@@ -17,7 +17,6 @@ import numpy as np
 import pytest
 from pyNastran.bdf.bdf import read_bdf
 
-from aero.strip import section_gaf
 from flutter.kmethod import k_solve
 from flutter.nastran_text import INV_K_ZERO, flutter_summary_text
 from flutter.pk import pk_solve
@@ -25,7 +24,7 @@ from flutter.results import label_units
 from flutter.run import run_flutter
 from flutter.system import ModalSystem
 from flutter_nastran import DATA, bah_qhh_dataset, f06_flutter_summaries, f06_modes_used
-from test_pk_typical_section import A, RHO, gaf, section
+from test_pk_typical_section import RHO, gaf, section
 
 BAH_F06 = DATA / "bah_plane" / "bah_plane.f06"
 

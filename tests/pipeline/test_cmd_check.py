@@ -2,7 +2,6 @@
 mass properties and the lowest modes, without any other analysis."""
 from __future__ import annotations
 
-import time
 from pathlib import Path
 
 from pipeline.cli import main
@@ -31,16 +30,13 @@ ENDDATA"""
 
 
 def test_check_practitioner_wing(capsys):
-    start = time.perf_counter()
     assert main(["check", str(WING), "--nmodes", "4"]) == 0
-    elapsed = time.perf_counter() - start
     out = capsys.readouterr().out
     assert "CBEAM" in out and "PBEAM" in out and "UNSUPPORTED" not in out
     assert "S I N G U L A R I T Y" in out and "240 singular directions at 60 grids" in out
     assert "3002 - 9000" in out and "free shell edges: 0" in out
     assert "mechanisms: none" in out and "x_cg" in out
     assert "6.21" in out                                  # first mode, Hz
-    assert elapsed < 30.0                                 # measured ~2 s on a shared 2-core machine
 
 
 def test_check_reports_a_mechanism_with_its_grids(tmp_path, capsys):
@@ -57,5 +53,5 @@ def test_check_lists_unsupported_cards(tmp_path, capsys):
     deck = tmp_path / "solid.bdf"
     deck.write_text(HINGED.replace("ENDDATA", "CHEXA,99,1,1,2,3,1,2,3,\n,1,2\nENDDATA"))
     assert main(["check", str(deck)]) == 2
-    out = capsys.readouterr().out
-    assert "UNSUPPORTED" in out and "CHEXA (99)" in out
+    out, err = capsys.readouterr()
+    assert "UNSUPPORTED" in out and err.startswith("error: ") and "CHEXA (99)" in err

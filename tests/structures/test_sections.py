@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from structures.bdf import read_model
-from structures.common.errors import UnsupportedCardError
+from structures.common.errors import InputError, UnsupportedCardError
 from structures.modal import compute_modes
 from structures.sections import section_fields, torsion_constant
 
@@ -38,7 +38,10 @@ def test_pbeaml_fields_single_and_two_stations():
         (b * h, b * h ** 3 / 12, h * b ** 3 / 12, 0.0, 0.2), rel=1e-14)
     assert one["K1"] is None and one["K2"] is None
     two = section_fields("PBEAML", 7, 1, "BAR", [[b, h], [b, 2 * h]], [0.0, 1.0], [0.2, 0.4])
-    ends = [section_fields("PBEAML", 7, 1, "BAR", [[b, hh]], [0.0], [0.0])
+    def roark_j(a, t):   # Roark Table 10.7 case 4, a >= t
+        return a * t ** 3 * (1 / 3 - 0.21 * (t / a) * (1 - t ** 4 / (12 * a ** 4)))
+
+    ends = [{"A": b * hh, "I1": b * hh ** 3 / 12, "I2": hh * b ** 3 / 12, "J": roark_j(b, hh)}
             for hh in (h, 2 * h)]
     for key in ("A", "I1", "I2", "J"):
         assert two[key] == pytest.approx(0.5 * (ends[0][key] + ends[1][key]), rel=1e-12)
@@ -76,3 +79,12 @@ def test_pbeaml_deck_equals_explicit_pbeam_and_euler_bernoulli(tmp_path):
     e_i = 2.1e11 * min(b * h ** 3, h * b ** 3) / 12
     analytic = 1.8751041 ** 2 / (2 * np.pi) * np.sqrt(e_i / (7800.0 * b * h * 1.0 ** 4))
     assert first[0] == pytest.approx(analytic, rel=1e-3)
+
+
+def test_impossible_section_dimensions_name_the_card():
+    """pyNastran checks DIMi with bare asserts (a BOX whose walls exceed half its width, a TUBE
+    whose inner radius exceeds the outer): the project's InputError names the card instead."""
+    with pytest.raises(InputError, match=r"wing\.bdf.*PBARL 3.*BOX section dimensions.*Fix"):
+        section_fields("PBARL", 3, 1, "BOX", [[0.1, 0.1, 0.06, 0.06]], [0.0], [0.0], "wing.bdf")
+    with pytest.raises(InputError, match=r"PBEAML 4.*TUBE"):
+        section_fields("PBEAML", 4, 1, "TUBE", [[0.01, 0.02]], [0.0], [0.0], "wing.bdf")

@@ -4,7 +4,7 @@ from __future__ import annotations
 import pytest
 
 from structures.common.errors import InputError
-from structures.units import MODEL_UNITS, UNIT_SYSTEMS, UnitLabels, system_of, unit_labels
+from structures.units import MODEL_UNITS, UnitLabels, system_of, unit_labels
 
 
 def test_labels_of_each_system():
