@@ -38,9 +38,11 @@ def _card_table(card_count) -> str:
 def run(args) -> int:
     from structures.checks import model_checks   # scipy.spatial: here, not in every parser
 
+    parsed = read_pynastran(args.deck)
     print("cards read")
-    print(_card_table(read_pynastran(args.deck).card_count))
-    model = read_model(args.deck)   # unsupported cards: the CLI's error line, exit code 2
+    print(_card_table(parsed.card_count))
+    # unsupported cards: the CLI's error line, exit code 2
+    model = read_model(args.deck, parsed=parsed)
     system = assemble(model, warn=False)
     checks = model_checks(model, system.singularities)
     print()

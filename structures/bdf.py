@@ -428,7 +428,7 @@ def _spc(model, filename: str, spc_id) -> tuple:
     return tuple(out)
 
 
-def read_model(path, *, spc_id: int | None = None) -> FEModel:
+def read_model(path, *, spc_id: int | None = None, parsed=None) -> FEModel:
     """Read a Nastran bulk-data deck into a validated :class:`FEModel`.
 
     Parameters
@@ -437,6 +437,9 @@ def read_model(path, *, spc_id: int | None = None) -> FEModel:
         The deck (executive and case control sections are allowed; INCLUDEs are followed).
     spc_id : int, optional
         The SPC set to apply; by default the case control's ``SPC =`` selection (or the only set).
+    parsed : pyNastran BDF, optional
+        ``path`` already parsed by :func:`structures.common.nastran.read_pynastran` (not read
+        again).
 
     Raises
     ------
@@ -446,7 +449,7 @@ def read_model(path, *, spc_id: int | None = None) -> FEModel:
         For undefined grids, properties, materials or coordinate systems and invalid values.
     """
     path = Path(path)
-    model = read_pynastran(path)
+    model = read_pynastran(path) if parsed is None else parsed
     filename = str(path)
     if not model.nodes:
         raise InputError(card_message("the deck has no grids (no GRID cards).", card="GRID",
