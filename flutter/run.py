@@ -39,6 +39,7 @@ class FlutterRequest:
     values: tuple          # velocities (PK, PKNL) or reduced frequencies (K, KE)
     sdamp: int | None
     filename: str
+    rhoref: float = 1.0    # AERO RHOREF (1.0 without AERO): the FLFACT density ratios' reference
 
     def __post_init__(self):
         if self.method not in METHODS:
@@ -109,7 +110,8 @@ def read_flutter_requests(bdf, filename: str = "", flutter_ids=None) -> list[Flu
         dens, mach, vals = lists
         out.append(FlutterRequest(sid=sid, method=fl.method, density=tuple(dens * rhoref),
                                   mach=tuple(mach), values=tuple(np.abs(vals)),
-                                  sdamp=None if sdamp is None else int(sdamp), filename=filename))
+                                  sdamp=None if sdamp is None else int(sdamp), filename=filename,
+                                  rhoref=rhoref))
     return out
 
 
@@ -230,13 +232,13 @@ def run_flutter(deck: str | os.PathLike, out_dir: str | os.PathLike | None = Non
         ks = np.unique(np.concatenate([aero.ks, np.asarray(extra, dtype=float)]))
         ks = ks[ks > 0]
         gaf = generalized_aero_forces(aero, modes, aero.machs, ks, method=kernel)
-    rhoref = float(bdf.aero.rho_ref) if bdf.aero is not None else 1.0
     results = []
     for req in requests:
         system = modal_system(modes, structural_damping(bdf, req.sdamp, str(deck)))
         for lab, ds in solve_request(system, gaf, req):
             ds = label_units(ds, units)
-            ds.attrs.update(method=req.method, rhoref=rhoref, configuration=lab["configuration"])
+            ds.attrs.update(method=req.method, rhoref=req.rhoref,
+                            configuration=lab["configuration"])
             results.append((lab, ds))
     summary = summary_entries([ds for _, ds in results], [lab for lab, _ in results])
     if out_dir is not None:
