@@ -15,8 +15,22 @@ Example (``data/bah_wing/case.toml``)::
     [flutter]                # optional: run the decks' FLUTTER cards
     kernel = "quartic"       # doublet-lattice kernel integration: quartic or parabolic
     flutter_ids = [502]      # FLUTTER cards to run (default: the case control's FMETHOD)
+    structural_damping = 0.01   # optional: g on every mode, replaces the decks' SDAMP table
+    envelope = { mach = [0.2, 0.6], velocity = [300.0, 320.0] }  # optional: V_D per Mach, model units
 
-    [tuning]                 # optional: pipeline tune (schema in pipeline.cmd_tune's docstring)
+    [selection]              # optional: participation-based mode selection (defaults shown)
+    primary = 0.90           # primary modes: with the rigid modes, >= 90 % of every critical root
+    secondary = 0.98         # secondary modes: the next ones up to 98 %
+    rigid_hz = 0.05          # in-vacuo modes below this frequency are rigid-body modes
+    flutter_modes = 2        # critical roots: the first N flutter crossings of every sweep
+
+    [loop]                   # optional: the tuning <-> flutter loop of pipeline run
+    stages = 3               # at most this many tuning stages after the baseline (stage 0)
+    standard = "MIL-STD-1540C"  # or "NASA-STD-5002": the primary-mode targets that stop the loop
+
+    [tuning]                 # optional: pipeline tune, and the loop's design variables (schema in
+                             # pipeline.cmd_tune's docstring; in the loop, its objective and
+                             # constraints are added to those generated from the selection)
 
 :func:`read_case` checks the whole file before anything is computed: unknown keys raise with the
 list of valid ones, every value has the type its key needs (an integer is never a bool or a float,
@@ -32,12 +46,15 @@ from pathlib import Path
 from types import MappingProxyType
 from typing import Mapping
 
+from flutter.summary import Envelope
+from structures.acceptance import MIL_STD_1540C, NASA_STD_5002, AcceptanceCriteria
 from structures.assembly import MASS_OPTIONS
 from structures.common.errors import InputError
 from structures.massprops import check_measured_mass
-from structures.units import UNIT_SYSTEMS
+from structures.units import UNIT_SYSTEMS, unit_labels
 
 KERNELS = ("quartic", "parabolic")
+STANDARDS = {c.name: c for c in (MIL_STD_1540C, NASA_STD_5002)}
 
 # expected type -> (test, words for the message, example value)
 _KINDS = {
@@ -48,6 +65,8 @@ _KINDS = {
     "int list": (lambda v: isinstance(v, list) and all(
         isinstance(i, int) and not isinstance(i, bool) for i in v), "a list of integers", "[502]"),
     "list": (lambda v: isinstance(v, list), "a list", "[...]"),
+    "float list": (lambda v: isinstance(v, list) and len(v) > 0 and all(
+        _KINDS["float"][0](i) for i in v), "a non-empty list of finite numbers", "[0.2, 0.6]"),
     "table": (lambda v: isinstance(v, dict), "a table", "{ ... }"),
     "table list": (lambda v: isinstance(v, list) and all(isinstance(i, dict) for i in v),
                    "a list of tables ([[...]])", "[{ ... }]"),
@@ -56,16 +75,24 @@ _KINDS = {
 _EXAMPLES = {"measured_mass": "{ weight = 18950.0, x_cg = 0.1 }", "mass": '"lumped"',
              "deck": '"wing.bdf"', "gvt": '"gvt.unv"', "kernel": '"quartic"', "units": '"si"',
              "mass_targets": "{ weight = 1500.0 }", "test_modes": "[7, 8, 9]",
-             "fields": '[["PBAR", 11, "I1"]]', "method": '"slsqp"', "index": '"*:frequency:*"'}
+             "fields": '[["PBAR", 11, "I1"]]', "method": '"slsqp"', "index": '"*:frequency:*"',
+             "envelope": "{ mach = [0.2, 0.6], velocity = [300.0, 320.0] }",
+             "standard": '"MIL-STD-1540C"', "structural_damping": "0.01", "primary": "0.9",
+             "secondary": "0.98", "stages": "3", "flutter_modes": "2"}
 _TOML_TYPES = {str: "a string", bool: "a boolean", int: "an integer", float: "a number",
                list: "a list", dict: "a table"}
 
 #: The keys of every table and the type of each.
 CASE_KEYS = {"name": "str", "units": "str", "configurations": "table list", "flutter": "table",
-             "tuning": "table"}
+             "selection": "table", "loop": "table", "tuning": "table"}
 CONFIGURATION_KEYS = {"name": "str", "deck": "str", "nmodes": "int", "mass": "str", "gvt": "str",
                       "measured_mass": "table"}
-FLUTTER_KEYS = {"kernel": "str", "flutter_ids": "int list"}
+FLUTTER_KEYS = {"kernel": "str", "flutter_ids": "int list", "structural_damping": "float",
+                "envelope": "table"}
+ENVELOPE_KEYS = {"mach": "float list", "velocity": "float list"}
+SELECTION_KEYS = {"primary": "float", "secondary": "float", "rigid_hz": "float",
+                  "flutter_modes": "int"}
+LOOP_KEYS = {"stages": "int", "standard": "str"}
 TUNING_KEYS = {"method": "str", "maxiter": "int", "shape_method": "str", "restart": "str",
                "allowed_violation": "float", "out": "str", "variables": "table list",
                "objective": "table list", "constraints": "table list",
@@ -146,15 +173,65 @@ class Configuration:
 
 @dataclass(frozen=True)
 class FlutterSettings:
-    """``[flutter]``: run each configuration's FLUTTER cards (modes -> GAFs -> p-k / k)."""
+    """``[flutter]``: run each configuration's FLUTTER cards (modes -> GAFs -> p-k / k).
+
+    ``structural_damping`` (g, e.g. 0.01) replaces the decks' SDAMP tables when given;
+    ``envelope`` is the flight envelope whose 1.15 x speed the flutter boundary is held against.
+    """
 
     kernel: str = "quartic"
     flutter_ids: tuple = ()
+    structural_damping: float | None = None
+    envelope: Envelope | None = None
 
     def __post_init__(self):
         if self.kernel not in KERNELS:
             raise InputError(f"kernel = {self.kernel!r}; valid: {', '.join(KERNELS)}.")
         object.__setattr__(self, "flutter_ids", tuple(int(i) for i in self.flutter_ids))
+        if self.structural_damping is not None and not 0.0 <= self.structural_damping < 1.0:
+            raise InputError(f"structural_damping = {self.structural_damping} must be a g value in "
+                             "[0, 1). Fix: e.g. structural_damping = 0.01 (1 %).")
+
+
+@dataclass(frozen=True)
+class SelectionSettings:
+    """``[selection]``: thresholds of the participation-based mode selection (fractions)."""
+
+    primary: float = 0.90
+    secondary: float = 0.98
+    rigid_hz: float = 0.05
+    flutter_modes: int = 2
+
+    def __post_init__(self):
+        if not 0.0 < self.primary <= self.secondary <= 1.0:
+            raise InputError(f"primary = {self.primary}, secondary = {self.secondary}: need "
+                             "0 < primary <= secondary <= 1. Fix: e.g. primary = 0.9, "
+                             "secondary = 0.98.")
+        if not self.rigid_hz >= 0.0:
+            raise InputError(f"rigid_hz = {self.rigid_hz} must be >= 0. Fix: e.g. rigid_hz = 0.05.")
+        if self.flutter_modes < 1:
+            raise InputError(f"flutter_modes = {self.flutter_modes} must be >= 1. Fix: e.g. "
+                             "flutter_modes = 2.")
+
+
+@dataclass(frozen=True)
+class LoopSettings:
+    """``[loop]``: at most ``stages`` tuning stages; stop when ``standard``'s primary-mode targets
+    hold (structures.acceptance)."""
+
+    stages: int = 3
+    standard: str = "MIL-STD-1540C"
+
+    def __post_init__(self):
+        if self.stages < 0:
+            raise InputError(f"stages = {self.stages} must be >= 0. Fix: e.g. stages = 3.")
+        if self.standard not in STANDARDS:
+            raise InputError(f"standard = {self.standard!r}; valid: {', '.join(STANDARDS)}.")
+
+    @property
+    def criteria(self) -> AcceptanceCriteria:
+        """The standard's acceptance limits."""
+        return STANDARDS[self.standard]
 
 
 @dataclass(frozen=True)
@@ -201,6 +278,8 @@ class Case:
     flutter: FlutterSettings | None = None
     tuning: TuningSettings | None = None
     path: Path | None = None
+    selection: SelectionSettings = SelectionSettings()
+    loop: LoopSettings | None = None
 
     def __post_init__(self):
         if self.units not in UNIT_SYSTEMS:
@@ -213,6 +292,15 @@ class Case:
         if len(set(names)) != len(names):
             raise InputError(f"case {self.name}: duplicate configuration names {names}. Fix: give "
                              "each configuration its own name.")
+        if self.loop is not None and self.loop.stages > 0:
+            missing = [c.name for c in self.configurations if c.gvt is None]
+            if self.tuning is None or self.flutter is None or missing:
+                raise InputError(
+                    f"case {self.name}: [loop] with stages = {self.loop.stages} tunes to the GVT "
+                    "and selects modes from flutter: it needs [tuning] (design variables), "
+                    "[flutter] and a gvt file for every configuration"
+                    + (f" (missing for {missing})" if missing else "") + ". Fix: add them, or "
+                    "stages = 0.")
 
 
 def _tuning(table: dict, path: Path, case_name: str, configs: tuple) -> TuningSettings:
@@ -302,11 +390,27 @@ def read_case(path) -> Case:
             table["gvt"] = _existing(base, table["gvt"], where, "gvt")
         configs.append(_built(Configuration, where, **table))
     flutter = None
+    units = data.get("units", "si")
+    if units not in UNIT_SYSTEMS:  # Case names the valid systems
+        units = None
     if "flutter" in data:
         where = f"file {path}, [flutter]"
-        flutter = _built(FlutterSettings, where, **_checked(data["flutter"], FLUTTER_KEYS, where))
+        table = dict(_checked(data["flutter"], FLUTTER_KEYS, where))
+        if "envelope" in table:
+            at = f"{where}, envelope"
+            _checked(table["envelope"], ENVELOPE_KEYS, at, required=("mach", "velocity"))
+            table["envelope"] = _built(Envelope, at, mach=table["envelope"]["mach"],
+                                       velocity=table["envelope"]["velocity"],
+                                       units=unit_labels(units).velocity)
+        flutter = _built(FlutterSettings, where, **table)
+    sections = {}
+    for key, cls, schema in (("selection", SelectionSettings, SELECTION_KEYS),
+                             ("loop", LoopSettings, LOOP_KEYS)):
+        if key in data:
+            where = f"file {path}, [{key}]"
+            sections[key] = _built(cls, where, **_checked(data[key], schema, where))
     name = data.get("name", path.stem)
     tuning = None if "tuning" not in data else _tuning(data["tuning"], path, name, tuple(configs))
     return _built(Case, f"file {path}", name=name, configurations=tuple(configs),
                   units=data.get("units", "si"), flutter=flutter, tuning=tuning,
-                  path=path.resolve())
+                  path=path.resolve(), **sections)
