@@ -75,25 +75,6 @@ def read_tuning(path) -> tuple:
     return case, case.tuning
 
 
-def build_problem(case, settings):
-    """The structures.tuning problem of a case (reads the decks and the GVT files)."""
-    from structures.bdf import read_model
-    from structures.gvt import load_gvt
-    from structures.tuning import TuningConfiguration, TuningProblem
-
-    extra = dict(settings.per_configuration)
-    configs = []
-    for c in case.configurations:
-        more = extra.get(c.name, {})
-        configs.append(TuningConfiguration(
-            c.name, read_model(c.deck), load_gvt(c.gvt), nmodes=c.nmodes or 30, mass=c.mass,
-            test_modes=tuple(more["test_modes"]) if "test_modes" in more else None,
-            mass_targets=more.get("mass_targets", dict(c.measured_mass)),
-            mass_references=more.get("mass_references", {})))
-    return TuningProblem(tuple(configs), settings.variables, settings.objective,
-                         settings.constraints, shape_method=settings.shape_method)
-
-
 def add_parser(subparsers) -> None:
     p = subparsers.add_parser("tune", help="tune the decks to the GVT data (paper eq. 25)")
     p.add_argument("case", help="TOML case file with [[configurations]] and [tuning]")
@@ -108,11 +89,12 @@ def run(args) -> int:
                                    write_text)
     from structures.tuning import best_from_history, tune
     from structures.tuning_report import tuning_report
+    from pipeline.loop import tuning_problem
 
     case, settings = read_tuning(args.case)
     out = check_output(Path(args.out).resolve() if args.out else settings.out, folder=True,
                        option="--out" if args.out else "[tuning] out")
-    problem = build_problem(case, settings)
+    problem = tuning_problem(case, settings.objective, settings.constraints)
     start = None
     if settings.restart is not None:
         start = best_from_history(read_dataset(settings.restart), settings.allowed_violation)

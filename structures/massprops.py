@@ -67,13 +67,27 @@ class MassProperties:
                 **self.product_of_inertia, "weight": self.weight}
 
     def to_dataset(self) -> xr.Dataset:
-        """The mass properties as a Dataset (dims ``axis``, ``axis_2``)."""
+        """The mass properties as a Dataset (dims ``axis``, ``axis_2``, ``rigid_dof``,
+        ``rigid_dof_2``); :meth:`from_dataset` reads it back."""
         axes = ["x", "y", "z"]
+        dofs = np.arange(1, 7)
         return xr.Dataset({"mass": ((), self.mass), "cg": ("axis", self.cg),
-                           "inertia": (("axis", "axis_2"), self.inertia)},
-                          coords={"axis": axes, "axis_2": axes},
+                           "inertia": (("axis", "axis_2"), self.inertia),
+                           "rigid_body_mass": (("rigid_dof", "rigid_dof_2"), self.rigid_body_mass),
+                           "reference_point": ("axis", self.reference_point)},
+                          coords={"axis": axes, "axis_2": axes, "rigid_dof": dofs,
+                                  "rigid_dof_2": dofs},
                           attrs={"wtmass": self.wtmass, "inertia_convention":
                                  "tensor about the CG; off-diagonals are minus the products"})
+
+    @classmethod
+    def from_dataset(cls, ds: xr.Dataset) -> "MassProperties":
+        """The mass properties of a :meth:`to_dataset` Dataset."""
+        return cls(mass=float(ds["mass"]), cg=np.asarray(ds["cg"].values, float),
+                   inertia=np.asarray(ds["inertia"].values, float),
+                   rigid_body_mass=np.asarray(ds["rigid_body_mass"].values, float),
+                   reference_point=np.asarray(ds["reference_point"].values, float),
+                   wtmass=float(ds.attrs.get("wtmass", 1.0)))
 
 
 def rigid_body_mass(m_basic, grid_xyz, reference=(0.0, 0.0, 0.0)) -> np.ndarray:

@@ -41,8 +41,10 @@ def _deck_text(path: Path) -> str:
     return raw.decode("latin-1")
 
 
-def _check_includes(path: Path, text: str, include_dir: str, chain: tuple = ()) -> None:
-    """Every INCLUDE of ``path`` (and of the files it includes) names an existing file, no file
+def _check_includes(path: Path, text: str, include_dir: str, chain: tuple = ()) -> list[Path]:
+    """The files ``path`` includes, directly or not, after checking them.
+
+    Every INCLUDE of ``path`` (and of the files it includes) names an existing file, no file
     includes itself, and no THRU range is absurd (:func:`_check_thru_ranges`). pyNastran would
     otherwise dump ``pyNastran_crash.bdf`` into the current folder (or recurse without end, or
     expand 1e8 ids) before failing; its own INCLUDE resolution rule is used
@@ -53,6 +55,7 @@ def _check_includes(path: Path, text: str, include_dir: str, chain: tuple = ()) 
     _check_thru_ranges(path, text)
     chain = chain + (path.resolve(),)
     lines = text.splitlines()
+    included = []
     i = 0
     while i < len(lines):
         if not lines[i].lstrip().upper().startswith("INCLUDE"):
@@ -85,7 +88,18 @@ def _check_includes(path: Path, text: str, include_dir: str, chain: tuple = ()) 
                 f"line {first}: INCLUDE {target.name!r} includes a file that is already being "
                 f"read ({' -> '.join(p.name for p in chain)} -> {target.name}).",
                 filename=str(path), fix="remove the circular INCLUDE."))
-        _check_includes(target, _deck_text(target), include_dir, chain)
+        included += [target, *_check_includes(target, _deck_text(target), include_dir, chain)]
+    return included
+
+
+def deck_files(path) -> list[Path]:
+    """The deck and every file it INCLUDEs (checked as :func:`read_pynastran` checks them): the
+    files whose content a result computed from the deck depends on."""
+    path = Path(path)
+    if not path.is_file():
+        raise InputError(card_message("no such deck.", filename=str(path),
+                                      fix="check the path."))
+    return [path, *_check_includes(path, _deck_text(path), str(path.resolve().parent))]
 
 
 #: Largest id range of a "THRU" list (SET1, SPC1, ...) read: pyNastran expands the range into a list
