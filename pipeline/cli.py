@@ -16,8 +16,9 @@ from pipeline.stage import Interrupted, running
 from structures.common.errors import PipelineError
 
 #: Subcommand modules, in the order ``pipeline --help`` lists them.
-COMMANDS = ("pipeline.cmd_run", "pipeline.cmd_modes", "pipeline.cmd_correlate",
-            "pipeline.cmd_flutter", "pipeline.cmd_tune", "pipeline.cmd_check")
+COMMANDS = ("pipeline.cmd_run", "pipeline.cmd_select", "pipeline.cmd_modes",
+            "pipeline.cmd_correlate", "pipeline.cmd_flutter", "pipeline.cmd_tune",
+            "pipeline.cmd_check")
 
 
 def positive_int(text: str) -> int:

@@ -7,9 +7,9 @@ of every input file and the recorded content hash of every upstream output. A ch
 therefore reruns exactly the stages downstream of it, and a stage whose upstream result came out
 the same (a rerun that reproduced identical bytes) is not rerun.
 
-The **manifest** (``manifest.json`` in the run folder) records per stage its fingerprint and the
-SHA-256 of every output file. A stage is *done* when its fingerprint matches and every recorded
-output is present with the recorded hash; a damaged or partial output (a truncated file, a file
+The **manifest** (``manifest.json`` in the run folder) records per stage its fingerprint, the
+SHA-256 of every output file and the seconds its computation took. A stage is *done* when its
+fingerprint matches and every recorded output is present with the recorded hash; a damaged or partial output (a truncated file, a file
 edited by hand) is detected, reported with a warning and recomputed.
 
 Atomicity: a stage computes into ``.staging/<stage>/`` inside the run folder; only when its
@@ -27,6 +27,7 @@ import hashlib
 import json
 import os
 import shutil
+import time
 import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -233,7 +234,9 @@ class Graph:
         staging.mkdir(parents=True)
         upstream = {s: [self.dir / rel for rel in self.manifest[s]["outputs"]] for s in stage.after}
         try:
+            start = time.perf_counter()
             note = stage.compute(StageContext(stage, staging, self.dir, upstream))
+            seconds = time.perf_counter() - start
             written = sorted(p for p in staging.rglob("*") if p.is_file())
             outputs = {p.relative_to(staging).as_posix(): file_hash(p) for p in written}
             old = self.manifest.pop(stage.name, None)
@@ -244,7 +247,8 @@ class Graph:
                 os.replace(path, target)
             for rel in set(old["outputs"] if old else ()) - set(outputs):
                 (self.dir / rel).unlink(missing_ok=True)
-            self.manifest[stage.name] = {"fingerprint": self.fingerprint(stage), "outputs": outputs}
+            self.manifest[stage.name] = {"fingerprint": self.fingerprint(stage), "outputs": outputs,
+                                         "seconds": round(seconds, 3)}
             write_json(self.manifest, self.manifest_path)
             self.log(f"[{stage.name}] {note or 'done'}")
         finally:
