@@ -135,7 +135,7 @@ def _modes_by_config(selection, roles, role: str) -> str:
 
 
 def _tuning(ctx: StageContext, case, n: int, progress=None) -> None:
-    from pipeline.loop import loop_terms, tuning_problem
+    from pipeline.loop import loop_terms, relaxed_at_start, tuning_problem
     from structures.design import write_tuned_bdf
     from structures.tuning import best_from_history, tune
     from structures.tuning_report import tuning_report
@@ -153,17 +153,22 @@ def _tuning(ctx: StageContext, case, n: int, progress=None) -> None:
         start = best_from_history(read_dataset(settings.restart), settings.allowed_violation)
     else:
         start = None
+    problem, relaxed = relaxed_at_start(problem, start)
     result = tune(problem, method=settings.method, start=start, maxiter=settings.maxiter,
                   progress=progress)
-    history = result.history.assign_attrs(success=int(result.success), message=result.message,
-                                          stage=n)
+    history = result.history.assign_attrs(
+        success=int(result.success), message=result.message, stage=n,
+        objective_terms="; ".join(name for name, _ in objective),
+        relaxed_constraints="; ".join(f"{name}: {eps:.4g} -> {new:.4g}"
+                                      for name, eps, new in relaxed))
     write_dataset(history, ctx.output(f"stage{n}/tuning/history.nc"))
     write_text(tuning_report(history) + "\n", ctx.output(f"stage{n}/tuning/report.txt"))
     for c in case.configurations:
         write_tuned_bdf(c.deck, ctx.output(_tuned_deck(n, c.name)), result.space, result.x)
     return (f"{'converged' if result.success else 'not converged'} after {result.iterations} "
             f"iterations, objective {float(history['objective'].values[-1]):.4e}, "
-            f"{len(objective)} objective terms, {len(constraints)} constraints")
+            f"{len(objective)} objective terms, {len(problem.constraints)} constraints "
+            f"({len(relaxed)} relaxed to the start design)")
 
 
 def _flutter_change(ctx: StageContext, case, last: int) -> None:
