@@ -1,4 +1,4 @@
-"""Roger rational function approximation of Q_hh(ik) and its state-space aeroelastic model.
+"""Roger rational function approximation of Q_hh(ik).
 
 Roger, K. L., "Airplane Math Modeling Methods for Active Control Design", AGARD-CP-228, 1977:
 
@@ -6,15 +6,13 @@ Roger, K. L., "Airplane Math Modeling Methods for Active Control Design", AGARD-
     p_bar = s b / V  (= i k on the imaginary axis; k = omega b / V, b = REFC / 2),
 
 fitted by linear least squares to the tabulated Q(ik) of one Mach number, all matrix entries at
-once. With q = rho V^2 / 2 and lag states x_l = A_{l+2} s/(s + beta_l V/b) u the aeroelastic
-equations M u'' + B u' + K u = q Q u become a linear time-invariant system (Karpel's arrangement,
-J. Aircraft 19(3), 1982, eq. 2-4), returned as a python-control StateSpace.
+once. The aeroelastic state-space model built on it (structure + RFA, a flutter cross-check) is
+:func:`flutter.statespace.aeroelastic_statespace`.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
 
-import control
 import numpy as np
 import xarray as xr
 
@@ -98,43 +96,3 @@ def fit_roger(gaf: xr.Dataset, mach: float, beta=None, nlag: int = 4) -> RogerRF
     A = coef.reshape(-1, n, n)
     err = float(np.abs(np.einsum("kt,tij->kij", E, A) - Q).max() / np.abs(Q).max())
     return RogerRFA(A=A, beta=beta, refc=float(gaf.attrs["refc"]), mach=float(mach), fit_error=err)
-
-
-def aeroelastic_statespace(M: np.ndarray, B: np.ndarray, K: np.ndarray, rfa: RogerRFA,
-                           velocity: float, density: float) -> control.StateSpace:
-    """LTI aeroelastic model at one flight point; states [u, u', x_1..x_L], outputs u.
-
-    Parameters
-    ----------
-    M, B, K : ndarray, shape (n, n)
-        Modal mass, damping, stiffness.
-    rfa : RogerRFA
-    velocity, density : float
-        Flight point (model units).
-
-    Returns
-    -------
-    control.StateSpace
-        With a single zero input (the model is autonomous; poles are the flutter roots).
-    """
-    n = M.shape[0]
-    b = rfa.refc / 2.0
-    q = 0.5 * density * velocity ** 2
-    L = rfa.beta.size
-    Mbar = M - q * (b / velocity) ** 2 * rfa.A[2]      # Karpel 1982 eq. 4
-    Bbar = B - q * (b / velocity) * rfa.A[1]
-    Kbar = K - q * rfa.A[0]
-    Mi = np.linalg.inv(Mbar)
-    N = n * (2 + L)
-    Amat = np.zeros((N, N))
-    Amat[:n, n:2 * n] = np.eye(n)
-    Amat[n:2 * n, :n] = -Mi @ Kbar
-    Amat[n:2 * n, n:2 * n] = -Mi @ Bbar
-    for l in range(L):
-        sl = slice((2 + l) * n, (3 + l) * n)
-        Amat[n:2 * n, sl] = q * Mi
-        Amat[sl, n:2 * n] = rfa.A[3 + l]               # x_l' = A_l u' - beta_l V/b x_l
-        Amat[sl, sl] = -(velocity / b) * rfa.beta[l] * np.eye(n)
-    C = np.zeros((n, N))
-    C[:, :n] = np.eye(n)
-    return control.ss(Amat, np.zeros((N, 1)), C, np.zeros((n, 1)))

@@ -1,6 +1,9 @@
 """State-space flutter cross-check: poles of the Roger-RFA aeroelastic model versus velocity.
 
-At each velocity the LTI model of aero.rfa (python-control StateSpace) gives all poles at once; the
+At each velocity the LTI model of a Roger RFA (aero.rfa, passed in as data) gives all poles at
+once (:func:`aeroelastic_statespace`: with q = rho V^2 / 2 and lag states
+x_l = A_{l+2} s/(s + beta_l V/b) u the aeroelastic equations M u'' + B u' + K u = q Q u become a
+linear time-invariant system, Karpel's arrangement, J. Aircraft 19(3), 1982, eq. 2-4); the
 structural roots are followed from the in-vacuo modes by eigenvalue continuity and eigenvector
 correlation (flutter.tracking), the aerodynamic lag poles are left out. Flutter is where a root's
 g = 2 Re(p) / Im(p) crosses zero upward (linear interpolation between velocities). The result
@@ -9,24 +12,65 @@ imaginary axis), which is what makes it a cross-check.
 """
 from __future__ import annotations
 
+import control
 import numpy as np
 import xarray as xr
 
-from aero.rfa import RogerRFA, aeroelastic_statespace
 from flutter.crossings import find_brackets, interpolate_zero
 from flutter.system import ModalSystem
 from flutter.tracking import assign
 from structures.common.errors import InputError
 
 
-def statespace_solve(system: ModalSystem, rfa: RogerRFA, velocity, *, density: float) -> xr.Dataset:
+def aeroelastic_statespace(M: np.ndarray, B: np.ndarray, K: np.ndarray, rfa,
+                           velocity: float, density: float) -> control.StateSpace:
+    """LTI aeroelastic model at one flight point; states [u, u', x_1..x_L], outputs u.
+
+    Parameters
+    ----------
+    M, B, K : ndarray, shape (n, n)
+        Modal mass, damping, stiffness.
+    rfa : aero.rfa.RogerRFA
+        Its ``A`` (3 + nlag, n, n), ``beta`` (nlag,) and ``refc``.
+    velocity, density : float
+        Flight point (model units).
+
+    Returns
+    -------
+    control.StateSpace
+        With a single zero input (the model is autonomous; poles are the flutter roots).
+    """
+    n = M.shape[0]
+    b = rfa.refc / 2.0
+    q = 0.5 * density * velocity ** 2
+    L = rfa.beta.size
+    Mbar = M - q * (b / velocity) ** 2 * rfa.A[2]      # Karpel 1982 eq. 4
+    Bbar = B - q * (b / velocity) * rfa.A[1]
+    Kbar = K - q * rfa.A[0]
+    Mi = np.linalg.inv(Mbar)
+    N = n * (2 + L)
+    Amat = np.zeros((N, N))
+    Amat[:n, n:2 * n] = np.eye(n)
+    Amat[n:2 * n, :n] = -Mi @ Kbar
+    Amat[n:2 * n, n:2 * n] = -Mi @ Bbar
+    for l in range(L):
+        sl = slice((2 + l) * n, (3 + l) * n)
+        Amat[n:2 * n, sl] = q * Mi
+        Amat[sl, n:2 * n] = rfa.A[3 + l]               # x_l' = A_l u' - beta_l V/b x_l
+        Amat[sl, sl] = -(velocity / b) * rfa.beta[l] * np.eye(n)
+    C = np.zeros((n, N))
+    C[:, :n] = np.eye(n)
+    return control.ss(Amat, np.zeros((N, 1)), C, np.zeros((n, 1)))
+
+
+def statespace_solve(system: ModalSystem, rfa, velocity, *, density: float) -> xr.Dataset:
     """Structural poles of the RFA state-space model along increasing velocities.
 
     Parameters
     ----------
     system : ModalSystem
         M_hh, B_hh, K_hh (structural damping is not modelled here).
-    rfa : RogerRFA
+    rfa : aero.rfa.RogerRFA
         From :func:`aero.rfa.fit_roger`.
     velocity : array_like, shape (nv,)
         Strictly increasing velocities.

@@ -1,4 +1,4 @@
-"""``pipeline flutter CASE_OR_DECK [--out DIR]``: modes -> GAFs -> flutter (library: flutter.run)."""
+"""``pipeline flutter CASE_OR_DECK [--out DIR]``: modes -> GAFs -> flutter (pipeline.chain)."""
 from __future__ import annotations
 
 from contextlib import nullcontext
@@ -35,38 +35,39 @@ def _print(name: str, summary: list) -> None:
 
 
 def run(args) -> int:
-    """A deck: :func:`flutter.run.run_flutter`. A case file: for every configuration the same two
-    library calls as ``pipeline run`` (:func:`pipeline.run.configuration_modes` with the
-    configuration's nmodes and mass option, :func:`pipeline.run.configuration_flutter` with the
-    case's ``[flutter]`` kernel and FLUTTER ids); ``--nmodes`` / ``--flutter-id`` override them.
-    All outputs are written only when every configuration has finished."""
-    from flutter.run import run_flutter           # here, not when every command's parser is built
+    """A deck: :func:`pipeline.chain.deck_modes` and :func:`pipeline.chain.flutter_chain`. A case
+    file: for every configuration the same two library calls as ``pipeline run``
+    (:func:`pipeline.chain.configuration_modes` with the configuration's nmodes and mass option,
+    :func:`pipeline.chain.case_flutter` with the case's ``[flutter]`` and ``[selection]``
+    settings); ``--nmodes`` / ``--flutter-id`` override them. All outputs are written only when
+    every configuration has finished."""
+    # here, not when every command's parser is built
+    from pipeline.chain import (case_flutter, check_flutter_requests, configuration_modes,
+                                deck_modes, flutter_chain)
 
     target = Path(args.target)
     if args.out:
         check_output(args.out, folder=True)
     if target.suffix.lower() == ".toml":
-        from pipeline.case import FlutterSettings, read_case
-        from pipeline.run import check_flutter_requests, configuration_flutter, configuration_modes
+        from pipeline.case import read_case
 
         case = read_case(target)
         check_flutter_requests(case, args.flutter_id)
-        settings = case.flutter or FlutterSettings()
         done = []
         with staged_folder(args.out) if args.out else nullcontext() as staged:
             for conf in case.configurations:
                 with running(f"flutter/{conf.name}"):
                     modes, _ = configuration_modes(conf, args.nmodes)
                     out = None if staged is None else staged / conf.name
-                    done.append((conf.name, configuration_flutter(
-                        conf, settings, modes, out, args.flutter_id, units=case.units)))
+                    done.append((conf.name, case_flutter(case, conf, modes, out, args.flutter_id)))
         for name, res in done:
             _print(name, res["summary"])
         if args.out:
             print(f"results written to {args.out}")
         return 0
     with staged_folder(args.out) if args.out else nullcontext() as staged:
-        res = run_flutter(target, staged, nmodes=args.nmodes, flutter_ids=args.flutter_id)
+        res = flutter_chain(target, deck_modes(target, args.nmodes), flutter_ids=args.flutter_id,
+                            out_dir=staged)
     _print(target.name, res["summary"])
     if args.out:
         print(f"results written to {args.out}")

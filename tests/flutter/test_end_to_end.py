@@ -1,8 +1,9 @@
 """End to end: our modes + doublet-lattice GAFs + splines + p-k / k, against Nastran's F06.
 
-Each deck runs through :func:`flutter.run.run_flutter` (structures.modal, aero.gaf, flutter.pk /
-flutter.kmethod) and is compared with the FLUTTER SUMMARY tables of its F06, whose crossing is
-found by linear interpolation of g (as one reads a Nastran V-g table).
+Each deck runs through :func:`pipeline.chain.flutter_chain` on :func:`pipeline.chain.deck_modes`
+(structures.modal, aero.gaf, flutter.solve: flutter.pk / flutter.kmethod) and is compared with the
+FLUTTER SUMMARY tables of its F06, whose crossing is found by linear interpolation of g (as one
+reads a Nastran V-g table).
 
 two_mode_flutter: the MSC Nastran 2005 F06 in tests/data, although its FLFACT and flutter tables say
 Mach 0.5, holds the flutter of the Mach 0.4 aerodynamic matrices (its first-point eigenpairs give
@@ -19,14 +20,18 @@ import numpy as np
 import pytest
 
 from flutter.participation import participation_factors
-from flutter.run import run_flutter
+from flutter.results import summary_entries
+from flutter.solve import solve_flutter
 from flutter_nastran import DATA, column, f06_flutter_summaries, first_crossing
+from pipeline.chain import deck_modes, flutter_chain
+from pipeline.flutter_cards import read_flutter_requests
+from structures.common.nastran import read_pynastran
 
 
 def _run(deck, **kw):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", UserWarning)  # DLM box-size advice at the largest k
-        return run_flutter(deck, None, **kw)
+        return flutter_chain(deck, deck_modes(deck), **kw)
 
 
 def _nastran_crossing(f06):
@@ -95,7 +100,9 @@ def two_mode_mach04(two_mode):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", UserWarning)
         gaf = generalized_aero_forces(aero, two_mode["modes"], [0.4], ks).assign_coords(mach=[0.5])
-    return _run(deck, modes=two_mode["modes"], gaf=gaf)
+    results = solve_flutter(two_mode["modes"], gaf, read_flutter_requests(read_pynastran(deck)))
+    return {"results": results,
+            "summary": summary_entries([ds for _, ds in results], [lab for lab, _ in results])}
 
 
 def test_two_mode_pknl_density_and_frequency(two_mode):

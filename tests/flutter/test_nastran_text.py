@@ -5,8 +5,8 @@ checked by the reader finding the same tables, and the header lines are compared
 - bah_plane, PK at M 0.2 (p-k on Nastran's own Q_hh, as tests/flutter/test_pk_bah.py): the elastic
   roots' rows agree with the F06 to the tolerance our p-k agrees with Nastran there (frequency,
   k 0.5%, g 0.005);
-- pt145, KE at M 0.45 (our modes and doublet-lattice GAFs, as tests/flutter/test_end_to_end.py):
-  same k column, velocity, frequency and Nastran's K-method eigenvalue within 1%, g within 0.015;
+- pt145, KE at M 0.45 (our modes and doublet-lattice GAFs through pipeline.chain, as
+  tests/flutter/test_end_to_end.py): same k column, velocity, frequency and Nastran's K-method eigenvalue within 1%, g within 0.015;
 - round trip: the printed numbers read back equal the Dataset's to printed precision (PK, PKNL, K).
 """
 from __future__ import annotations
@@ -21,9 +21,9 @@ from flutter.kmethod import k_solve
 from flutter.nastran_text import INV_K_ZERO, flutter_summary_text
 from flutter.pk import pk_solve
 from flutter.results import label_units
-from flutter.run import run_flutter
 from flutter.system import ModalSystem
 from flutter_nastran import DATA, bah_qhh_dataset, f06_flutter_summaries, f06_modes_used
+from pipeline.chain import deck_modes, flutter_chain
 from test_pk_typical_section import RHO, gaf, section
 
 BAH_F06 = DATA / "bah_plane" / "bah_plane.f06"
@@ -132,7 +132,8 @@ def test_round_trip_pk_pknl_k(bah, tmp_path):
 @pytest.mark.filterwarnings("ignore::UserWarning")
 def test_pt145_ke_tables_match_f06(tmp_path):
     out = tmp_path / "pt145"
-    run_flutter(DATA / "pt145" / "pt145.bdf", out, units="english_in")
+    deck = DATA / "pt145" / "pt145.bdf"
+    flutter_chain(deck, deck_modes(deck), units="english_in", out_dir=out)
     text = (out / "flutter_summary.txt").read_text()
     f06 = DATA / "pt145" / "pt145.f06"
     assert _header_lines(text) == _header_lines(f06.read_text(errors="replace"))

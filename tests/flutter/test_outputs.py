@@ -14,6 +14,7 @@ from flutter.participation import crossing_participation, participation_factors,
 from flutter.pk import pk_solve
 from flutter.results import write_flutter
 from flutter.system import ModalSystem
+from pipeline.chain import deck_modes, flutter_chain
 from structures.common.errors import InputError
 from structures.common.files import read_dataset
 from flutter_nastran import DATA
@@ -121,9 +122,8 @@ def test_bare_deck_labels_model_units(tmp_path, sweep):
 def test_pt145_ke_writes_the_flutter_contract(tmp_path):
     """The K method (pt145, KE at M 0.45) goes into flutter.nc with the p-k contract: its points are
     the FLFACT k values, each root at its own V = omega b / k in root_velocity."""
-    from flutter.run import run_flutter
-
-    out = run_flutter(DATA / "pt145" / "pt145.bdf", tmp_path, units="english_in")
+    deck = DATA / "pt145" / "pt145.bdf"
+    out = flutter_chain(deck, deck_modes(deck), units="english_in", out_dir=tmp_path)
     ds = read_dataset(tmp_path / "flutter.nc")
     for v in ("damping", "frequency", "k", "eigenvalue", "converged", "root_velocity"):
         assert ds[v].dims == ("case", "velocity", "root"), v

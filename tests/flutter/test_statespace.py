@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from aero.rfa import aeroelastic_statespace, fit_roger
+from aero.rfa import fit_roger
 from aero.strip import section_gaf
 from flutter.pk import pk_solve
-from flutter.statespace import statespace_solve
+from flutter.statespace import aeroelastic_statespace, statespace_solve
 from flutter.tracking import assign
 from structures.common.errors import InputError
 from test_pk_typical_section import A, B, section

@@ -1,0 +1,181 @@
+"""Flutter requests and their solution from modal data and GAFs (no deck, no aerodynamics here).
+
+A :class:`FlutterRequest` is one flutter analysis as data: the method and the flight points (the
+content of a Nastran FLUTTER card with its FLFACT lists, read by :mod:`pipeline.flutter_cards`) and
+the structural damping that goes with it. :func:`solve_flutter` maps each request to our solvers:
+PK -> :func:`flutter.pk.pk_solve_many` (a velocity sweep for every density x Mach), PKNL -> one
+matched density sweep (aligned density / Mach / velocity lists), K and KE ->
+:func:`flutter.kmethod.k_solve` over the request's reduced frequencies (k = omega b / V,
+b = REFC / 2). The modal matrices come from a modes Dataset (DESIGN.md section 6) and the GAFs
+``Q(mach, k, mode_i, mode_j)`` from any source (aero.gaf, Nastran's OP4).
+"""
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass, field
+
+import numpy as np
+import xarray as xr
+
+from flutter.kmethod import k_solve
+from flutter.pk import pk_solve, pk_solve_many
+from flutter.results import label_units
+from flutter.system import ModalSystem, StructuralDamping
+from structures.common.errors import InputError, UnsupportedCardError, card_message
+
+#: Nastran FLUTTER method -> our solver ("pk": velocity sweeps, "pknl": one density sweep,
+#: "k": reduced-frequency sweeps).
+METHODS = {"PK": "pk", "PKNL": "pknl", "K": "k", "KE": "k"}
+
+
+@dataclass(frozen=True)
+class FlutterRequest:
+    """One flutter analysis (a FLUTTER card with its FLFACT values), in model units.
+
+    Parameters
+    ----------
+    sid : int
+        Id of the request (the FLUTTER card id); labels its sweeps "FLUTTER <sid>".
+    method : {"PK", "PKNL", "K", "KE"}
+    density : tuple of float, shape (nrho,)
+        Absolute densities (FLFACT ratios already multiplied by ``rhoref``).
+    mach : tuple of float, shape (nmach,)
+    values : tuple of float, shape (nv,)
+        Velocities (PK, PKNL) or reduced frequencies k = omega b / V, b = REFC / 2 (K, KE).
+        PKNL needs ``density``, ``mach`` and ``values`` of equal length (one flight point each).
+    rhoref : float
+        Reference density of the FLFACT density ratios (AERO RHOREF; 1.0 without AERO).
+    damping : StructuralDamping
+        Structural damping of the modes for this request.
+    source : str
+        Where the request came from (e.g. the deck's file name), named in error messages.
+    """
+
+    sid: int
+    method: str
+    density: tuple
+    mach: tuple
+    values: tuple
+    rhoref: float = 1.0
+    damping: StructuralDamping = field(default_factory=StructuralDamping)
+    source: str = ""
+
+    def __post_init__(self):
+        if self.method not in METHODS:
+            raise UnsupportedCardError(card_message(
+                f"flutter method {self.method!r} is not supported.", card="FLUTTER",
+                card_id=self.sid, filename=self.source or None,
+                fix=f"use one of {sorted(METHODS)}."))
+        for name in ("density", "mach", "values"):
+            object.__setattr__(self, name, tuple(float(x) for x in getattr(self, name)))
+        if self.method == "PKNL" and not (len(self.density) == len(self.mach) == len(self.values)):
+            raise InputError(card_message(
+                f"PKNL needs FLFACT density, Mach and velocity lists of equal length (got "
+                f"{len(self.density)}, {len(self.mach)}, {len(self.values)}).", card="FLUTTER",
+                card_id=self.sid, filename=self.source or None,
+                fix="give one value per flight point."))
+        if not isinstance(self.damping, StructuralDamping):
+            raise InputError(card_message(
+                f"damping must be a flutter.system.StructuralDamping, not "
+                f"{type(self.damping).__name__}.", card="FLUTTER", card_id=self.sid,
+                filename=self.source or None, fix="pass StructuralDamping(...)."))
+
+
+def modal_system(modes: xr.Dataset, structural: StructuralDamping) -> ModalSystem:
+    """Diagonal M_hh, K_hh of a modes Dataset.
+
+    Parameters
+    ----------
+    modes : xarray.Dataset
+        ``generalized_mass(mode)`` and ``frequency(mode)`` [Hz] (DESIGN.md section 6).
+    structural : StructuralDamping
+
+    Returns
+    -------
+    ModalSystem
+        M_hh = diag(m_j), K_hh = diag(m_j omega_j^2), shape (nmode, nmode), mode ids from
+        ``modes["mode"]`` (negative frequencies of rounding-level rigid modes are taken as 0).
+    """
+    gm = np.asarray(modes["generalized_mass"].values, dtype=float)
+    w = 2 * np.pi * np.maximum(np.asarray(modes["frequency"].values, dtype=float), 0.0)
+    return ModalSystem(np.diag(gm), np.diag(gm * w * w), structural=structural,
+                       modes=tuple(int(m) for m in modes["mode"].values))
+
+
+def _cores() -> int:
+    """Cores this process may run on."""
+    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
+
+
+def solve_request(system: ModalSystem, gaf: xr.Dataset,
+                  req: FlutterRequest) -> list[tuple[dict, xr.Dataset]]:
+    """Solve one request on a modal system.
+
+    Parameters
+    ----------
+    system : ModalSystem
+        Modal matrices with the request's structural damping.
+    gaf : xarray.Dataset
+        ``Q(mach, k, mode_i, mode_j)`` with attrs ``refc`` (k = omega b / V, b = refc / 2).
+    req : FlutterRequest
+
+    Returns
+    -------
+    list of (dict, xarray.Dataset)
+        One per sweep: the label (``mach``, ``density`` (not for PKNL), ``configuration`` =
+        "FLUTTER <sid>") and the :func:`flutter.pk.pk_solve` / :func:`flutter.kmethod.k_solve`
+        result.
+    """
+    out = []
+    name = f"FLUTTER {req.sid}"
+    if METHODS[req.method] == "pk":
+        V = np.unique(req.values)
+        points = [(rho, m) for rho in req.density for m in req.mach]
+        # the sweeps are independent: one per core (flutter.parallel)
+        results = pk_solve_many(system, gaf, [(V, rho, m) for rho, m in points],
+                                workers=min(len(points), _cores()))
+        for (rho, m), ds in zip(points, results):
+            out.append(({"mach": m, "density": rho, "configuration": name}, ds))
+    elif METHODS[req.method] == "pknl":
+        rho, mach, V = (np.asarray(x) for x in (req.density, req.mach, req.values))
+        order = np.argsort(rho, kind="stable")
+        ds = pk_solve(system, gaf, V[order], density=rho[order], mach=mach[order], sweep="density")
+        out.append(({"mach": float(mach[0]), "configuration": name}, ds))
+    else:
+        for rho in req.density:
+            for m in req.mach:
+                ds = k_solve(system, gaf, np.unique(req.values), density=rho, mach=m)
+                out.append(({"mach": m, "density": rho, "configuration": name}, ds))
+    return out
+
+
+def solve_flutter(modes: xr.Dataset, gaf: xr.Dataset, requests, units: str | None = None
+                  ) -> list[tuple[dict, xr.Dataset]]:
+    """Every request on the modes' modal system, each with its own structural damping.
+
+    Parameters
+    ----------
+    modes : xarray.Dataset
+        ``frequency(mode)`` [Hz], ``generalized_mass(mode)`` (DESIGN.md section 6).
+    gaf : xarray.Dataset
+        ``Q(mach, k, mode_i, mode_j)`` of the same modes, attrs ``refc``.
+    requests : sequence of FlutterRequest
+    units : {"si", "english_in", "english_ft"} or None
+        Unit system whose labels the results carry (:func:`flutter.results.label_units`; None:
+        "model units"). The numbers are in the model's units either way.
+
+    Returns
+    -------
+    list of (dict, xarray.Dataset)
+        Every sweep of every request in order, as :func:`solve_request`; each Dataset's attrs
+        also hold ``method`` (the request's), ``rhoref`` and ``configuration``.
+    """
+    results = []
+    for req in requests:
+        system = modal_system(modes, req.damping)
+        for lab, ds in solve_request(system, gaf, req):
+            ds = label_units(ds, units)
+            ds.attrs.update(method=req.method, rhoref=req.rhoref,
+                            configuration=lab["configuration"])
+            results.append((lab, ds))
+    return results

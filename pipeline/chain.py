@@ -1,0 +1,260 @@
+"""The one modes -> GAFs -> flutter chain, used by ``pipeline run``, ``pipeline flutter`` and the
+tuning loop.
+
+:func:`flutter_chain` reads a deck once (structures.common.nastran.read_pynastran): its FLUTTER
+requests (:mod:`pipeline.flutter_cards`) and its aerodynamic model (aero.model); computes the GAFs
+of the given modes (aero.gaf) and solves flutter from them as data (:func:`flutter.solve.
+solve_flutter`); then the participation of every mode in every flutter crossing
+(:func:`flutter.participation.crossing_participation`), stacked as ``participation.nc``.
+:func:`case_flutter` is that chain with a case's settings, :func:`deck_modes` and
+:func:`configuration_modes` give the modes of a bare deck and of a case's configuration.
+"""
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+import xarray as xr
+
+from aero.gaf import generalized_aero_forces
+from aero.model import read_aero_model
+from flutter.participation import crossing_participation
+from flutter.results import summary_entries, write_flutter
+from flutter.solve import METHODS, solve_flutter
+from pipeline.case import Case, Configuration, FlutterSettings
+from pipeline.flutter_cards import lmodes, read_flutter_requests
+from structures.assembly import assemble
+from structures.bdf import read_model
+from structures.common.files import write_dataset
+from structures.common.nastran import read_pynastran
+from structures.massprops import mass_properties
+from structures.modal import compute_modes
+from structures.units import system_of, unit_labels
+
+
+def deck_modes(deck: str | os.PathLike, nmodes: int | None = None,
+               mass: str = "deck") -> xr.Dataset:
+    """Modes of a bare deck for its flutter solution.
+
+    Parameters
+    ----------
+    deck : path
+    nmodes : int, optional
+        Number of modes; default PARAM LMODES, else the deck's EIGR / EIGRL (else 20).
+    mass : {"deck", "consistent", "lumped"}
+
+    Returns
+    -------
+    xarray.Dataset
+        The modes (DESIGN.md section 6).
+    """
+    bdf = read_pynastran(deck)
+    model = read_model(deck, parsed=bdf)
+    return compute_modes(model, nmodes or lmodes(bdf), mass=mass, system=assemble(model, mass))
+
+
+def configuration_modes(config: Configuration, nmodes: int | None = None) -> tuple:
+    """Modes and mass properties of one configuration (its deck, nmodes and mass option).
+
+    Parameters
+    ----------
+    config : pipeline.case.Configuration
+    nmodes : int, optional
+        Overrides the configuration's ``nmodes``.
+
+    Returns
+    -------
+    (xarray.Dataset, structures.massprops.MassProperties)
+        The modes (DESIGN.md section 6) and the mass properties.
+    """
+    model = read_model(config.deck)
+    system = assemble(model, config.mass)
+    modes = compute_modes(model, nmodes or config.nmodes, mass=config.mass, system=system)
+    return modes, mass_properties(model, m_basic=system.m_basic)
+
+
+def _gaf_ks(aero_ks: np.ndarray, requests) -> np.ndarray:
+    """Reduced frequencies of the GAFs: MKAERO1's, plus the K / KE requests' own k values (they
+    solve there rather than interpolate), without k = 0."""
+    extra = [v for req in requests if METHODS[req.method] == "k" for v in req.values]
+    ks = np.unique(np.concatenate([aero_ks, np.asarray(extra, dtype=float)]))
+    return ks[ks > 0]
+
+
+def flutter_participation(results, modes: xr.Dataset, *, rigid_hz: float = 0.05,
+                          units: str | None = None, configuration: str = "") -> xr.Dataset:
+    """Participation of every mode in every flutter crossing of every sweep (``participation.nc``).
+
+    Parameters
+    ----------
+    results : list of (dict, xarray.Dataset)
+        The sweeps (:func:`flutter.solve.solve_flutter`); sweep c is ``case`` c of flutter.nc.
+    modes : xarray.Dataset
+        The modes the sweeps were solved on (``frequency(mode)`` Hz, ``generalized_mass(mode)``).
+    rigid_hz : float
+        Modes below this in-vacuo frequency (Hz) are rigid-body modes.
+    units : str or None
+        Unit system of the velocity and density labels (None: "model units").
+    configuration : str
+        Name of the configuration, stored in attrs.
+
+    Returns
+    -------
+    xarray.Dataset
+        ``participation(flutter_point, mode)`` [%] (sums to 100 per point; definition in
+        flutter.participation), on ``flutter_point`` the coordinates ``case``, ``mach``,
+        ``density``, ``velocity``, ``frequency`` [Hz], ``root`` and ``flutter_mode`` (1, 2, ... in
+        order of speed within its sweep), on ``mode`` the coordinates ``rigid`` and
+        ``fe_frequency`` [Hz]; attrs ``configuration``, ``units``, ``rigid_hz``. Flutter crossings
+        only (no divergence); ``flutter_point`` has length 0 when there is none.
+    """
+    mass = np.diag(np.asarray(modes["generalized_mass"].values, dtype=float))
+    fe_frequency = np.asarray(modes["frequency"].values, dtype=float)
+    omega = 2 * np.pi * np.maximum(fe_frequency, 0.0)
+    rows, shares = [], []
+    for case, (_, ds) in enumerate(results):
+        part = crossing_participation(ds, mass, omega, rigid_hz, kinds=("flutter",))
+        for f in range(part.sizes["flutter_mode"]):
+            i = int(np.flatnonzero((ds.crossing_root.values == int(part.root[f])) &
+                                   (ds.crossing_velocity.values == float(part.velocity[f])))[0])
+            rows.append((case, float(ds.crossing_mach[i]), float(ds.crossing_density[i]),
+                         float(part.velocity[f]), float(part.frequency[f]), int(part.root[f]),
+                         int(part.flutter_mode[f])))
+            shares.append(part.participation.values[f])
+    nmode = modes.sizes["mode"]
+    P = np.array(shares, dtype=float).reshape(len(shares), nmode)
+    col = list(zip(*rows)) if rows else [()] * 7
+    labels = unit_labels(units)
+    point = "flutter_point"
+    return xr.Dataset(
+        {"participation": ((point, "mode"), P, {
+            "units": "%", "long_name": "modal participation",
+            "definition": "100 Re(conj(u_j)(M u)_j) / (u^H M u)"})},
+        coords={
+            "case": (point, np.array(col[0], dtype=int),
+                     {"long_name": "index of the sweep in flutter.nc's case dimension"}),
+            "mach": (point, np.array(col[1], dtype=float)),
+            "density": (point, np.array(col[2], dtype=float), {"units": labels.density}),
+            "velocity": (point, np.array(col[3], dtype=float), {"units": labels.velocity}),
+            "frequency": (point, np.array(col[4], dtype=float), {"units": "Hz"}),
+            "root": (point, np.array(col[5], dtype=int)),
+            "flutter_mode": (point, np.array(col[6], dtype=int),
+                             {"long_name": "n-th flutter crossing of its sweep, by speed"}),
+            "mode": ("mode", np.asarray(modes["mode"].values, dtype=int)),
+            "rigid": ("mode", fe_frequency < rigid_hz),
+            "fe_frequency": ("mode", fe_frequency, {"units": "Hz",
+                                                    "long_name": "in-vacuo frequency"}),
+        },
+        attrs={"configuration": configuration, "units": labels.system, "rigid_hz": float(rigid_hz)},
+    )
+
+
+def flutter_chain(deck: str | os.PathLike, modes: xr.Dataset, *, kernel: str = "quartic",
+                  flutter_ids=None, structural_damping: float | None = None,
+                  rigid_hz: float = 0.05, units: str | None = None,
+                  out_dir: str | os.PathLike | None = None,
+                  configuration: str | None = None) -> dict:
+    """GAFs, flutter and participation of a deck's FLUTTER requests on ``modes``.
+
+    Parameters
+    ----------
+    deck : path
+        Nastran deck with aero (CAERO1/SPLINE/AERO/MKAERO1) and FLUTTER/FLFACT cards; read once.
+    modes : xarray.Dataset
+        The modes (DESIGN.md section 6) of the deck's structure (:func:`deck_modes`,
+        :func:`configuration_modes`, a tuned model's, or imported from Nastran).
+    kernel : {"quartic", "parabolic"}
+        Doublet-lattice kernel integration for the GAFs.
+    flutter_ids : list of int, optional
+        FLUTTER cards to run (default: those selected by FMETHOD).
+    structural_damping : float, optional
+        g on every mode (modal viscous, as Nastran), replacing the deck's SDAMP table.
+    rigid_hz : float
+        In-vacuo modes below this frequency (Hz) are rigid-body modes (participation.nc).
+    units : {"si", "english_in", "english_ft"}, optional
+        The case's unit system, for the labels of every written number (structures.units); None
+        (a bare deck): the modes' own ``units`` attribute if it names a system, else "model units".
+    out_dir : path, optional
+        Output folder: ``flutter.nc``, ``summary.json``, ``flutter_summary.txt``, ``vg_<n>.png``
+        (:func:`flutter.results.write_flutter`), ``modes.nc``, ``gaf.nc`` and
+        ``participation.nc`` (:func:`flutter_participation`). Nothing is written when None.
+    configuration : str, optional
+        Name stored in participation.nc (default: the deck's file stem).
+
+    Returns
+    -------
+    dict
+        ``summary`` (list of crossings as in summary.json), ``results`` (list of (label,
+        Dataset)), ``participation`` (Dataset), ``gaf``, ``modes`` (labelled with the unit
+        system), ``units`` (the system used, None for "model units").
+    """
+    unit_labels(units)  # an unknown name fails before any work
+    deck = Path(deck)
+    bdf = read_pynastran(deck)
+    requests = read_flutter_requests(bdf, str(deck), flutter_ids, structural_damping)
+    if units is None:
+        units = system_of(modes.attrs)
+    elif modes.attrs.get("units") != units:
+        modes = modes.assign_attrs(units=units)  # modes.nc and the GAFs' labels name the system
+    aero = read_aero_model(bdf)
+    gaf = generalized_aero_forces(aero, modes, aero.machs, _gaf_ks(aero.ks, requests),
+                                  method=kernel)
+    results = solve_flutter(modes, gaf, requests, units)
+    sweeps, labels = [ds for _, ds in results], [lab for lab, _ in results]
+    participation = flutter_participation(results, modes, rigid_hz=rigid_hz, units=units,
+                                          configuration=configuration or deck.stem)
+    if out_dir is not None:
+        out_dir = Path(out_dir)
+        write_flutter(out_dir, sweeps, labels, units=units, title=deck.name)
+        write_dataset(modes, out_dir / "modes.nc")
+        write_dataset(gaf, out_dir / "gaf.nc")
+        write_dataset(participation, out_dir / "participation.nc")
+    return {"summary": summary_entries(sweeps, labels), "results": results,
+            "participation": participation, "gaf": gaf, "modes": modes, "units": units}
+
+
+def _flutter_ids(settings: FlutterSettings, flutter_ids) -> list | None:
+    """The command-line override, else the case's ids, else None (the deck's FMETHOD)."""
+    return list(flutter_ids or settings.flutter_ids) or None
+
+
+def case_flutter(case: Case, config: Configuration, modes: xr.Dataset,
+                 out_dir: str | os.PathLike | None = None, flutter_ids=None) -> dict:
+    """:func:`flutter_chain` of one configuration with the case's settings.
+
+    Kernel, FLUTTER ids and structural damping from ``[flutter]`` (``flutter_ids``, a
+    command-line override, replaces the case's; both empty: the deck's FMETHOD selection),
+    ``rigid_hz`` from ``[selection]``, the unit system from ``units``. The flutter stage of
+    ``pipeline run`` and ``pipeline flutter CASE`` both call this.
+
+    Returns
+    -------
+    dict
+        As :func:`flutter_chain`; writes ``out_dir`` when given.
+    """
+    settings = case.flutter or FlutterSettings()
+    return flutter_chain(config.deck, modes, kernel=settings.kernel,
+                         flutter_ids=_flutter_ids(settings, flutter_ids),
+                         structural_damping=settings.structural_damping,
+                         rigid_hz=case.selection.rigid_hz, units=case.units, out_dir=out_dir,
+                         configuration=config.name)
+
+
+def check_flutter_requests(case: Case, flutter_ids=None) -> None:
+    """Before any computation: every configuration's deck defines the FLUTTER cards (their FLFACT
+    lists and SDAMP tables) that the case's ``[flutter]`` (or the ``flutter_ids`` override)
+    selects.
+
+    Raises
+    ------
+    InputError
+        Naming the deck, the card, its id and the fix
+        (:func:`pipeline.flutter_cards.read_flutter_requests`).
+    """
+    if case.flutter is None and not flutter_ids:
+        return
+    settings = case.flutter or FlutterSettings()
+    for config in case.configurations:
+        read_flutter_requests(read_pynastran(config.deck), str(config.deck),
+                              _flutter_ids(settings, flutter_ids), settings.structural_damping)
