@@ -195,3 +195,23 @@ def test_pipeline_flutter_case_agrees_with_the_library(tmp_path, capsys, plain):
     assert part.attrs["configuration"] == "baseline" and part.attrs["rigid_hz"] == 0.1
     v_damped = _flutter(lib)[0]["velocity"]
     assert v_damped > _flutter(plain[1])[0]["velocity"] * 1.001
+
+
+@pytest.mark.filterwarnings("ignore::UserWarning", "ignore::RuntimeWarning")
+def test_pipeline_flutter_deck_agrees_with_the_library(tmp_path, capsys, plain):
+    """``pipeline flutter DECK`` (deck_modes + flutter_chain): the library's crossings and
+    participation, labelled "model units" (a bare deck)."""
+    out = tmp_path / "fl"
+    assert main(["flutter", str(DECK), "--flutter-id", "502", "--out", str(out)]) == 0
+    capsys.readouterr()
+    _, lib = plain
+    summary = json.loads((out / "summary.json").read_text())
+    assert [(c["kind"], c["root"]) for c in summary] == [(c["kind"], c["root"])
+                                                         for c in lib["summary"]]
+    for a, b in zip(summary, lib["summary"]):
+        assert a["velocity"] == pytest.approx(b["velocity"], rel=1e-9)
+        assert a["frequency"] == pytest.approx(b["frequency"], rel=1e-9)
+    part = read_dataset(out / "participation.nc")
+    np.testing.assert_allclose(part.participation.values,
+                               lib["participation"].participation.values, rtol=1e-9, atol=1e-9)
+    assert part.attrs["units"] == "model units" and part.attrs["configuration"] == "bah_plane"
