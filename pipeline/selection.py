@@ -202,7 +202,12 @@ def _units(participation: dict) -> str | None:
     return systems.pop()
 
 
-def _check_inputs(participation: dict) -> str | None:
+def _check_inputs(participation: dict, flutter_modes: int) -> str | None:
+    """Check the participation Datasets and ``flutter_modes``; return their unit system."""
+    if int(flutter_modes) < 1:
+        raise InputError(card_message(f"flutter_modes = {flutter_modes} must be >= 1.",
+                                      card="[selection]", card_id="flutter_modes",
+                                      fix="e.g. flutter_modes = 2."))
     if not participation:
         raise InputError(card_message("no configuration given.", card="participation",
                                       fix="pass {configuration: participation Dataset}."))
@@ -282,11 +287,7 @@ def select_modes(participation: dict[str, xr.Dataset], *, primary: float = 0.9,
         ``frequency`` [Hz], ``root``, ``flutter_mode``, ``critical``.
     """
     check_thresholds(primary, secondary)
-    if int(flutter_modes) < 1:
-        raise InputError(card_message(f"flutter_modes = {flutter_modes} must be >= 1.",
-                                      card="[selection]", card_id="flutter_modes",
-                                      fix="e.g. flutter_modes = 2."))
-    units = _check_inputs(participation)
+    units = _check_inputs(participation, flutter_modes)
     pairing = pairing or {}
     unknown = sorted(set(pairing) - set(participation))
     if unknown:
@@ -457,12 +458,13 @@ def selection_study(participation: dict[str, xr.Dataset], thresholds, *,
         coordinates as in :func:`select_modes` (critical roots only).
     """
     th = np.unique(np.asarray(thresholds, dtype=float))
-    if th.size == 0:
-        raise InputError(card_message("no threshold given.", card="--thresholds",
-                                      fix="give fractions, e.g. --thresholds 0.85,0.9,0.95."))
-    for t in th:
-        check_thresholds(float(t), float(t))
-    units = _check_inputs(participation)
+    bad = th[~((th > 0.0) & (th <= 1.0))]
+    if th.size == 0 or bad.size:
+        raise InputError(card_message(
+            f"thresholds {bad.tolist()} are not fractions in (0, 1]." if bad.size
+            else "no threshold given.", card="--thresholds",
+            fix="give fractions, e.g. --thresholds 0.85,0.9,0.95 (not percentages)."))
+    units = _check_inputs(participation, flutter_modes)
     configs = list(participation)
     counts, n_primary, ids = [], np.zeros((th.size, len(configs)), int), []
     for c, ds in enumerate(participation.values()):

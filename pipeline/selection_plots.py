@@ -1,7 +1,8 @@
 """Figures of the mode selection (plotting only; the numbers come from pipeline.selection).
 
 - :func:`plot_selection_study`: flexible modes needed versus threshold, one line per critical root
-  (configuration x Mach x flutter mode) and a dashed line per configuration for the joint selection;
+  (configuration x Mach x flutter mode) and a black dashed line per configuration for the joint
+  selection;
 - :func:`plot_participation`: the participation of every critical root as bars over the modes,
   coloured by the role the selection gave each mode (the paper's Table 6 as a picture).
 """
@@ -16,6 +17,7 @@ from matplotlib.ticker import MaxNLocator
 from pipeline.selection import point_labels
 
 ROLE_COLOURS = {"rigid": "0.45", "primary": "tab:red", "secondary": "tab:orange", "": "tab:blue"}
+JOINT_STYLES = ("--", "-.", ":")  # the joint selection of each configuration, in black
 ROLE_NAMES = {"rigid": "rigid-body", "primary": "primary", "secondary": "secondary", "": "not selected"}
 
 
@@ -41,8 +43,8 @@ def plot_selection_study(study: xr.Dataset, *, ax=None) -> Figure:
         ax.plot(pct, study["n_modes"].values[:, i], marker="o", label=label)
     for c, name in enumerate(study["configuration"].values):
         if int(study["critical_roots"].values[c]):
-            ax.plot(pct, study["n_primary"].values[:, c], color="k", linestyle="--", marker="s",
-                    alpha=0.4 + 0.6 / (c + 1), label=f"{name}: all critical roots")
+            ax.plot(pct, study["n_primary"].values[:, c], color="k", marker="s",
+                    linestyle=JOINT_STYLES[c % len(JOINT_STYLES)], label=f"{name}: all critical roots")
     ax.yaxis.set_major_locator(MaxNLocator(integer=True))
     ax.set_xlabel("participation threshold, with the rigid-body modes [%]")
     ax.set_ylabel("flexible modes needed")

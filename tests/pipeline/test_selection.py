@@ -212,6 +212,10 @@ def test_bad_inputs_are_refused():
         select_modes({})
     with pytest.raises(InputError, match="--thresholds"):
         selection_study({"EFEW": ds}, [])
+    with pytest.raises(InputError, match=r"--thresholds: thresholds \[90.0\].*Fix:"):
+        selection_study({"EFEW": ds}, [0.85, 90.0])
+    with pytest.raises(InputError, match="flutter_modes"):
+        selection_study({"EFEW": ds}, [0.9], flutter_modes=0)
     with pytest.raises(InputError, match="unit systems"):
         select_modes({"EFEW": ds, "FFFW": ds.assign_attrs(units="english_in")})
 
