@@ -233,6 +233,7 @@ class Graph:
         shutil.rmtree(staging, ignore_errors=True)
         staging.mkdir(parents=True)
         upstream = {s: [self.dir / rel for rel in self.manifest[s]["outputs"]] for s in stage.after}
+        fingerprint = self.fingerprint(stage)   # of the inputs as the compute starts reading them
         try:
             start = time.perf_counter()
             note = stage.compute(StageContext(stage, staging, self.dir, upstream))
@@ -247,7 +248,7 @@ class Graph:
                 os.replace(path, target)
             for rel in set(old["outputs"] if old else ()) - set(outputs):
                 (self.dir / rel).unlink(missing_ok=True)
-            self.manifest[stage.name] = {"fingerprint": self.fingerprint(stage), "outputs": outputs,
+            self.manifest[stage.name] = {"fingerprint": fingerprint, "outputs": outputs,
                                          "seconds": round(seconds, 3)}
             write_json(self.manifest, self.manifest_path)
             self.log(f"[{stage.name}] {note or 'done'}")
