@@ -38,7 +38,6 @@ from structures.units import system_of, unit_labels
 TOLERANCE = 1e-6          # [%] a total this close below a threshold reaches it
 SUM_TOLERANCE = 1e-6      # [%] participation of a point must sum to 100 within this
 MAX_NODES = 500_000       # exact search bound: partial sets per cover before the greedy rule
-ROLES = ("rigid", "primary", "secondary", "")
 _POINT_COORDS = ("case", "mach", "density", "velocity", "frequency", "root", "flutter_mode")
 
 
@@ -166,8 +165,9 @@ def smallest_cover(shares: np.ndarray, base: np.ndarray, target: float, *,
     return _greedy(shares, cand, base, need), False  # unreachable for shares summing to 100
 
 
-def _source(name: str, ds: xr.Dataset) -> str:
-    return str(ds.encoding.get("source") or f"participation.nc of configuration {name!r}")
+def _source(name: str, ds) -> str:
+    source = ds.encoding.get("source") if isinstance(ds, xr.Dataset) else None
+    return str(source or f"participation.nc of configuration {name!r}")
 
 
 def _check_participation(name: str, ds: xr.Dataset) -> None:
