@@ -254,18 +254,18 @@ def test_failed_flutter_of_a_case_writes_nothing(tmp_path, capsys, pt145):
 
 # ------------------------------------------------------------------------------ Ctrl-C
 def test_interrupt_names_the_stage_and_keeps_finished_ones(tmp_path, capsys, monkeypatch):
-    import pipeline.run
+    import pipeline.chain
 
     case = _case(tmp_path, BASE + "nmodes = 6\n")
 
     def interrupted(*args, **kwargs):
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(pipeline.run, "configuration_modes", interrupted)
+    monkeypatch.setattr(pipeline.chain, "configuration_modes", interrupted)
     code, out, err = cli(["run", case, "--out", tmp_path / "run"], capsys)
     assert code == 130
     assert err.strip().splitlines() == [
-        "interrupted in modes/baseline; run the same command again to resume"]
+        "interrupted in stage0/modes/baseline; run the same command again to resume"]
     assert not (tmp_path / "run").exists()  # nothing finished, nothing kept
 
 
@@ -289,7 +289,8 @@ def test_flutter_of_a_case_agrees_with_run(tmp_path, capsys):
     code, _, err = cli(["run", case, "--out", tmp_path / "run"], capsys)
     assert code == 0, err
     cli_crossings = json.loads((tmp_path / "fl" / "baseline" / "summary.json").read_text())
-    run_crossings = json.loads((tmp_path / "run" / "baseline" / "flutter" / "summary.json").read_text())
+    run_crossings = json.loads((tmp_path / "run" / "stage0" / "baseline" / "flutter" /
+                                   "summary.json").read_text())
     assert len(cli_crossings) == len(run_crossings) >= 1
     for a, b in zip(cli_crossings, run_crossings):
         assert (a["kind"], a["root"], a["mach"]) == (b["kind"], b["root"], b["mach"])
