@@ -1,95 +1,280 @@
-"""The run's HTML report: one self-contained page built from the stage results (no computation)."""
+"""The run's HTML report: one self-contained page built from the run folder (no computation).
+
+:func:`write_report` reads the files of the run folder (layout in the stage graph's contract:
+``stage<n>/<config>/modes.nc, mass_properties.nc, correlation.nc, correlation/*.png,
+flutter/flutter.nc, flutter/summary.json``, ``stage<n>/selection.nc``, ``stage<n>/targets.json``,
+``stage<n>/tuning/history.nc`` and ``flutter_change.nc``) and writes ``report.html`` beside them.
+Sections: the case and the stages run with the loop's stop reason; the flutter speed and frequency
+change per stage (paper Table 5, ``<table id="flutter-change">``); the flutter boundary against the
+envelope with the 15 % margin; V-g / V-f of every stage overlaid (Figs. 11, 12, 17); the
+design-variable changes (Table 24); then per stage and configuration the test-analysis frequency
+table with MAC, the orthogonality / cross-orthogonality off-diagonals and the acceptance checks,
+the correlation maps, the mass properties and the flutter crossings, and per stage the participation
+and selection table (Table 6). Every figure is embedded as a PNG data URI, so the page renders offline
+with nothing beside it; every number carries its unit (structures.units); a missing optional piece
+(no GVT, no tuning stage, no envelope, no flutter) is left out with one line saying why.
+
+The stages shown are those of this run: stage 0, then the tuning stages up to the one whose
+targets.json states why the loop stopped (at most the case's ``[loop] stages``).
+"""
 from __future__ import annotations
 
 import html
+import json
 from pathlib import Path
 
-from structures.common.files import write_text
+import numpy as np
+
+from pipeline.report_figures import (boundary_figure, figure_data_uri, png_data_uri, vg_overlay)
+from pipeline.report_tables import (correlation_section, design_change_section, fmt,
+                                    mass_section, modes_section, note, ordinal, selection_section,
+                                    table, tuning_section)
+from structures.common.errors import InputError
+from structures.common.files import read_dataset, write_text
 from structures.units import UnitLabels, unit_labels
 
-
-_STYLE = """body{font-family:sans-serif;margin:2em;max-width:70em}
+_STYLE = """body{font-family:sans-serif;margin:2em;max-width:80em;color:#222}
 table{border-collapse:collapse;margin:0.5em 0 1.5em}td,th{border:1px solid #bbb;padding:2px 8px;
-text-align:right}th{background:#eee}h2{border-bottom:1px solid #999}"""
+text-align:right}th{background:#e8eef6}td:first-child{text-align:left}h2{border-bottom:2px solid #456;
+color:#234}h3{color:#345}img{border:1px solid #ccc;margin:4px}p.note{color:#555;font-style:italic}
+pre{background:#f6f6f6;padding:6px;overflow-x:auto}"""
 
 
-def _table(header, rows) -> str:
-    head = "".join(f"<th>{html.escape(str(h))}</th>" for h in header)
-    body = "".join("<tr>" + "".join(f"<td>{html.escape(str(c))}</td>" for c in row) + "</tr>"
-                   for row in rows)
-    return f"<table><tr>{head}</tr>{body}</table>"
+def _stage_label(k: int) -> str:
+    return "stage 0 (baseline)" if k == 0 else f"stage {k} (tuning {k})"
 
 
-def _modes_section(name, result, labels: UnitLabels) -> str:
-    modes = result["modes"]
-    rows = [(int(m), f"{f:.5g}") for m, f in zip(modes["mode"].values, modes["frequency"].values)]
-    mp = result["mass_properties"]
-    cg = mp["cg"].values
-    inertia = mp["inertia"].values
-    values = [("mass", float(mp["mass"])), ("x_cg", cg[0]), ("y_cg", cg[1]), ("z_cg", cg[2]),
-              ("Ixx", inertia[0, 0]), ("Iyy", inertia[1, 1]), ("Izz", inertia[2, 2]),
-              ("Ixy", -inertia[0, 1]), ("Iyz", -inertia[1, 2]), ("Izx", -inertia[2, 0])]
-    mass_rows = [(q, f"{v:.6g}", labels.of_mass_property(q)) for q, v in values]
-    return (f"<h2>Configuration {html.escape(name)}</h2>"
-            f"<p>Deck: {html.escape(str(modes.attrs.get('deck', '')))}; modes from "
-            f"{html.escape(str(modes.attrs.get('source', '')))}.</p>"
-            "<h3>Natural frequencies</h3>" + _table(("mode", "frequency [Hz]"), rows) +
-            "<h3>Mass properties (about the CG, basic axes)</h3>" +
-            _table(("quantity", "value", "unit"), mass_rows))
+def _read_json(path: Path):
+    return json.loads(path.read_text()) if path.exists() else None
 
 
-def _correlation_section(result, labels: UnitLabels, wtmass: float) -> str:
-    corr = result["dataset"]
-    names = corr["test_name"].values if "test_name" in corr else [""] * corr.sizes["test_mode"]
+def _text(value) -> str:
+    return "\u2013" if value is None else str(value)
+
+
+def _nan(value) -> float:
+    return np.nan if value is None else float(value)
+
+
+def _check_unit(check: str) -> str:
+    """Unit of a targets.json check's value and limit."""
+    if "frequency" in check:
+        return "%"
+    return "- (|S_ij|)" if "orthogonality" in check else "-"
+
+
+def stage_folders(run_dir: Path, case) -> list[Path]:
+    """``stage0``, ``stage1``, ... of this run in order: contiguous from stage 0, at most the case's
+    [loop] stages, and none after a stage whose targets.json gives the loop's stop reason (folders
+    of an earlier, longer run are left out)."""
+    run_dir = Path(run_dir)
+    if not (run_dir / "stage0").is_dir():
+        raise InputError(f"run folder {run_dir}: no stage0/ folder. Fix: run `pipeline run CASE` "
+                         "into this folder first (the report reads its results).")
+    last = case.loop.stages if case.loop is not None else 0
+    out = []
+    for k in range(last + 1):
+        folder = run_dir / f"stage{k}"
+        if not folder.is_dir():
+            break
+        out.append(folder)
+        targets = _read_json(folder / "targets.json")
+        if targets is not None and targets.get("stop_reason"):
+            break
+    return out
+
+
+def _overview(case, stages: list[Path], labels: UnitLabels) -> str:
+    configs = table(("configuration", "deck", "GVT"),
+                    [(c.name, str(c.deck), str(c.gvt) if c.gvt else "none (no correlation)")
+                     for c in case.configurations])
+    rows, failing = [], []
+    for k, folder in enumerate(stages):
+        targets = _read_json(folder / "targets.json")
+        if targets is None:
+            rows.append((_stage_label(k), "", "", "no targets.json (no [loop] or no GVT)"))
+            continue
+        rows.append((_stage_label(k), targets["standard"], "yes" if targets["met"] else "no",
+                     targets["stop_reason"] or "the loop goes on"))
+        if k == len(stages) - 1:
+            failing = [(k, f["configuration"], _text(f["test_mode"]), _text(f["fe_mode"]),
+                        f["check"], fmt(_nan(f["value"]), ".4g"), fmt(_nan(f["limit"]), ".4g"),
+                        _check_unit(f["check"])) for f in targets.get("failing", [])]
+    out = (f"<h1>Case {html.escape(case.name)}</h1><p>Unit system: {html.escape(labels.system)} ("
+           + html.escape(", ".join(f"{q} [{getattr(labels, q)}]" for q in
+                                   ("length", "velocity", "density", "mass", "inertia", "force",
+                                    "frequency"))) + ").</p>" + configs +
+           "<h2 id='stages'>Stages run</h2>" +
+           table(("stage", "standard", "primary-mode targets met [yes/no]", "stop reason"), rows))
+    if len(stages) == 1:
+        out += note("No tuning stage was run (no [loop] with stages >= 1, or the targets held "
+                    "at stage 0): the report shows the baseline only.")
+    if failing:
+        out += "<h3>Primary-mode targets still failing after the last stage</h3>" + table(
+            ("stage", "configuration", "test mode", "FE mode", "check", "value [unit column]",
+             "limit [unit column]", "unit"), failing)
+    return out
+
+
+def _flutter_change_section(run_dir: Path, labels: UnitLabels) -> str:
+    head = "<h2 id='table5'>Flutter speed and frequency per stage (paper Table 5)</h2>"
+    path = run_dir / "flutter_change.nc"
+    if not path.exists():
+        return head + note("No flutter_change.nc in the run folder (no [flutter] section or no "
+                            "flutter stage): no flutter-change table.")
+    fc = read_dataset(path)
+    if fc.sizes["case"] == 0 or fc.sizes["flutter_mode"] == 0:
+        return head + note("No flutter crossing at any stage, Mach or configuration.")
+    v_u = fc["velocity"].attrs.get("units", labels.velocity)
+    d_u = fc["density"].attrs.get("units", labels.density)
+    stages = fc["stage"].values
+    header = ["configuration", "Mach [-]", f"density [{d_u}]", "flutter mode",
+              f"stage 0 speed [{v_u}]", "stage 0 frequency [Hz]"]
+    for k in stages[1:]:
+        header += [f"stage {k} speed [{v_u}]", f"stage {k} speed change [%]",
+                   f"stage {k} frequency [Hz]", f"stage {k} frequency change [%]"]
     rows = []
-    for i, mode in enumerate(corr["test_mode"].values):
-        rows.append((int(mode), names[i], f"{float(corr['test_frequency'][i]):.4g}",
-                     int(corr["paired_fe_mode"][i]), f"{float(corr['paired_fe_frequency'][i]):.4g}",
-                     f"{float(corr['frequency_error'][i]):+.2f}", f"{float(corr['paired_mac'][i]):.3f}",
-                     "yes" if bool(corr["interchanged"][i]) else ""))
-    table = _table(("test mode", "name", "test [Hz]", "FE mode", "FE [Hz]", "error [%]", "MAC",
-                    "interchanged"), rows)
-    mass = ""
-    if "mass_model" in corr:
-        mass_rows = [(q, f"{float(corr['mass_model'].sel(quantity=q)):.6g}",
-                      f"{float(corr['mass_measured'].sel(quantity=q)):.6g}",
-                      f"{float(corr['mass_relative_error'].sel(quantity=q)):+.2f}",
-                      labels.of_mass_property(str(q), wtmass))
-                     for q in corr["quantity"].values]
-        mass = "<h3>Mass properties, model vs measured</h3>" + _table(
-            ("quantity", "model", "measured", "error [%]", "unit"), mass_rows)
-    figures = "".join(f"<img src='{html.escape(str(f))}' alt='correlation' width='420'>"
-                      for f in result["figures"])
-    return "<h3>Test-analysis correlation (paper Tables 1-4)</h3>" + table + mass + figures
+    for config in fc["configuration"].values:
+        for case in fc["case"].values:
+            for mode in fc["flutter_mode"].values:
+                one = fc.sel(configuration=config, case=case, flutter_mode=mode)
+                if np.all(np.isnan(one["velocity"].values)):
+                    continue
+                row = [str(config), fmt(one["mach"], ".4g"), fmt(one["density"], ".5g"),
+                       ordinal(int(mode)), fmt(one["velocity"].sel(stage=0), ".5g"),
+                       fmt(one["frequency"].sel(stage=0), ".4g")]
+                for k in stages[1:]:
+                    at = one.sel(stage=k)
+                    row += [fmt(at["velocity"], ".5g"), fmt(at["velocity_change"], "+.2f"),
+                            fmt(at["frequency"], ".4g"), fmt(at["frequency_change"], "+.2f")]
+                rows.append(row)
+    return (head + "<p>The n-th flutter crossing (by speed) of each sweep at stage k against the "
+            "n-th at stage 0; change = 100 (stage k - stage 0) / stage 0, signed (positive: "
+            "faster / higher). \u2013: no such crossing at that stage (no change is given).</p>"
+            + table(header, rows, table_id="flutter-change"))
 
 
-def _flutter_section(result, labels: UnitLabels) -> str:
-    rows = [(c["kind"], c["root"], f"{c['mach']:.3g}", f"{c['density']:.5g}",
-             f"{c['velocity']:.5g}", f"{c['frequency']:.4g}") for c in result["summary"]]
-    table = (_table(("kind", "root", "Mach", f"density [{labels.density}]",
-                     f"velocity [{labels.velocity}]", f"frequency [{labels.frequency}]"), rows)
-             if rows else "<p>No flutter or divergence crossing in the analysed range.</p>")
-    figures = "".join(f"<img src='{html.escape(str(f))}' alt='V-g / V-f' width='560'>"
-                      for f in result["figures"])
-    return f"<h3>Flutter crossings ({html.escape(labels.system)})</h3>" + table + figures
+def _crossings(stages: list[Path], case) -> list[dict]:
+    """summary.json entries per stage and configuration."""
+    out = []
+    for folder in stages:
+        out.append({c.name: data for c in case.configurations
+                    if (data := _read_json(folder / c.name / "flutter" / "summary.json"))
+                    is not None})
+    return out
 
 
-def write_report(case, results: dict, out_dir) -> Path:
-    """Write ``report.html`` into ``out_dir`` and return its path; every number is labelled with
-    the case's unit system (structures.units)."""
-    out = Path(out_dir) / "report.html"
+def _boundary_section(case, stages: list[Path], labels: UnitLabels) -> str:
+    head = "<h2 id='boundary'>Flutter boundary against the flight envelope</h2>"
+    crossings = _crossings(stages, case)
+    if not any(entries for stage in crossings for entries in stage.values()):
+        return head + note("No flutter or divergence crossing in any stage: no boundary to draw.")
+    envelope = case.flutter.envelope if case.flutter is not None else None
+    fig = boundary_figure(crossings, [_stage_label(k) for k in range(len(stages))], envelope,
+                          units=labels.velocity)
+    out = head + (note("No envelope in the case's [flutter]: the boundary is drawn without the "
+                        "envelope and its 1.15 x margin.") if envelope is None else
+                  "<p>Envelope and 1.15 x envelope (the 15 % flutter margin) from the case's "
+                  "[flutter] envelope.</p>")
+    return out + f"<img src='{figure_data_uri(fig)}' alt='flutter boundary' width='640'>"
+
+
+def _overlay_section(case, stages: list[Path], labels: UnitLabels) -> str:
+    out = "<h2 id='vg'>V-g / V-f of every stage overlaid (paper Figs. 11, 12, 17)</h2>"
+    names = [_stage_label(k) for k in range(len(stages))]
+    for config in case.configurations:
+        files = [folder / config.name / "flutter" / "flutter.nc" for folder in stages]
+        if not files[0].exists():
+            out += note(f"Configuration {config.name}: no flutter.nc at stage 0 (no flutter run).")
+            continue
+        present = [(read_dataset(f), name) for f, name in zip(files, names) if f.exists()]
+        base = present[0][0]
+        for c in base["case"].values:
+            where = [f"{name} {base[key].values[c]:.4g} [{unit}]"
+                     for key, name, unit in (("case_mach", "Mach", "-"),
+                                             ("case_density", "density", labels.density))
+                     if key in base.coords and np.isfinite(base[key].values[c])]
+            title = f"{config.name}: " + ", ".join(where or [f"sweep {int(c) + 1}"])
+            fig = vg_overlay([ds for ds, _ in present], int(c), [n for _, n in present],
+                             title=title)
+            out += (f"<h3>Configuration {html.escape(title)}</h3><img src='{figure_data_uri(fig)}' "
+                    f"alt='V-g / V-f {html.escape(title)}' width='620'>")
+    return out
+
+
+def _crossing_table(entries: list[dict], labels: UnitLabels) -> str:
+    if not entries:
+        return note("No flutter or divergence crossing in the analysed range.")
+    rows = [(e["kind"], e["root"], fmt(e["mach"], ".4g"), fmt(e["density"], ".5g"),
+             fmt(e["velocity"], ".5g"), fmt(e["frequency"], ".4g"))
+            for e in sorted(entries, key=lambda e: (e.get("case", 0), e["velocity"]))]
+    return table(("kind", "root", "Mach [-]", f"density [{labels.density}]",
+                  f"velocity [{labels.velocity}]", "frequency [Hz]"), rows)
+
+
+def _stage_section(k: int, folder: Path, case, labels: UnitLabels) -> str:
+    out = f"<h2 id='stage{k}'>{html.escape(_stage_label(k).capitalize())}</h2>"
+    if k:
+        out += tuning_section(k, folder / "tuning" / "history.nc")
+    for config in case.configurations:
+        where = f"Stage {k}, configuration {config.name}"
+        out += f"<h3>{html.escape(where)}</h3>"
+        base = folder / config.name
+        corr_path = base / "correlation.nc"
+        if corr_path.exists():
+            corr = read_dataset(corr_path)
+            out += correlation_section(corr, where)
+            maps = sorted((base / "correlation").glob("*.png"))
+            out += "".join(f"<img src='{png_data_uri(p.read_bytes())}' alt='{html.escape(where)} "
+                           f"{html.escape(p.stem)}' width='380'>" for p in maps)
+        else:
+            corr = None
+            out += note(f"{where}: no GVT for this configuration, so no correlation.")
+            if (base / "modes.nc").exists():
+                out += modes_section(read_dataset(base / "modes.nc"), where)
+        if (base / "mass_properties.nc").exists():
+            out += mass_section(read_dataset(base / "mass_properties.nc"), corr, labels, where)
+        summary = _read_json(base / "flutter" / "summary.json")
+        if summary is not None:
+            out += f"<h4>{html.escape(where)}: flutter crossings</h4>" + _crossing_table(summary,
+                                                                                        labels)
+    out += selection_section(k, folder / "selection.nc")
+    return out
+
+
+def write_report(case, run_dir, *, out=None) -> Path:
+    """Write the report of a run folder and return its path.
+
+    Parameters
+    ----------
+    case : pipeline.case.Case
+        The case (name, unit system, configurations, flutter envelope).
+    run_dir : path
+        The run folder (layout in the module docstring).
+    out : path, optional
+        Where to write the page (default ``run_dir / "report.html"``; the stage graph passes its
+        staging path).
+
+    Returns
+    -------
+    Path
+        The page, written atomically (structures.common.files.write_text).
+
+    Raises
+    ------
+    InputError
+        The run folder has no ``stage0/``.
+    """
+    run_dir = Path(run_dir)
     labels = unit_labels(case.units)
-    sections = "".join(_modes_section(name, res, labels) +
-                       (_correlation_section(res["correlation"], labels,
-                                             float(res["mass_properties"].attrs.get("wtmass", 1.0)))
-                        if "correlation" in res else "") +
-                       (_flutter_section(res["flutter"], labels) if "flutter" in res else "")
-                       for name, res in results.items())
-    page = (f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>{html.escape(case.name)}"
-            f"</title><style>{_STYLE}</style></head><body><h1>Case {html.escape(case.name)}</h1>"
-            f"<p>Units: {html.escape(case.units)} (" +
-            html.escape(", ".join(f"{q} {getattr(labels, q)}" for q in
-                                  ("length", "velocity", "density", "mass", "inertia", "force",
-                                   "frequency"))) + "). Configurations: "
-            f"{len(case.configurations)}.</p>{sections}</body></html>")
-    return write_text(page, out)
+    stages = stage_folders(run_dir, case)
+    body = (_overview(case, stages, labels) + _flutter_change_section(run_dir, labels) +
+            (_boundary_section(case, stages, labels) + _overlay_section(case, stages, labels)
+             if case.flutter is not None else
+             note("No [flutter] section in the case: no flutter boundary and no V-g / V-f.")) +
+            design_change_section(stages[1:]) +
+            "".join(_stage_section(k, folder, case, labels) for k, folder in enumerate(stages)))
+    page = (f"<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'><title>"
+            f"{html.escape(case.name)}: pipeline run report</title><style>{_STYLE}</style></head>"
+            f"<body>{body}</body></html>")
+    return write_text(page, Path(out) if out is not None else run_dir / "report.html")
