@@ -27,8 +27,8 @@ import numpy as np
 
 from pipeline.report_figures import (boundary_figure, figure_data_uri, png_data_uri, vg_overlay)
 from pipeline.report_tables import (correlation_section, design_change_section, fmt,
-                                    mass_section, modes_section, note, ordinal, selection_section,
-                                    table, tuning_section)
+                                    mass_section, modes_section, note, ordinal, selection_roles,
+                                    selection_section, table, tuning_section)
 from structures.common.errors import InputError
 from structures.common.files import read_dataset, write_text
 from structures.units import UnitLabels, unit_labels
@@ -104,7 +104,7 @@ def _overview(case, stages: list[Path], labels: UnitLabels) -> str:
            + html.escape(", ".join(f"{q} [{getattr(labels, q)}]" for q in
                                    ("length", "velocity", "density", "mass", "inertia", "force",
                                     "frequency"))) + ").</p>" + configs +
-           "<h2 id='stages'>Stages run</h2>" +
+           '<h2 id="stages">Stages run</h2>' +
            table(("stage", "standard", "primary-mode targets met [yes/no]", "stop reason"), rows))
     if len(stages) == 1:
         out += note("No tuning stage was run (no [loop] with stages >= 1, or the targets held "
@@ -117,7 +117,7 @@ def _overview(case, stages: list[Path], labels: UnitLabels) -> str:
 
 
 def _flutter_change_section(run_dir: Path, labels: UnitLabels) -> str:
-    head = "<h2 id='table5'>Flutter speed and frequency per stage (paper Table 5)</h2>"
+    head = '<h2 id="table5">Flutter speed and frequency per stage (paper Table 5)</h2>'
     path = run_dir / "flutter_change.nc"
     if not path.exists():
         return head + note("No flutter_change.nc in the run folder (no [flutter] section or no "
@@ -165,7 +165,7 @@ def _crossings(stages: list[Path], case) -> list[dict]:
 
 
 def _boundary_section(case, stages: list[Path], labels: UnitLabels) -> str:
-    head = "<h2 id='boundary'>Flutter boundary against the flight envelope</h2>"
+    head = '<h2 id="boundary">Flutter boundary against the flight envelope</h2>'
     crossings = _crossings(stages, case)
     if not any(entries for stage in crossings for entries in stage.values()):
         return head + note("No flutter or divergence crossing in any stage: no boundary to draw.")
@@ -176,11 +176,11 @@ def _boundary_section(case, stages: list[Path], labels: UnitLabels) -> str:
                         "envelope and its 1.15 x margin.") if envelope is None else
                   "<p>Envelope and 1.15 x envelope (the 15 % flutter margin) from the case's "
                   "[flutter] envelope.</p>")
-    return out + f"<img src='{figure_data_uri(fig)}' alt='flutter boundary' width='640'>"
+    return out + f'<img src="{figure_data_uri(fig)}" alt="flutter boundary" width="640">'
 
 
 def _overlay_section(case, stages: list[Path], labels: UnitLabels) -> str:
-    out = "<h2 id='vg'>V-g / V-f of every stage overlaid (paper Figs. 11, 12, 17)</h2>"
+    out = '<h2 id="vg">V-g / V-f of every stage overlaid (paper Figs. 11, 12, 17)</h2>'
     names = [_stage_label(k) for k in range(len(stages))]
     for config in case.configurations:
         files = [folder / config.name / "flutter" / "flutter.nc" for folder in stages]
@@ -197,8 +197,8 @@ def _overlay_section(case, stages: list[Path], labels: UnitLabels) -> str:
             title = f"{config.name}: " + ", ".join(where or [f"sweep {int(c) + 1}"])
             fig = vg_overlay([ds for ds, _ in present], int(c), [n for _, n in present],
                              title=title)
-            out += (f"<h3>Configuration {html.escape(title)}</h3><img src='{figure_data_uri(fig)}' "
-                    f"alt='V-g / V-f {html.escape(title)}' width='620'>")
+            out += (f'<h3>Configuration {html.escape(title)}</h3><img src="{figure_data_uri(fig)}" '
+                    f'alt="V-g / V-f {html.escape(title)}" width="620">')
     return out
 
 
@@ -213,9 +213,10 @@ def _crossing_table(entries: list[dict], labels: UnitLabels) -> str:
 
 
 def _stage_section(k: int, folder: Path, case, labels: UnitLabels) -> str:
-    out = f"<h2 id='stage{k}'>{html.escape(_stage_label(k).capitalize())}</h2>"
+    out = f'<h2 id="stage{k}">{html.escape(_stage_label(k).capitalize())}</h2>'
     if k:
         out += tuning_section(k, folder / "tuning" / "history.nc")
+    roles = selection_roles(folder / "selection.nc")
     for config in case.configurations:
         where = f"Stage {k}, configuration {config.name}"
         out += f"<h3>{html.escape(where)}</h3>"
@@ -223,10 +224,10 @@ def _stage_section(k: int, folder: Path, case, labels: UnitLabels) -> str:
         corr_path = base / "correlation.nc"
         if corr_path.exists():
             corr = read_dataset(corr_path)
-            out += correlation_section(corr, where)
+            out += correlation_section(corr, where, roles.get(config.name))
             maps = sorted((base / "correlation").glob("*.png"))
-            out += "".join(f"<img src='{png_data_uri(p.read_bytes())}' alt='{html.escape(where)} "
-                           f"{html.escape(p.stem)}' width='380'>" for p in maps)
+            out += "".join(f'<img src="{png_data_uri(p.read_bytes())}" alt="{html.escape(where)} '
+                           f'{html.escape(p.stem)}" width="380">' for p in maps)
         else:
             corr = None
             out += note(f"{where}: no GVT for this configuration, so no correlation.")
@@ -274,7 +275,7 @@ def write_report(case, run_dir, *, out=None) -> Path:
              note("No [flutter] section in the case: no flutter boundary and no V-g / V-f.")) +
             design_change_section(stages[1:]) +
             "".join(_stage_section(k, folder, case, labels) for k, folder in enumerate(stages)))
-    page = (f"<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'><title>"
+    page = (f'<!DOCTYPE html><html lang="en"><head><meta charset="utf-8"><title>'
             f"{html.escape(case.name)}: pipeline run report</title><style>{_STYLE}</style></head>"
             f"<body>{body}</body></html>")
     return write_text(page, Path(out) if out is not None else run_dir / "report.html")

@@ -33,7 +33,7 @@ def table(header, rows, *, table_id: str | None = None) -> str:
     body = "".join("<tr>" + "".join(f"<td>{html.escape(str(c), quote=False)}</td>" for c in row)
                    + "</tr>"
                    for row in rows)
-    ident = f" id='{html.escape(table_id)}'" if table_id else ""
+    ident = f' id="{html.escape(table_id)}"' if table_id else ""
     return f"<table{ident}><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>"
 
 
@@ -50,15 +50,17 @@ def ordinal(n: int) -> str:
 
 def note(text: str) -> str:
     """A one-line remark (e.g. why a section is left out)."""
-    return f"<p class='note'>{html.escape(text, quote=False)}</p>"
+    return f'<p class="note">{html.escape(text, quote=False)}</p>'
 
 
 def _yes(flag) -> str:
     return "pass" if bool(flag) else "FAIL"
 
 
-def correlation_section(corr: xr.Dataset, where: str) -> str:
-    """Frequency / MAC / orthogonality table and acceptance summary of one correlation.nc."""
+def correlation_section(corr: xr.Dataset, where: str, roles: dict | None = None) -> str:
+    """Frequency / MAC / orthogonality table and acceptance summary of one correlation.nc;
+    ``roles`` (FE mode -> "primary" / "secondary" / "rigid" / "") are the stage's selection."""
+    roles = roles or {}
     checks = [str(c) for c in corr["check"].values] if "check" in corr.coords else []
     names = corr["test_name"].values if "test_name" in corr else [""] * corr.sizes["test_mode"]
     rows = []
@@ -70,11 +72,11 @@ def correlation_section(corr: xr.Dataset, where: str) -> str:
                      fmt(abs(float(one["paired_cross_orthogonality"])), ".3f"),
                      fmt(one["max_cross_orthogonality_off_diagonal"], ".3f"),
                      fmt(one["max_orthogonality_off_diagonal"], ".3f"),
-                     "yes" if bool(one["primary"]) else "no"]
+                     roles.get(int(one["paired_fe_mode"])) or "-"]
                     + [_yes(one["pass_all"].sel(check=c)) for c in checks])
     header = ["test mode", "name", "test frequency [Hz]", "FE mode", "FE frequency [Hz]",
               "frequency error [%]", "MAC [-]", "|S_ii| [-]", "max off-diagonal |S_ij| [-]",
-              "max off-diagonal |M_ij| [-]", "primary [yes/no]",
+              "max off-diagonal |M_ij| [-]", "selection role",
               *(f"{c} [pass/fail]" for c in checks)]
     out = (f"<h4>{html.escape(where)}: test-analysis correlation (paper Tables 1-4)</h4>"
            + table(header, rows))
@@ -145,7 +147,7 @@ def design_change_section(stages: list) -> str:
     tuning (:func:`structures.tuning_report.design_change_table`), the change from the baseline is
     against the start of stage 1's tuning.
     """
-    head = "<h2 id='table24'>Design-variable changes per stage (paper Table 24)</h2>"
+    head = '<h2 id="table24">Design-variable changes per stage (paper Table 24)</h2>'
     tables = {k: design_change_table(read_dataset(folder / "tuning" / "history.nc"))
               for k, folder in enumerate(stages, start=1)
               if (folder / "tuning" / "history.nc").exists()}
@@ -174,6 +176,16 @@ def design_change_section(stages: list) -> str:
         rows.append(row)
     return (head + "<p>Values in the deck's units of each card field; \"at bound\": on a side "
             "constraint.</p>" + table(header, rows))
+
+
+def selection_roles(path: Path) -> dict:
+    """configuration -> {FE mode: role} of a stage's selection.nc ({} when there is none)."""
+    if not path.exists():
+        return {}
+    sel = read_dataset(path)
+    modes = [int(m) for m in sel["mode"].values]
+    return {str(c): dict(zip(modes, sel["role"].sel(configuration=c).values.astype(str)))
+            for c in sel["configuration"].values}
 
 
 def selection_section(k: int, path: Path) -> str:

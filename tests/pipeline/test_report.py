@@ -23,7 +23,7 @@ DASH = "\u2013"
 NAME_HEADERS = {"configuration", "deck", "GVT", "stage", "standard", "stop reason", "test mode",
                 "FE mode", "name", "check", "unit", "kind", "root", "flutter mode",
                 "design variable", "acceptance check", "limits", "configuration:test mode",
-                "FE mode before", "FE mode after"}
+                "FE mode before", "FE mode after", "selection role"}
 
 
 class Tables(HTMLParser):
@@ -178,6 +178,9 @@ def test_sections_name_stage_and_configuration(run):
             assert f"Stage {stage}, configuration {config}: mass properties" in text
         assert f"Stage {stage}: modal participation and mode selection (paper Table 6)" in text
     assert STOP_REASON in text
+    corr = next(t for t in Tables(text).tables if t["header"][:2] == ["test mode", "name"])
+    role = corr["header"].index("selection role")
+    assert [r[role] for r in corr["rows"]] == ["primary", "primary", "secondary"]  # FE modes 2, 3, 4
     assert "Envelope and 1.15 x envelope" in text
     table24 = next(t for t in Tables(text).tables if t["header"][0] == "design variable")
     rows = {r[0]: r for r in table24["rows"]}

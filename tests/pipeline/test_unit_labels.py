@@ -10,6 +10,7 @@ from flutter.results import units_entry
 from pipeline.cmd_flutter import _print
 from pipeline.report import write_report
 from pipeline.tables import mass_table
+from structures.common.files import write_dataset, write_json
 
 
 def _props(wtmass=1.0):
@@ -46,11 +47,15 @@ def test_report_headers_carry_units(tmp_path):
                      "inertia": (("axis", "axis_2"), np.diag([3.0, 4.0, 5.0]))})
     crossing = {"kind": "flutter", "root": 1, "mach": 0.45, "density": 1.1e-7, "velocity": 6004.0,
                 "frequency": 140.0}
-    results = {"a": {"modes": modes, "mass_properties": mp,
-                     "flutter": {"summary": [crossing], "figures": []}}}
-    case = SimpleNamespace(name="c", units="english_in", configurations=(None,))
-    page = write_report(case, results, tmp_path).read_text()
-    assert "Units: english_in (length in, velocity in/s" in page
+    base = tmp_path / "stage0" / "a"
+    write_dataset(modes, base / "modes.nc")
+    write_dataset(mp, base / "mass_properties.nc")
+    write_json([crossing], base / "flutter" / "summary.json")
+    case = SimpleNamespace(name="c", units="english_in", flutter=None, loop=None,
+                           configurations=(SimpleNamespace(name="a", deck="x.bdf", gvt=None),))
+    page = write_report(case, tmp_path).read_text()
+    assert "Unit system: english_in (length [in], velocity [in/s]" in page
     assert "<th>velocity [in/s]</th>" in page and "<th>frequency [Hz]</th>" in page
-    assert "<td>Ixx</td><td>3</td><td>lbf s^2 in (slinch in^2)</td>" in page
-    assert "Flutter crossings (english_in)" in page
+    assert "<th>Ixx [lbf s^2 in (slinch in^2)]</th>" in page
+    assert "<td>2</td><td>1</td><td>0</td><td>0.5</td><td>3</td>" in page
+    assert "Stage 0, configuration a: flutter crossings" in page
