@@ -29,8 +29,9 @@ Example (``data/bah_wing/case.toml``)::
     standard = "MIL-STD-1540C"  # or "NASA-STD-5002": the primary-mode targets that stop the loop
 
     [tuning]                 # optional: pipeline tune, and the loop's design variables (schema in
-                             # pipeline.cmd_tune's docstring; in the loop, its objective and
-                             # constraints are added to those generated from the selection)
+                             # pipeline.cmd_tune's docstring; the loop keeps its constraints and
+                             # design-change prior and takes the rest of its objective from the
+                             # selection, pipeline.loop)
 
 :func:`read_case` checks the whole file before anything is computed: unknown keys raise with the
 list of valid ones, every value has the type its key needs (an integer is never a bool or a float,

@@ -12,7 +12,10 @@ stage's selection (pipeline.selection). For every configuration C:
   ``C:cross_orthogonality:ti-tj`` with ti or tj secondary, eps = off_diagonal^2;
   ``C:orthogonality:ti-tj`` of the tuned test modes, eps = orthogonality_off_diagonal^2;
   ``C:mass:q`` of every measured mass quantity q, eps = (MASS_TOLERANCE / 100)^2.
-The case's own ``[tuning]`` objective and constraints are added to these.
+Of the case's own ``[tuning]`` terms the loop keeps the design-change terms of the objective
+(``design:change:*``, the prior that regularises the update) and every constraint (a constraint
+the case states replaces the generated limit of the same index); its other objective terms are
+``pipeline tune``'s and are replaced by the selection's.
 
 Stop rule (:func:`evaluate_targets`): the loop stops after stage n when, in every configuration,
 every primary mode of stage n's selection has a paired test mode with |frequency error| within

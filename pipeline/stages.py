@@ -145,8 +145,9 @@ def _tuning(ctx: StageContext, case, n: int, progress=None) -> None:
     selection = read_dataset(ctx.run_dir / f"stage{n - 1}/selection.nc")
     objective, constraints, test_modes = loop_terms(selection, names, case.loop.criteria,
                                                     _measured_mass(case))
-    problem = tuning_problem(case, objective + settings.objective,
-                             constraints + settings.constraints, test_modes)
+    prior = tuple(t for t in settings.objective if str(t[0]).startswith("design:"))
+    problem = tuning_problem(case, objective + prior, constraints + settings.constraints,
+                             test_modes)
     if n > 1:   # go on from where the previous stage ended
         start = read_dataset(ctx.run_dir / f"stage{n - 1}/tuning/history.nc")["design"].values[-1]
     elif settings.restart is not None:
