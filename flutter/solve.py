@@ -149,8 +149,8 @@ def solve_request(system: ModalSystem, gaf: xr.Dataset,
     return out
 
 
-def solve_flutter(modes: xr.Dataset, gaf: xr.Dataset, requests, units: str | None = None
-                  ) -> list[tuple[dict, xr.Dataset]]:
+def solve_flutter(modes: xr.Dataset, gaf: xr.Dataset, requests, units: str | None = None,
+                  progress=None) -> list[tuple[dict, xr.Dataset]]:
     """Every request on the modes' modal system, each with its own structural damping.
 
     Parameters
@@ -163,6 +163,8 @@ def solve_flutter(modes: xr.Dataset, gaf: xr.Dataset, requests, units: str | Non
     units : {"si", "english_in", "english_ft"} or None
         Unit system whose labels the results carry (:func:`flutter.results.label_units`; None:
         "model units"). The numbers are in the model's units either way.
+    progress : callable(str), optional
+        Told which request is being solved.
 
     Returns
     -------
@@ -171,7 +173,9 @@ def solve_flutter(modes: xr.Dataset, gaf: xr.Dataset, requests, units: str | Non
         also hold ``method`` (the request's), ``rhoref`` and ``configuration``.
     """
     results = []
-    for req in requests:
+    for i, req in enumerate(requests):
+        if progress is not None:
+            progress(f"FLUTTER {req.sid} ({req.method}), request {i + 1} of {len(requests)}")
         system = modal_system(modes, req.damping)
         for lab, ds in solve_request(system, gaf, req):
             ds = label_units(ds, units)

@@ -154,7 +154,7 @@ def flutter_chain(deck: str | os.PathLike, modes: xr.Dataset, *, kernel: str = "
                   flutter_ids=None, structural_damping: float | None = None,
                   rigid_hz: float = 0.05, units: str | None = None,
                   out_dir: str | os.PathLike | None = None,
-                  configuration: str | None = None) -> dict:
+                  configuration: str | None = None, progress=None) -> dict:
     """GAFs, flutter and participation of a deck's FLUTTER requests on ``modes``.
 
     Parameters
@@ -181,6 +181,8 @@ def flutter_chain(deck: str | os.PathLike, modes: xr.Dataset, *, kernel: str = "
         ``participation.nc`` (:func:`flutter_participation`). Nothing is written when None.
     configuration : str, optional
         Name stored in participation.nc (default: the deck's file stem).
+    progress : callable(str), optional
+        Told what is being computed (the GAFs, each FLUTTER request's sweeps).
 
     Returns
     -------
@@ -198,9 +200,11 @@ def flutter_chain(deck: str | os.PathLike, modes: xr.Dataset, *, kernel: str = "
     elif modes.attrs.get("units") != units:
         modes = modes.assign_attrs(units=units)  # modes.nc and the GAFs' labels name the system
     aero = read_aero_model(bdf)
-    gaf = generalized_aero_forces(aero, modes, aero.machs, _gaf_ks(aero.ks, requests),
-                                  method=kernel)
-    results = solve_flutter(modes, gaf, requests, units)
+    ks = _gaf_ks(aero.ks, requests)
+    if progress is not None:
+        progress(f"GAFs: {len(aero.machs)} Mach x {ks.size} k, {modes.sizes['mode']} modes")
+    gaf = generalized_aero_forces(aero, modes, aero.machs, ks, method=kernel)
+    results = solve_flutter(modes, gaf, requests, units, progress=progress)
     sweeps, labels = [ds for _, ds in results], [lab for lab, _ in results]
     participation = flutter_participation(results, modes, rigid_hz=rigid_hz, units=units,
                                           configuration=configuration or deck.stem)
@@ -220,13 +224,15 @@ def _flutter_ids(settings: FlutterSettings, flutter_ids) -> list | None:
 
 
 def case_flutter(case: Case, config: Configuration, modes: xr.Dataset,
-                 out_dir: str | os.PathLike | None = None, flutter_ids=None) -> dict:
+                 out_dir: str | os.PathLike | None = None, flutter_ids=None,
+                 progress=None) -> dict:
     """:func:`flutter_chain` of one configuration with the case's settings.
 
     Kernel, FLUTTER ids and structural damping from ``[flutter]`` (``flutter_ids``, a
     command-line override, replaces the case's; both empty: the deck's FMETHOD selection),
     ``rigid_hz`` from ``[selection]``, the unit system from ``units``. The flutter stage of
-    ``pipeline run`` and ``pipeline flutter CASE`` both call this.
+    ``pipeline run`` and ``pipeline flutter CASE`` both call this; ``progress`` as
+    :func:`flutter_chain`.
 
     Returns
     -------
@@ -238,7 +244,7 @@ def case_flutter(case: Case, config: Configuration, modes: xr.Dataset,
                          flutter_ids=_flutter_ids(settings, flutter_ids),
                          structural_damping=settings.structural_damping,
                          rigid_hz=case.selection.rigid_hz, units=case.units, out_dir=out_dir,
-                         configuration=config.name)
+                         configuration=config.name, progress=progress)
 
 
 def check_flutter_requests(case: Case, flutter_ids=None) -> None:

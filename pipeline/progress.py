@@ -1,7 +1,8 @@
 """Progress of a run on the terminal: the stage that runs and the optimiser's iterations.
 
-On a terminal (stderr is a TTY) a one-line live display (``rich``) shows the stage, its position in
-the run and, during tuning, the optimiser's iteration, objective and constraint violation; it
+On a terminal (stderr is a TTY) a one-line live display (``rich``) shows the stage, what it is
+computing (the GAFs, each flutter request) and, during tuning, the optimiser's iteration,
+objective and constraint violation; it
 vanishes when the stage ends, leaving the stage's log lines. When output is not a terminal (a log
 file, CI) nothing but the log lines is written.
 """
@@ -51,9 +52,12 @@ class Display:
             finally:
                 self._progress = self._task = None
 
+    def note(self, text: str) -> None:
+        """What the running stage is doing now (e.g. a flutter request), on the live line."""
+        if self._progress is not None:
+            self._progress.update(self._task, description=f"{self._label}: {text}")
+
     def iteration(self, iteration: int, objective: float, violation: float, seconds: float) -> None:
         """An optimiser iteration (structures.tuning.tune's ``progress`` callback)."""
-        if self._progress is not None:
-            self._progress.update(self._task, description=(
-                f"{self._label}: iteration {iteration}, objective {objective:.4e}, "
-                f"max violation {violation:.2e}"))
+        self.note(f"iteration {iteration}, objective {objective:.4e}, max violation "
+                  f"{violation:.2e}")

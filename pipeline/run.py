@@ -31,7 +31,7 @@ def _walk(case, graph: Graph, display: Display, execute: bool, baseline_only: bo
     last = case.loop.stages if case.loop is not None and not baseline_only else 0
     names, n = [], 0
     while True:
-        for stage in stage_plan(case, n, progress=display.iteration):
+        for stage in stage_plan(case, n, display):
             graph.add(stage)
             names.append(stage.name)
             if execute:

@@ -84,13 +84,13 @@ def _correlation(ctx: StageContext, config, n: int) -> None:
             f"{worst:.2f} %")
 
 
-def _flutter(ctx: StageContext, case, config, n: int) -> None:
+def _flutter(ctx: StageContext, case, config, n: int, progress=None) -> None:
     from pipeline.chain import case_flutter
     from structures.modes import read_modes
 
     modes = read_modes(ctx.run_dir / f"stage{n}/{config.name}/modes.nc")
     out = ctx.output(f"stage{n}/{config.name}/flutter/x").parent
-    result = case_flutter(case, _deck(ctx, config, n), modes, out_dir=out)
+    result = case_flutter(case, _deck(ctx, config, n), modes, out_dir=out, progress=progress)
     flutter = [c for c in result["summary"] if c["kind"] == "flutter"]
     if not flutter:
         return "no flutter crossing"
@@ -207,15 +207,19 @@ def _tuning_settings(case) -> dict:
 
 
 # ------------------------------------------------------------------------------------ the plan
-def stage_plan(case, n: int, progress=None) -> list[Stage]:
-    """The stages of stage ``n`` (0: baseline; n >= 1: a tuning stage and its analyses)."""
+def stage_plan(case, n: int, display=None) -> list[Stage]:
+    """The stages of stage ``n`` (0: baseline; n >= 1: a tuning stage and its analyses);
+    ``display`` (pipeline.progress.Display) is told the optimiser's iterations and the flutter
+    requests."""
+    iteration = None if display is None else display.iteration
+    note = None if display is None else display.note
     out = []
     after_deck = ()
     if n >= 1:
         files = tuple(f for c in case.configurations for f in (*deck_files(c.deck), c.gvt))
         files += (case.tuning.restart,) if case.tuning.restart is not None and n == 1 else ()
         after = (f"stage{n - 1}/selection",) + ((f"stage{n - 1}/tuning",) if n > 1 else ())
-        out.append(Stage(f"stage{n}/tuning", partial(_tuning, case=case, n=n, progress=progress),
+        out.append(Stage(f"stage{n}/tuning", partial(_tuning, case=case, n=n, progress=iteration),
                          settings=_tuning_settings(case), files=files, after=after))
         after_deck = (f"stage{n}/tuning",)
     for c in case.configurations:
@@ -230,7 +234,7 @@ def stage_plan(case, n: int, progress=None) -> list[Stage]:
                              files=(c.gvt,), after=(f"stage{n}/modes/{c.name}",)))
         if case.flutter is not None:
             out.append(Stage(f"stage{n}/flutter/{c.name}",
-                             partial(_flutter, case=case, config=c, n=n),
+                             partial(_flutter, case=case, config=c, n=n, progress=note),
                              settings=_flutter_settings(case), files=files,
                              after=(f"stage{n}/modes/{c.name}",) + after_deck))
     if case.flutter is not None:
