@@ -74,6 +74,42 @@ def configuration_modes(config: Configuration, nmodes: int | None = None) -> tup
     return modes, mass_properties(model, m_basic=system.m_basic)
 
 
+def configuration_correlation(config: Configuration, modes: xr.Dataset, props,
+                              settings=None, primary_modes=None) -> xr.Dataset:
+    """Correlation of a configuration's modes with its GVT (paper Tables 1-4), with the model's
+    mass properties against the configuration's measured ones (``mass_*`` variables on the
+    ``quantity`` dim) when it states them.
+
+    Parameters
+    ----------
+    config : Configuration
+        With a ``gvt`` file.
+    modes : xarray.Dataset
+        The configuration's modes (:func:`configuration_modes`).
+    props : structures.massprops.MassProperties
+        Its mass properties (:func:`configuration_modes`).
+    settings : structures.correlation.CorrelationSettings, optional
+    primary_modes : sequence of int, optional
+        Primary test modes of the acceptance checks (default: all).
+
+    Returns
+    -------
+    xarray.Dataset
+        :func:`structures.correlation.correlate`'s Dataset (+ the mass comparison).
+    """
+    from structures.acceptance import DEFAULT_CRITERIA
+    from structures.correlation import CorrelationSettings, correlate
+    from structures.gvt import load_gvt
+    from structures.massprops import compare_mass_properties
+
+    corr = correlate(modes, load_gvt(config.gvt), settings or CorrelationSettings(),
+                     DEFAULT_CRITERIA, primary_modes=primary_modes)
+    if config.measured_mass:
+        comparison = compare_mass_properties(props, config.measured_mass)
+        corr = corr.merge(comparison.rename({v: f"mass_{v}" for v in comparison.data_vars}))
+    return corr
+
+
 def _gaf_ks(aero_ks: np.ndarray, requests) -> np.ndarray:
     """Reduced frequencies of the GAFs: MKAERO1's, plus the K / KE requests' own k values (they
     solve there rather than interpolate), without k = 0."""

@@ -2,7 +2,9 @@
 
 CASE_OR_DECK is a bulk-data deck (modes computed with ``compute_modes``), a modes netCDF file
 (``.nc``, e.g. from ``pipeline modes --out``) or a TOML case file (``.toml``: the configuration named
-by ``--config``, by default the first one with a ``gvt``, gives deck, nmodes, mass and gvt). GVT is a
+by ``--config``, by default the first one with a ``gvt``, gives deck, nmodes, mass, gvt and
+measured mass; its modes and correlation are computed by the same library calls as the stages of
+``pipeline run``, pipeline.chain.configuration_modes / configuration_correlation). GVT is a
 universal file (UFF 15 + 55, ``.unv``/``.uff``) or a GVT netCDF file; with a case file it defaults
 to the configuration's ``gvt``.
 
@@ -44,8 +46,8 @@ def add_parser(sub) -> None:
     p.add_argument("--figures", default=None, help="write MAC / orthogonality / frequency figures here")
     p.add_argument("--config", default=None, help="configuration of a case file (default: first with a gvt)")
     p.add_argument("--nmodes", type=positive_int, default=None,
-                   help="analysis modes to compute for a deck (default: 2 x test modes + 6, at most "
-                        "the number of measured DOFs)")
+                   help="analysis modes (default: a deck's 2 x test modes + 6, at most the number "
+                        "of measured DOFs; a case's configuration nmodes as pipeline run)")
     p.add_argument("--mass", choices=MASS_OPTIONS, default="deck", help="mass formulation for a deck")
     p.add_argument("--pair-by", choices=("mac", "cross_orthogonality"), default="mac",
                    help="metric of the Hungarian mode pairing")
@@ -67,7 +69,11 @@ def _analysis_modes(path: Path, gvt, nmodes, mass):
     return compute_modes(model, nmodes or default_nmodes(gvt), mass=mass)
 
 
-def _from_case(args):
+def _configuration(args):
+    """The case file's configuration named by --config (default: the first with a gvt), with the
+    command line's GVT file if given."""
+    from dataclasses import replace
+
     from pipeline.case import read_case
     case = read_case(args.model)
     configs = [c for c in case.configurations if args.config in (None, c.name)]
@@ -77,12 +83,10 @@ def _from_case(args):
         raise InputError(f"case {args.model}: no configuration {args.config!r}; valid: "
                          f"{[c.name for c in case.configurations]}.")
     config = configs[0]
-    gvt_path = args.gvt or config.gvt
-    if gvt_path is None:
+    if args.gvt is None and config.gvt is None:
         raise InputError(f"case {args.model}, configuration {config.name}: no gvt. Fix: give GVT on the "
                          "command line or set gvt = \"...\" in the configuration.")
-    return (Path(config.deck), Path(gvt_path), args.nmodes or config.nmodes, config.mass,
-            dict(config.measured_mass))
+    return config if args.gvt is None else replace(config, gvt=Path(args.gvt))
 
 
 def run(args) -> int:
@@ -94,25 +98,24 @@ def run(args) -> int:
     if args.figures:
         check_output(args.figures, folder=True, option="--figures")
     path = Path(args.model)
-    measured = {}
+    settings = CorrelationSettings(pair_by=args.pair_by, a_set=args.a_set)
     if path.suffix.lower() == ".toml":
-        deck, gvt_path, nmodes, mass, measured = _from_case(args)
+        # a case: the same modes and correlation as the stages of pipeline run
+        from pipeline.chain import configuration_correlation, configuration_modes
+        config = _configuration(args)
+        load_gvt(config.gvt)                     # a bad GVT file fails before the eigen solve
+        modes, props = configuration_modes(config, args.nmodes)
+        corr = configuration_correlation(config, modes, props, settings, args.primary)
     elif args.gvt is None:
         raise InputError("pipeline correlate: GVT file missing. Fix: pipeline correlate DECK GVT.unv.")
     else:
-        deck, gvt_path, nmodes, mass = path, Path(args.gvt), args.nmodes, args.mass
-    gvt = load_gvt(gvt_path)
-    modes = _analysis_modes(deck, gvt, nmodes, mass)
-    settings = CorrelationSettings(pair_by=args.pair_by, a_set=args.a_set)
-    corr = correlate(modes, gvt, settings, DEFAULT_CRITERIA, primary_modes=args.primary)
+        gvt = load_gvt(Path(args.gvt))
+        modes = _analysis_modes(path, gvt, args.nmodes, args.mass)
+        corr = correlate(modes, gvt, settings, DEFAULT_CRITERIA, primary_modes=args.primary)
     print(correlation_tables(corr))
-    if measured:
-        from structures.bdf import read_model
-        from structures.massprops import compare_mass_properties, mass_properties
-        comparison = compare_mass_properties(mass_properties(read_model(deck)), measured)
+    if "mass_model" in corr:
         print("\nMass properties (model vs measured):")
-        print(mass_comparison_table(comparison))
-        corr = corr.merge(comparison.rename({name: f"mass_{name}" for name in comparison.data_vars}))
+        print(mass_comparison_table(corr))
     figures = []
     if args.figures:
         from structures.correlation_plots import save_correlation_figures
@@ -130,13 +133,14 @@ def run(args) -> int:
     return 0
 
 
-def mass_comparison_table(comparison) -> str:
-    """Model vs measured mass properties with the error in %."""
+def mass_comparison_table(corr) -> str:
+    """Model vs measured mass properties (a correlation Dataset's ``mass_*`` variables) with the
+    error in %."""
     lines = [f"{'quantity':>10} {'model':>14} {'measured':>14} {'error %':>9}"]
-    for q in comparison["quantity"].values:
-        c = comparison.sel(quantity=q)
-        lines.append(f"{q:>10} {float(c.model):14.6g} {float(c.measured):14.6g} "
-                     f"{float(c.relative_error):9.3f}")
+    for q in corr["quantity"].values:
+        c = corr.sel(quantity=q)
+        lines.append(f"{q:>10} {float(c.mass_model):14.6g} {float(c.mass_measured):14.6g} "
+                     f"{float(c.mass_relative_error):9.3f}")
     return "\n".join(lines)
 
 

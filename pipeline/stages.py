@@ -65,18 +65,14 @@ def _modes(ctx: StageContext, config, n: int) -> None:
 
 
 def _correlation(ctx: StageContext, config, n: int) -> None:
-    from structures.correlation import CorrelationSettings, correlate
+    from pipeline.chain import configuration_correlation
     from structures.correlation_plots import save_correlation_figures
-    from structures.gvt import load_gvt
-    from structures.massprops import MassProperties, compare_mass_properties
+    from structures.massprops import MassProperties
     from structures.modes import read_modes
 
     folder = ctx.run_dir / f"stage{n}/{config.name}"
-    corr = correlate(read_modes(folder / "modes.nc"), load_gvt(config.gvt), CorrelationSettings())
-    if config.measured_mass:
-        props = MassProperties.from_dataset(read_dataset(folder / "mass_properties.nc"))
-        comparison = compare_mass_properties(props, config.measured_mass)
-        corr = corr.merge(comparison.rename({v: f"mass_{v}" for v in comparison.data_vars}))
+    props = MassProperties.from_dataset(read_dataset(folder / "mass_properties.nc"))
+    corr = configuration_correlation(config, read_modes(folder / "modes.nc"), props)
     write_dataset(corr, ctx.output(f"stage{n}/{config.name}/correlation.nc"))
     save_correlation_figures(corr, ctx.output(f"stage{n}/{config.name}/correlation/x").parent)
     worst = float(np.nanmax(np.abs(corr["frequency_error"].values)))

@@ -98,8 +98,9 @@ def test_case_file_gives_deck_and_gvt(files, tmp_path, capsys):
     cmd_correlate.run(args)
     corr = read_dataset(folder / "c.nc")
     assert corr.attrs["deck"].endswith("chain.bdf") and corr.sizes["test_mode"] == 4
-    # default nmodes = 2 x 4 test modes + 6 rigid = 14 analysis modes
-    assert corr.sizes["fe_mode"] == 14
+    # a case's modes are those of pipeline run's modes stage: the configuration's nmodes, else
+    # the deck's EIGRL, else 20 (structures.modal.compute_modes)
+    assert corr.sizes["fe_mode"] == 20
     # the deck is the chain of chain_modes with rotations constrained: same modes, same pairing
     np.testing.assert_array_equal(corr["paired_fe_mode"].values, [4, 5, 6, 7])
     np.testing.assert_allclose(np.abs(corr["paired_cross_orthogonality"].values), 1.0, atol=1e-4)
