@@ -2,6 +2,7 @@
 whose expected entries are worked out by hand (tests/pipeline/run_fixture.py)."""
 from __future__ import annotations
 
+import base64
 import re
 import shutil
 from dataclasses import replace
@@ -14,7 +15,9 @@ import xarray as xr
 from pipeline.case import Case, Configuration, LoopSettings
 from pipeline.flutter_change import flutter_change
 from pipeline.report import write_report
+from pipeline.report_figures import figure_data_uri, vg_overlay
 from structures.common.errors import InputError
+from structures.common.files import read_dataset
 from tests.pipeline.run_fixture import (CONFIGS, CROSSINGS, DESIGN, EXPECTED_CHANGE, STOP_REASON,
                                         make_run)
 
@@ -214,3 +217,22 @@ def test_stages_stop_where_the_loop_stopped(run, tmp_path):
     shutil.rmtree(run_dir / "stage0")
     with pytest.raises(InputError, match="no stage0"):
         write_report(case, run_dir)
+
+
+def test_vg_overlay_keeps_root_colours_and_tells_stages_by_line_style(run):
+    _, run_dir, _ = run
+    flutter = [read_dataset(run_dir / f"stage{k}" / "EFEW" / "flutter" / "flutter.nc")
+               for k in (0, 1)]
+    fig = vg_overlay(flutter, 0, ["stage 0", "stage 1"])
+    lines = [ln for ln in fig.axes[0].get_lines() if ln.get_xydata().shape[0] > 2]
+    assert len(lines) == 2 * 3                                    # 2 stages x 3 roots
+    stage0, stage1 = lines[:3], lines[3:]
+    assert [ln.get_color() for ln in stage0] == [ln.get_color() for ln in stage1]
+    assert len({ln.get_color() for ln in stage0}) == 3
+    assert {ln.get_linestyle() for ln in stage0} == {"-"}
+    assert {ln.get_linestyle() for ln in stage1} == {"--"}
+    # root 1 of stage 1 crosses g = 0 at 210 m/s (fixture: g = 0.002 (V - 210))
+    x, g = stage1[0].get_xydata().T
+    assert np.interp(0.0, g, x) == pytest.approx(210.0, rel=1e-12)
+    uri = figure_data_uri(fig)
+    assert base64.b64decode(uri.split(",", 1)[1])[:8] == b"\x89PNG\r\n\x1a\n"
