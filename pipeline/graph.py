@@ -118,7 +118,8 @@ class Graph:
         self.stages: dict[str, Stage] = {}
         self.manifest_path = self.dir / MANIFEST
         self.manifest = self._read_manifest()
-        self.forced: set[str] = set()
+        self.forced: set[str] = set()       # forced stages not yet rerun
+        self._forced_all: set[str] = set()  # every forced stage, rerun or not: their downstream
         for stage in stages:
             self.add(stage)
 
@@ -131,8 +132,9 @@ class Graph:
         if unknown:
             raise ValueError(f"stage {stage.name} comes after unregistered stages {unknown}")
         self.stages[stage.name] = stage
-        if any(s in self.forced for s in stage.after):
+        if any(s in self._forced_all for s in stage.after):
             self.forced.add(stage.name)
+            self._forced_all.add(stage.name)
         return stage
 
     def force(self, pattern: str, valid=None) -> list[str]:
@@ -146,9 +148,11 @@ class Graph:
         if not hit:
             raise InputError(f"--from {pattern}: no such stage; valid: {', '.join(names)}.")
         self.forced |= set(hit)
+        self._forced_all |= set(hit)
         for name, stage in self.stages.items():
-            if any(s in self.forced for s in stage.after):
+            if any(s in self._forced_all for s in stage.after):
                 self.forced.add(name)
+                self._forced_all.add(name)
         return hit
 
     # ----------------------------------------------------------------------------- manifest

@@ -232,6 +232,17 @@ def test_force_before_registration_reaches_stages_added_later(toy):
     assert graph.status()[1][2] == "forced by --from"
 
 
+def test_force_reaches_stages_registered_after_the_forced_ones_ran(toy):
+    toy.run()
+    graph = Graph(toy.run_dir, log=_quiet)
+    graph.force("s0/a", valid=["s0/a", "s0/b", "s1/c", "other"])
+    for stage in toy.stages():      # as pipeline.run registers a loop stage once the last one ran
+        graph.add(stage)
+        graph.run(stage.name)
+    assert toy.calls == Counter({"s0/a": 2, "s0/b": 2, "s1/c": 2, "other": 1})
+    assert [s for _, s, _ in graph.status()] == ["done"] * 4
+
+
 def test_force_unknown_stage_lists_the_valid_ones(toy):
     graph = toy.graph()
     with pytest.raises(InputError, match=r"--from s2: no such stage; valid: s0/a, s0/b, s1/c, "
