@@ -40,7 +40,8 @@ def run_pipeline(case: Path | None, folder: Path) -> tuple[float, Path]:
     log = folder / "pipeline_run.log"
     start = time.perf_counter()
     with open(log, "w") as out:
-        code = subprocess.run(cmd, cwd=folder, env=env, stdout=out, stderr=subprocess.STDOUT).returncode
+        code = subprocess.run(cmd, cwd=folder, env=env, stdout=out,
+                              stderr=subprocess.STDOUT).returncode
     wall = time.perf_counter() - start
     if code != 0:
         raise SystemExit(f"pipeline run failed with exit code {code}:\n"

@@ -84,7 +84,8 @@ def _outputs(run_dir: Path) -> list[str]:
 
 def _mtimes(run_dir: Path, stages) -> dict[str, int]:
     manifest = _manifest(run_dir)
-    return {rel: (run_dir / rel).stat().st_mtime_ns for s in stages for rel in manifest[s]["outputs"]}
+    return {rel: (run_dir / rel).stat().st_mtime_ns
+            for s in stages for rel in manifest[s]["outputs"]}
 
 
 def _copy_run(reference, name: str) -> Path:
