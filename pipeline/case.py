@@ -10,7 +10,9 @@ Example (``data/bah_wing/case.toml``)::
     deck = "bah_plane.bdf"   # relative to the case file
     nmodes = 10
     gvt = "gvt.unv"          # optional: the configuration's GVT (UFF 15/55 or netCDF)
-    measured_mass = { weight = 18950.0, x_cg = 0.10 }   # optional: measured mass properties
+    measured_mass = { weight = 18950.0, x_cg = 0.10 }   # optional: measured mass properties, or
+                             # a JSON file: measured_mass = "mass.json" (structures.massprops.
+                             # read_measured_mass: {"weight", "cg", "inertia_cg"})
 
     [flutter]                # optional: run the decks' FLUTTER cards
     kernel = "quartic"       # doublet-lattice kernel integration: quartic or parabolic
@@ -51,7 +53,7 @@ from flutter.summary import Envelope
 from structures.acceptance import MIL_STD_1540C, NASA_STD_5002, AcceptanceCriteria
 from structures.assembly import MASS_OPTIONS
 from structures.common.errors import InputError
-from structures.massprops import check_measured_mass
+from structures.massprops import check_measured_mass, read_measured_mass
 from structures.units import UNIT_SYSTEMS, unit_labels
 
 KERNELS = ("quartic", "parabolic")
@@ -69,6 +71,7 @@ _KINDS = {
     "float list": (lambda v: isinstance(v, list) and len(v) > 0 and all(
         _KINDS["float"][0](i) for i in v), "a non-empty list of finite numbers", "[0.2, 0.6]"),
     "table": (lambda v: isinstance(v, dict), "a table", "{ ... }"),
+    "table or str": (lambda v: isinstance(v, (dict, str)), "a table or a file name", "{ ... }"),
     "table list": (lambda v: isinstance(v, list) and all(isinstance(i, dict) for i in v),
                    "a list of tables ([[...]])", "[{ ... }]"),
 }
@@ -87,7 +90,7 @@ _TOML_TYPES = {str: "a string", bool: "a boolean", int: "an integer", float: "a 
 CASE_KEYS = {"name": "str", "units": "str", "configurations": "table list", "flutter": "table",
              "selection": "table", "loop": "table", "tuning": "table"}
 CONFIGURATION_KEYS = {"name": "str", "deck": "str", "nmodes": "int", "mass": "str", "gvt": "str",
-                      "measured_mass": "table"}
+                      "measured_mass": "table or str"}
 FLUTTER_KEYS = {"kernel": "str", "flutter_ids": "int list", "structural_damping": "float",
                 "envelope": "table"}
 ENVELOPE_KEYS = {"mach": "float list", "velocity": "float list"}
@@ -389,6 +392,9 @@ def read_case(path) -> Case:
         table["deck"] = _existing(base, table["deck"], where, "deck")
         if "gvt" in table:
             table["gvt"] = _existing(base, table["gvt"], where, "gvt")
+        if isinstance(table.get("measured_mass"), str):
+            table["measured_mass"] = read_measured_mass(
+                _existing(base, table["measured_mass"], where, "measured_mass"))
         configs.append(_built(Configuration, where, **table))
     flutter = None
     units = data.get("units", "si")

@@ -145,6 +145,55 @@ def mass_properties(model: FEModel, *, mass: str = "deck", reference=(0.0, 0.0, 
     return properties_from_rigid_body_mass(m0, reference, model.wtmass, model.filename)
 
 
+def read_measured_mass(path) -> dict:
+    """Measured mass properties from a JSON file, as :data:`MASS_QUANTITIES` values.
+
+    The file holds ``{"weight": W, "cg": [x, y, z], "inertia_cg": [Ixx, Iyy, Izz, Ixy, Ixz, Iyz]}``
+    (any of the three keys may be left out): the moments and the products of inertia
+    (Ixy = sum m x y, as :attr:`MassProperties.product_of_inertia`) about the CG, basic axes, in
+    the deck's units (weight = mass / WTMASS).
+
+    Raises
+    ------
+    InputError
+        Naming the file, the key and the fix for a missing file, bad JSON, unknown keys or values
+        that are not finite numbers of the right count.
+    """
+    import json
+    from pathlib import Path
+
+    path = Path(path)
+    form = ('{"weight": 480.0, "cg": [x, y, z], "inertia_cg": [Ixx, Iyy, Izz, Ixy, Ixz, Iyz]}')
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise InputError(f"file {path}: no such measured-mass file. Fix: check the path "
+                         "(relative to the case file).") from None
+    except (ValueError, UnicodeDecodeError) as exc:
+        raise InputError(f"file {path}: not valid JSON ({exc}). Fix: write {form}.") from None
+    lengths = {"weight": None, "cg": 3, "inertia_cg": 6}
+    if not isinstance(data, dict) or set(data) - set(lengths):
+        raise InputError(f"file {path}: unknown keys "
+                         f"{sorted(set(data) - set(lengths)) if isinstance(data, dict) else data!r}"
+                         f"; valid: {sorted(lengths)}. Fix: write {form}.")
+    out = {}
+    for key, n in lengths.items():
+        if key not in data:
+            continue
+        value = data[key]
+        values = [value] if n is None else value
+        if not (isinstance(values, list) and len(values) == (n or 1) and all(
+                isinstance(v, (int, float)) and not isinstance(v, bool) and np.isfinite(v)
+                for v in values)):
+            raise InputError(f"file {path}: {key} = {value!r} is not "
+                             f"{'a finite number' if n is None else f'a list of {n} finite numbers'}"
+                             f". Fix: write {form}.")
+        names = {"weight": ("weight",), "cg": ("x_cg", "y_cg", "z_cg"),
+                 "inertia_cg": ("Ixx", "Iyy", "Izz", "Ixy", "Izx", "Iyz")}[key]
+        out.update({name: float(v) for name, v in zip(names, values)})
+    return check_measured_mass(out, f"file {path}")
+
+
 def check_measured_mass(measured: Mapping, where: str = "measured mass properties") -> dict:
     """Validate measured mass properties: names from :data:`MASS_QUANTITIES`, finite numbers."""
     unknown = sorted(set(measured) - set(MASS_QUANTITIES))

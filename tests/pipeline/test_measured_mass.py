@@ -17,6 +17,7 @@ from structures.modal import compute_modes
 from structures.common.files import read_dataset
 
 DATA = Path(__file__).resolve().parents[1] / "data"
+EXAMPLE = Path(__file__).resolve().parents[2] / "data" / "bah_wing"
 
 
 @pytest.fixture()
@@ -65,3 +66,18 @@ def test_comparison_of_model_with_itself_is_zero():
     same = {k: v for k, v in props.as_dict().items() if k != "mass" and v != 0.0}
     comparison = compare_mass_properties(props, same)
     np.testing.assert_allclose(comparison["relative_error"].values, 0.0, atol=1e-12)
+
+
+def test_measured_mass_from_a_json_file(tmp_path):
+    """``measured_mass = "mass.json"`` in a case file reads the issue's JSON layout."""
+    for name in ("bah_plane.bdf", "structure_bah.inc", "aero_bah.inc", "interface_bah.inc"):
+        shutil.copy(EXAMPLE / name, tmp_path / name)
+    (tmp_path / "mass.json").write_text('{"weight": 19177.9, "cg": [0.1, 3.1, 0.0]}')
+    (tmp_path / "case.toml").write_text('name = "m"\n[[configurations]]\nname = "a"\n'
+                                        'deck = "bah_plane.bdf"\nmeasured_mass = "mass.json"\n')
+    config = read_case(tmp_path / "case.toml").configurations[0]
+    assert dict(config.measured_mass) == {"weight": 19177.9, "x_cg": 0.1, "y_cg": 3.1, "z_cg": 0.0}
+    (tmp_path / "case.toml").write_text('name = "m"\n[[configurations]]\nname = "a"\n'
+                                        'deck = "bah_plane.bdf"\nmeasured_mass = "none.json"\n')
+    with pytest.raises(InputError, match="measured_mass 'none.json'.*does not exist"):
+        read_case(tmp_path / "case.toml")

@@ -1,12 +1,14 @@
 """Mass properties against hand calculations (offset CONM2s with inertia, CMASS2)."""
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 from structures.bdf import read_model
+from structures.common.errors import InputError
 from structures.massprops import mass_properties
 
 DATA = Path(__file__).resolve().parents[1] / "data"
@@ -70,3 +72,25 @@ def test_bah_total_mass_equals_sum_of_conm2():
     ms.update({k + 5: v for k, v in ms.items()})
     x_cg = sum(ms[g] * xs[g] for g in xs) / props.mass
     assert props.cg[0] == pytest.approx(x_cg, rel=1e-12)
+
+
+def test_measured_mass_json(tmp_path):
+    from structures.massprops import read_measured_mass
+
+    path = tmp_path / "mass.json"
+    path.write_text('{"weight": 480.5, "cg": [1.0, 0.0, -2.5], '
+                    '"inertia_cg": [10.0, 20.0, 30.0, 0.5, -0.25, 0.125]}')
+    assert read_measured_mass(path) == {"weight": 480.5, "x_cg": 1.0, "y_cg": 0.0, "z_cg": -2.5,
+                                        "Ixx": 10.0, "Iyy": 20.0, "Izz": 30.0, "Ixy": 0.5,
+                                        "Izx": -0.25, "Iyz": 0.125}
+    path.write_text('{"weight": 480.5}')
+    assert read_measured_mass(path) == {"weight": 480.5}
+    for text, words in (('{"weight": 1.0, "cog": [1, 2, 3]}', "unknown keys ['cog']"),
+                        ('{"cg": [1.0, 2.0]}', "cg = [1.0, 2.0] is not a list of 3 finite"),
+                        ('{"weight": "heavy"}', "weight = 'heavy' is not a finite number"),
+                        ('{"weight": 1.0,}', "not valid JSON")):
+        path.write_text(text)
+        with pytest.raises(InputError, match=re.escape(words)):
+            read_measured_mass(path)
+    with pytest.raises(InputError, match="no such measured-mass file"):
+        read_measured_mass(tmp_path / "none.json")
