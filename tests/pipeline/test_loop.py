@@ -2,11 +2,16 @@
 whose answers are worked out by hand in each test."""
 from __future__ import annotations
 
+from dataclasses import dataclass
+from types import SimpleNamespace
+
 import numpy as np
 import pytest
 import xarray as xr
 
-from pipeline.loop import MASS_TOLERANCE, evaluate_targets, loop_terms, tuned_test_modes
+import structures.tuning
+from pipeline.loop import (MASS_TOLERANCE, START_BUFFER, evaluate_targets, loop_terms,
+                           relaxed_at_start, tuned_test_modes)
 from structures.acceptance import MIL_STD_1540C, NASA_STD_5002
 from structures.common.errors import InputError
 
@@ -85,3 +90,43 @@ def test_targets_unpaired_primary_mode_fails_and_no_roots_stops():
     none = _selection(["rigid", "rigid", "", "", ""], [0, 0, 1, 2, 3])
     t = evaluate_targets(none, {"a": corr}, MIL_STD_1540C, stage=0, last_stage=1)
     assert t["met"] and "no critical flutter root" in t["stop_reason"]
+
+
+@dataclass(frozen=True)
+class _Problem:
+    constraints: tuple
+
+
+class _Evaluator:
+    """Stands in for structures.tuning.Evaluator: four constraints (two J <= eps, two MAC J >= eps)
+    and one objective term, with index values fixed by hand."""
+
+    calls: list = []
+
+    def __init__(self, problem):
+        self.space = SimpleNamespace(x0=np.array([1.0, 2.0]))
+        self.names = ["a:frequency:3", "a:mass:weight", "a:mac:1", "a:mac:2", "a:frequency:1"]
+        self.limits = np.array([9e-4, 1e-4, 0.9, 0.9, np.nan])
+        self.lower_is_better = np.array([True, True, False, False, True])
+        self.con_index = np.array([0, 1, 2, 3])
+
+    def evaluate(self, x):
+        _Evaluator.calls.append(np.asarray(x))
+        return np.array([4e-4, 3e-4, 0.95, 0.8, 0.5]), None
+
+
+def test_relaxed_at_start_by_hand(monkeypatch):
+    monkeypatch.setattr(structures.tuning, "Evaluator", _Evaluator)
+    _Evaluator.calls.clear()
+    problem, relaxed = relaxed_at_start(_Problem(constraints=(("a:*", 1.0),)))
+    np.testing.assert_array_equal(_Evaluator.calls[-1], [1.0, 2.0])   # the decks' design
+    # met constraints keep their limit; a violated J <= eps gets J(start) x 1.02, a violated
+    # MAC J >= eps gets J(start) / 1.02; the objective term (no limit) is not a constraint
+    assert START_BUFFER == 1.02
+    assert dict(problem.constraints) == pytest.approx(
+        {"a:frequency:3": 9e-4, "a:mass:weight": 3e-4 * 1.02, "a:mac:1": 0.9,
+         "a:mac:2": 0.8 / 1.02}, rel=1e-15)
+    assert relaxed == [("a:mass:weight", 1e-4, pytest.approx(3.06e-4, rel=1e-15)),
+                       ("a:mac:2", 0.9, pytest.approx(0.8 / 1.02, rel=1e-15))]
+    relaxed_at_start(_Problem(constraints=()), start=np.array([3.0, 4.0]))
+    np.testing.assert_array_equal(_Evaluator.calls[-1], [3.0, 4.0])   # the given start
