@@ -27,8 +27,9 @@ import numpy as np
 
 from pipeline.report_figures import (boundary_figure, figure_data_uri, png_data_uri, vg_overlay)
 from pipeline.report_tables import (correlation_section, design_change_section, fmt,
-                                    mass_section, modes_section, note, ordinal, selection_roles,
+                                    mass_section, modes_section, note, selection_roles,
                                     selection_section, table, tuning_section)
+from pipeline.selection import ordinal
 from structures.common.errors import InputError
 from structures.common.files import read_dataset, write_text
 from structures.units import UnitLabels, unit_labels

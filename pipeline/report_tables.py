@@ -24,8 +24,6 @@ from structures.common.files import read_dataset
 from structures.tuning_report import design_change_table, frequency_table
 from structures.units import UnitLabels
 
-_ORDINAL = {1: "1st", 2: "2nd", 3: "3rd"}
-
 
 def table(header, rows, *, table_id: str | None = None) -> str:
     """An HTML table (cells escaped); ``table_id`` becomes the table's ``id``."""
@@ -41,11 +39,6 @@ def fmt(value, spec: str) -> str:
     """A number formatted with ``spec``; NaN (absent) as an en dash (-0 prints as 0)."""
     value = float(value) + 0.0
     return "\u2013" if not np.isfinite(value) else format(value, spec)
-
-
-def ordinal(n: int) -> str:
-    """1st, 2nd, 3rd, 4th, ... (the paper's flutter-mode names)."""
-    return _ORDINAL.get(n, f"{n}th")
 
 
 def note(text: str) -> str:

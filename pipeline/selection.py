@@ -346,14 +346,15 @@ def select_modes(participation: dict[str, xr.Dataset], *, primary: float = 0.9,
     return out
 
 
-def _ordinal(n: int) -> str:
+def ordinal(n: int) -> str:
+    """1st, 2nd, 3rd, 4th, ..., 11th, 12th, 13th, ..., 21st (the paper's flutter-mode names)."""
     return f"{n}{'th' if 10 <= n % 100 <= 20 else {1: 'st', 2: 'nd', 3: 'rd'}.get(n % 10, 'th')}"
 
 
 def point_labels(ds: xr.Dataset) -> list[str]:
     """Labels "EFEW M=0.200 1st" of the flutter points of a selection or study Dataset (the density
     is added where two points would otherwise read the same)."""
-    base = [f"{c} M={float(m):.3f} {_ordinal(int(f))}" for c, m, f in
+    base = [f"{c} M={float(m):.3f} {ordinal(int(f))}" for c, m, f in
             zip(ds["point_configuration"].values, ds["mach"].values, ds["flutter_mode"].values)]
     return [f"{b} rho={float(r):.4g}" if base.count(b) > 1 else b
             for b, r in zip(base, ds["density"].values)]
@@ -406,7 +407,7 @@ def selection_table(selection: xr.Dataset) -> str:
         rows = [f"configuration {name} (search: {str(cfg['search'].values)})",
                 f"{'':33s}" + "".join(f"{'M=' + format(float(m), '.3f'):>11s}"
                                       for m in sub["mach"].values),
-                f"{'':33s}" + "".join(f"{_ordinal(int(f)):>11s}" for f in sub["flutter_mode"].values),
+                f"{'':33s}" + "".join(f"{ordinal(int(f)):>11s}" for f in sub["flutter_mode"].values),
                 f"{'V [' + labels.velocity + ']':>33s}" + "".join(f"{float(v):11.4g}"
                                                                   for v in sub["velocity"].values),
                 f"{'rho [' + labels.density + ']':>33s}" + "".join(f"{float(r):11.4g}"

@@ -17,8 +17,8 @@ import xarray as xr
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from pipeline.selection import (select_modes, selection_study, selection_table, smallest_cover,
-                                study_table)
+from pipeline.selection import (ordinal, select_modes, selection_study, selection_table,
+                                smallest_cover, study_table)
 from pipeline.selection_plots import ROLE_COLOURS, plot_participation, plot_selection_study
 from structures.common.errors import InputError
 from structures.common.files import read_dataset, write_dataset
@@ -375,3 +375,10 @@ def test_figures(bah_participation):
         buffer = io.BytesIO()
         f.savefig(buffer, format="png")
         assert buffer.tell() > 1000
+
+
+def test_ordinal_names_of_flutter_modes():
+    # English ordinals: 11th-13th (and 111th-113th) take "th", 21st / 22nd / 23rd do not
+    names = {1: "1st", 2: "2nd", 3: "3rd", 4: "4th", 11: "11th", 12: "12th", 13: "13th",
+             21: "21st", 22: "22nd", 23: "23rd", 101: "101st", 111: "111th", 112: "112th"}
+    assert {n: ordinal(n) for n in names} == names
