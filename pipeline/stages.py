@@ -253,7 +253,11 @@ def final_stages(case, last: int, upstream: list[str]) -> list[Stage]:
                          settings={"stages": last}, after=after))
     report_settings = {"name": case.name, "units": case.units,
                        "envelope": None if case.flutter is None or case.flutter.envelope is None
-                       else [case.flutter.envelope.mach, case.flutter.envelope.velocity]}
+                       else [case.flutter.envelope.mach, case.flutter.envelope.velocity],
+                       # the overview names each configuration's deck and GVT file
+                       "configurations": [[c.name, str(c.deck), str(c.gvt)]
+                                          for c in case.configurations],
+                       "stages": None if case.loop is None else case.loop.stages}
     out.append(Stage("report", partial(_report, case=case), settings=report_settings,
                      after=tuple(upstream) + tuple(s.name for s in out)))
     return out
