@@ -73,9 +73,10 @@ def _damping(bdf, sdamp: int | None, structural_damping: float | None,
 
 
 def _selection(bdf, flutter_ids) -> list[tuple[int, int | None]]:
-    """(FLUTTER id, SDAMP id) pairs: the ``flutter_ids`` override (with the global SDAMP), else each
-    subcase's FMETHOD (with its SDAMP, else the global one), else every FLUTTER card undamped.
-    pyNastran files the case control's SDAMP under its full name SDAMPING."""
+    """(FLUTTER id, SDAMP id) pairs: each subcase's FMETHOD (with its SDAMP, else the global one),
+    else every FLUTTER card undamped; the ``flutter_ids`` override keeps the SDAMP of the subcase
+    whose FMETHOD names the id (the global one for an id no FMETHOD names). pyNastran files the case
+    control's SDAMP under its full name SDAMPING."""
     selected = []
     glob_sdamp = None
     cc = bdf.case_control_deck
@@ -88,7 +89,8 @@ def _selection(bdf, flutter_ids) -> list[tuple[int, int | None]]:
             if "FMETHOD" in sc.params:
                 selected.append((int(sc.get_parameter("FMETHOD")[0]), sdamp or glob_sdamp))
     if flutter_ids is not None:
-        return [(int(sid), glob_sdamp) for sid in flutter_ids]
+        by_fmethod = dict(selected)
+        return [(int(sid), by_fmethod.get(int(sid), glob_sdamp)) for sid in flutter_ids]
     return selected or [(sid, None) for sid in sorted(bdf.flutters)]
 
 
@@ -128,9 +130,11 @@ def read_flutter_requests(bdf, filename: str = "", flutter_ids=None,
     out = []
     for sid, sdamp in _selection(bdf, flutter_ids):
         if sid not in bdf.flutters:
-            raise InputError(card_message(f"FMETHOD selects FLUTTER {sid}, which is not defined.",
+            who = "FMETHOD" if flutter_ids is None else "[flutter] flutter_ids (or --flutter-id)"
+            raise InputError(card_message(f"{who} names FLUTTER {sid}, which is not defined; "
+                                          f"defined: {sorted(bdf.flutters)}.",
                                           card="FLUTTER", card_id=sid, filename=filename,
-                                          fix="add the FLUTTER card or correct FMETHOD."))
+                                          fix=f"add the FLUTTER card or correct {who}."))
         fl = bdf.flutters[sid]
         lists = []
         for what, fid in (("density", fl.density), ("Mach", fl.mach),

@@ -161,6 +161,21 @@ def test_case_damping_equals_the_deck_route_with_a_constant_table(modes, damped,
     assert over.damping == StructuralDamping(g=0.01, kind="viscous")
 
 
+def test_flutter_id_override_keeps_its_subcase_sdamp(tmp_path):
+    """A FLUTTER id asked for by [flutter] flutter_ids gets the SDAMP of the subcase whose FMETHOD
+    names it (Nastran's pairing); an id no FMETHOD names gets the global SDAMP (none here)."""
+    deck = _deck_copy(tmp_path, lambda text: text.replace(
+        "  FMETHOD = 501\n", "  FMETHOD = 501\n  SDAMP = 2001\n"))
+    bdf = read_pynastran(deck)
+    (fmethod,) = read_flutter_requests(bdf, str(deck))
+    (asked,) = read_flutter_requests(bdf, str(deck), [501])
+    # TABDMP1 2001 of the deck: g = 0.01 at 0 Hz, 0.005 at 100 Hz (TYPE G)
+    assert fmethod.damping == asked.damping == StructuralDamping(
+        frequency=(0.0, 100.0), table_g=(0.01, 0.005), kind="viscous")
+    (other,) = read_flutter_requests(bdf, str(deck), [502])
+    assert other.damping == StructuralDamping()
+
+
 def test_kdamp_minus_one_is_refused(tmp_path):
     deck = _deck_copy(tmp_path, lambda text: text.replace("PARAM,LMODES,10",
                                                           "PARAM,LMODES,10\nPARAM,KDAMP,-1"))

@@ -183,7 +183,8 @@ def test_case_flutter_id_missing_from_the_deck_before_any_stage(tmp_path, capsys
     case = _case(tmp_path, BASE + 'gvt = "gvt.unv"\n[flutter]\nflutter_ids = [999]\n', gvt=True)
     before = listing(tmp_path)
     for argv in (["run", case, "--out", tmp_path / "run"], ["flutter", case, "--out", tmp_path / "fl"]):
-        failed(argv, capsys, "bah_plane.bdf", "FLUTTER 999", "which is not defined", "Fix")
+        failed(argv, capsys, "bah_plane.bdf", "[flutter] flutter_ids", "FLUTTER 999",
+               "which is not defined", "Fix")
         assert listing(tmp_path) == before  # no stage ran, nothing written
 
 
