@@ -1,10 +1,10 @@
 """Progress of a run on the terminal: the stage that runs and the optimiser's iterations.
 
-On a terminal (stderr is a TTY) a one-line live display (``rich``) shows the stage, what it is
-computing (the GAFs, each flutter request) and, during tuning, the optimiser's iteration,
-objective and constraint violation; it
-vanishes when the stage ends, leaving the stage's log lines. When output is not a terminal (a log
-file, CI) nothing but the log lines is written.
+On a terminal (stdout and stderr both TTYs) a one-line live display (``rich``, on stderr) shows the
+stage, what it is computing (the GAFs, each flutter request) and, during tuning, the optimiser's
+iteration, objective and constraint violation; it vanishes when the stage ends, leaving the stage's
+log lines. When either is not a terminal (``pipeline run > log``, CI) there is no live line and
+the log lines go to stdout.
 """
 from __future__ import annotations
 
@@ -18,23 +18,24 @@ class Display:
     Parameters
     ----------
     live : bool, optional
-        Show the live status line (default: when stderr is a terminal).
+        Show the live status line (default: when stdout and stderr are terminals; while it shows,
+        rich routes the log lines through its console, so a redirected stdout would lose them).
     """
 
     def __init__(self, live: bool | None = None):
-        self.live = sys.stderr.isatty() if live is None else live
+        self.live = sys.stdout.isatty() and sys.stderr.isatty() if live is None else live
         self._progress = None
         self._task = None
 
     def log(self, line: str) -> None:
-        """One line of the run's log (always written, on stdout)."""
+        """One line of the run's log: on stdout, or above the live line while it shows."""
         if self._progress is not None:
             self._progress.console.print(line, highlight=False, markup=False)
         else:
             print(line, flush=True)
 
     @contextmanager
-    def stage(self, name: str, position: str = ""):
+    def stage(self, name: str):
         """Show ``name`` as the running stage for the block."""
         if not self.live:
             yield
@@ -42,11 +43,10 @@ class Display:
         from rich.console import Console
         from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
 
-        label = f"{name} {position}".strip()
         with Progress(SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(),
                       console=Console(stderr=True), transient=True) as progress:
-            self._progress, self._task = progress, progress.add_task(label, total=None)
-            self._label = label
+            self._progress, self._task = progress, progress.add_task(name, total=None)
+            self._label = name
             try:
                 yield
             finally:
