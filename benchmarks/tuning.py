@@ -9,10 +9,14 @@ off-diagonal of both configurations (2 x (14 + 182) indices), SLSQP.
 Figures (``key: value`` lines): setup seconds, seconds per evaluation without gradients,
 evaluations per second, seconds per evaluation with gradients (per shape method), seconds per
 SLSQP iteration (with gradients; time and counts up to the last completed iteration, the start
-design's gradient included), eigen solves and gradients per SLSQP iteration, peak resident memory. Wall seconds depend on what else runs on the machine: the CPU seconds of the process
-(all its threads) and the 1-minute load average are printed beside them.
+design's gradient included), eigen solves and gradients per SLSQP iteration, peak resident memory
+of each method's tuning (``[method] peak_rss_mb``: evaluator set-up to the end of ``tune``, the
+previous method's evaluator released; Linux, from VmHWM reset through /proc/self/clear_refs) and
+of the whole process (``peak_rss_mb``, which includes building the truth models and GVTs). Wall
+seconds depend on what else runs on the machine: the CPU seconds of the process (all its
+threads) and the 1-minute load average are printed beside them.
 
-Usage: ``PYTHONPATH=. python benchmarks/tuning.py [--span 180 --chord 8 --iterations 3]``
+Usage: ``PYTHONPATH=. python benchmarks/tuning.py [--span 180 --chord 8 --iterations 3 --workers 2]``
 """
 from __future__ import annotations
 
@@ -62,12 +66,34 @@ def variables(skin_e_only: bool = False):
     return out
 
 
+def reset_peak_rss() -> bool:
+    """Reset the process's peak resident memory (Linux >= 4.0); False where that is impossible."""
+    try:
+        Path("/proc/self/clear_refs").write_text("5")
+    except OSError:
+        return False
+    return True
+
+
+def peak_rss_mb() -> float:
+    """Peak resident memory [MB] since the last reset (VmHWM), else since the process started."""
+    try:
+        for line in Path("/proc/self/status").read_text().splitlines():
+            if line.startswith("VmHWM:"):
+                return float(line.split()[1]) / 1024.0
+    except OSError:
+        pass
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--span", type=int, default=180)
     parser.add_argument("--chord", type=int, default=8)
     parser.add_argument("--iterations", type=int, default=3)
     parser.add_argument("--methods", default="modal,nelson")
+    parser.add_argument("--workers", type=int, default=None,
+                        help="threads evaluating the configurations (default: Evaluator's)")
     parser.add_argument("--skin-e-only", action="store_true",
                         help="tune the skin E alone (G held: re-assembled skin, see variables())")
     args = parser.parse_args(argv)
@@ -94,8 +120,10 @@ def main(argv=None) -> int:
         problem = TuningProblem(tuple(configs), tuple(var),
                                 objective=(("*:frequency:*", 1.0), ("*:cross_orthogonality:*", 1.0)),
                                 shape_method=method)
+        reset = reset_peak_rss()
         t0 = time.perf_counter()
-        ev = Evaluator(problem)
+        ev = Evaluator(problem, workers=args.workers)
+        print(f"[{method}] workers: {ev.workers}")
         print(f"[{method}] setup_seconds: {time.perf_counter() - t0:.2f}")
         print(f"[{method}] a_set_dofs: {[c.sub.system.K.shape[0] for c in ev.configs]}")
         t0, c0 = time.perf_counter(), time.process_time()
@@ -130,6 +158,9 @@ def main(argv=None) -> int:
         print(f"[{method}] seconds_per_iteration: {total / n_it:.2f}")
         print(f"[{method}] cpu_seconds_per_iteration: {cpu / n_it:.2f}")
         print(f"[{method}] load_average_1min: {os.getloadavg()[0]:.2f}")
+        print(f"[{method}] peak_rss_mb: {peak_rss_mb():.0f}"
+              + ("" if reset else " (process peak: the reset is not available here)"))
+        del ev, result       # one tuning at a time: the next method's evaluator starts afresh
     peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
     print(f"peak_rss_mb: {peak:.0f}")
     return 0

@@ -55,7 +55,7 @@ def _inv_sqrt_and_derivative(a, da):
     return s, ds
 
 
-def rigid_modes(rigid, m, dm=None):
+def rigid_modes(rigid, m, dm=None, rows=None):
     """Canonical mass-normalised rigid-body modes Phi_r = R (R^T M R)^(-1/2) and derivatives.
 
     Parameters
@@ -63,11 +63,12 @@ def rigid_modes(rigid, m, dm=None):
     rigid : (na, r) rigid-body motions R of the a-set
     m : sparse (na, na)
     dm : list of sparse (na, na), optional
+    rows : sparse (nr, na), optional: the derivatives at these rows only, (rows R) dS
 
     Returns
     -------
     phi_r : (na, r)
-    dphi_r : (nvar, na, r) or None
+    dphi_r : (nvar, na or nr, r) or None
     """
     mr = m @ rigid
     a = rigid.T @ mr
@@ -76,7 +77,7 @@ def rigid_modes(rigid, m, dm=None):
         return rigid @ s, None
     da = np.stack([rigid.T @ (d @ rigid) for d in dm]) if dm else np.zeros((0,) + a.shape)
     s, ds = _inv_sqrt_and_derivative(a, da)
-    return rigid @ s, np.einsum("nr,vrs->vns", rigid, ds)
+    return rigid @ s, np.einsum("nr,vrs->vns", rigid if rows is None else rows @ rigid, ds)
 
 
 def split_rigid(lam, rigid, *, tol: float = 1e-6, filename: str = ""):
@@ -173,9 +174,7 @@ def mode_shape_derivatives(k, m, lam, phi, dk, dm, dlam, *, n_rigid: int = 0, ri
     nrow = phi.shape[0] if rows is None else rows.shape[0]
     out = np.zeros((nvar, nrow, nmode))
     if n_rigid:
-        _, dphi_r = rigid_modes(rigid, m, dm)
-        for i in range(nvar):
-            out[i, :, :n_rigid] = project(dphi_r[i])
+        out[:, :, :n_rigid] = rigid_modes(rigid, m, dm, rows)[1]
     elastic = range(n_rigid, nmode)
     if method == "nelson":
         for j in elastic:

@@ -25,6 +25,22 @@ evaluated on concurrent threads (SuperLU, ARPACK and the large numpy kernels rel
 with one BLAS thread: the small dense products of a 30-mode problem gain nothing from BLAS threads,
 and threads spinning on cores shared with other work slowed an evaluation several times.
 
+Memory (n a-set DOFs, m modes, v design variables, r measured DOFs, per configuration): held for
+the evaluator's life, the sub-assembly (:mod:`structures.subassembly`: the start K and M, each
+polynomial group's coefficients, terms x group non-zeros, and its reduction operator over the
+raw element entries) and the last design's eigen solve: K, M, the modes (8 n m bytes) and the
+factor of K - sigma M (12 nnz(L + U) bytes, the modal method reuses it); ~125 MB in all at
+n = 19,872. Held during a gradient: dK_i, dM_i of every variable (the non-zeros of the groups each
+touches), the rows-only shape derivatives (8 v r m bytes: the indices need the shapes at the
+measured DOFs only) and, modal method, Z1 = S rows^T and Z2 = S M Z1 (2 x 8 n r bytes, 38 MB at
+r = 120) or, Nelson's method, one factor of K - lambda_j M at a time with its n x v right-hand
+sides; ~100 MB at n = 19,872. The sub-assembly set-up holds a group's samples while it fits them
+(samples x non-zero raw entries x 8 bytes: ~210 MB at the peak for the benchmark's skin). The ``workers``
+threads run configurations side by side, so their transients add up; configuration i always runs
+on thread i % workers, because scipy's SuperLU frees a factor only on the thread that made it
+(:func:`_release`). Benchmark (benchmarks/tuning.py, n = 19,872, 2 configurations, m = 30,
+v = 24): peak resident memory of a tuning ~0.65 GB (modal) and ~0.77 GB (Nelson).
+
 Restart (the paper's "previous optimization history" start, sec. V.C): :func:`best_from_history`
 picks the evaluation with the lowest objective among those whose largest normalised constraint
 violation max_k (J_k / eps_k - 1) does not exceed ``allowed_violation`` (default 0.05, i.e. a
@@ -37,6 +53,7 @@ import ctypes.util
 import fnmatch
 import os
 import time
+import weakref
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from typing import Callable, Mapping
@@ -141,8 +158,13 @@ class _Configuration:
         """Eigenpairs at x, reused when the optimiser asks for the gradient at the same design."""
         key = np.asarray(x, float).tobytes()
         if self._last is None or self._last[0] != key:
+            self._last = None        # the previous design's K, M and factor go before the new ones
             self._last = (key, model_modes(self.sub, x, self.cfg.nmodes))
         return self._last[1]
+
+    def release(self):
+        """Drop the kept eigen solve (K, M, modes and the factor of K - sigma M)."""
+        self._last = None
 
     def evaluate(self, x, gradient: bool):
         k, m, m0, lam, phi, n_rigid, lu = self._modes(x)
@@ -186,6 +208,20 @@ def _trim_heap():
         _MALLOC_TRIM(0)
 
 
+def _release(pools, configs):
+    """Free every configuration's kept factorisation on the thread that made it, then the threads.
+
+    scipy's SuperLU frees its factor only on the thread that allocated it (its allocations are
+    registered per thread): a factor dropped on another thread stays allocated for good, and did
+    so once per design (+50 MB each at 20,000 DOF) while the configurations moved between the
+    threads of a shared pool.
+    """
+    for i, c in enumerate(configs):
+        pools[i % len(pools)].submit(c.release).result()
+    for pool in pools:
+        pool.shutdown(wait=False)
+
+
 def _select(patterns, names, what: str):
     """Indices of ``names`` matched by each (pattern, number) pair; InputError if none."""
     out = []
@@ -226,7 +262,8 @@ class Evaluator:
 
     Everything is validated at construction (design variables, index names), before any solve.
     ``workers`` threads evaluate the configurations concurrently (default: one per configuration,
-    at most the number of cores); the results do not depend on it.
+    at most the number of cores), configuration i always on thread i % workers (module docstring,
+    memory); the results do not depend on it.
     """
 
     def __init__(self, problem: TuningProblem, workers: int | None = None):
@@ -236,6 +273,7 @@ class Evaluator:
         self.space = bind(problem.variables, [c.model for c in problem.configurations])
         self.configs = [_Configuration(c, self.space, problem.shape_method)
                         for c in problem.configurations]
+        _trim_heap()      # the sub-assembly fits' samples (module docstring, memory)
         if any(c.name == "design" for c in problem.configurations):
             raise InputError("tuning: a configuration is named 'design', the prefix of the design-change "
                              "indices. Fix: rename the configuration.")
@@ -261,7 +299,7 @@ class Evaluator:
         self.pair_test_frequency = np.concatenate([c.f_test for c in self.configs])
         self.records = []
         self._cache = {}
-        self._pool = None   # the worker threads, kept for the evaluator's life
+        self._pools = None  # worker threads, one executor each, kept for the evaluator's life
         self.counts = {"designs": 0, "gradients": 0}   # evaluations actually computed
 
     # ------------------------------------------------------------------------------ evaluation
@@ -278,9 +316,14 @@ class Evaluator:
         # one BLAS thread per configuration, the configurations side by side (module docstring)
         with threadpool_limits(limits=1, user_api="blas"):
             if self.workers > 1:
-                if self._pool is None:
-                    self._pool = ThreadPoolExecutor(self.workers, thread_name_prefix="tuning")
-                results = list(self._pool.map(lambda c: c.evaluate(x, gradient), self.configs))
+                # configuration i always on thread i % workers (SuperLU factors: see _release)
+                if self._pools is None:
+                    self._pools = [ThreadPoolExecutor(1, thread_name_prefix=f"tuning{i}")
+                                   for i in range(self.workers)]
+                    weakref.finalize(self, _release, self._pools, self.configs).atexit = False
+                futures = [self._pools[i % self.workers].submit(c.evaluate, x, gradient)
+                           for i, c in enumerate(self.configs)]
+                results = [f.result() for f in futures]
                 _trim_heap()
             else:
                 results = [c.evaluate(x, gradient) for c in self.configs]

@@ -215,3 +215,82 @@ def test_group_that_is_not_the_assumed_polynomial_is_reassembled(aircraft, monke
     full = assemble(apply_design(model, space_t, x))
     assert abs(k - full.K).max() <= 1e-13 * abs(full.K).max()
     assert abs(m - full.M).max() <= 1e-13 * abs(full.M).max()
+
+
+# ----------------------------------------------------------------------- memory-lean building blocks
+def test_shape_derivatives_at_rows_are_the_rows_of_the_full_field_ones(aircraft):
+    """The tuning asks for d phi at the measured DOFs only (``rows``): rigid modes through
+    rigid_modes(..., rows), elastic ones by Nelson per mode or by the modal method's adjoint
+    solves. Reference: the same rows of the full-field derivatives, to round-off."""
+    import scipy.sparse as sp
+
+    from structures.sensitivity import rigid_modes
+
+    sub, space, _ = aircraft
+    x = space.x0 * 1.02
+    k, m, _, lam, phi, n_rigid, lu = model_modes(sub, x, 14)
+    dk, dm, _ = sub.derivatives(x)
+    dlam = eigenvalue_derivatives(lam, phi, dk, dm)
+    picked = [0, 7, 13, 101, sub.n // 2, sub.n - 1]
+    rows = sp.csr_matrix((np.ones(len(picked)), (np.arange(len(picked)), picked)),
+                         shape=(len(picked), sub.n))
+    _, full_r = rigid_modes(sub.rigid, m, dm)
+    _, rows_r = rigid_modes(sub.rigid, m, dm, rows)
+    np.testing.assert_allclose(rows_r, full_r[:, picked], rtol=0, atol=1e-12 * np.abs(full_r).max())
+    for method in ("nelson", "modal"):
+        args = (k, m, lam, phi, dk, dm, dlam)
+        opts = dict(n_rigid=n_rigid, rigid=sub.rigid, method=method, lu=lu)
+        full = mode_shape_derivatives(*args, **opts)
+        at_rows = mode_shape_derivatives(*args, rows=rows, **opts)
+        assert at_rows.shape == (len(space), len(picked), 14)
+        np.testing.assert_allclose(at_rows, full[:, picked], rtol=0,
+                                   atol=1e-9 * np.abs(full).max(), err_msg=method)
+
+
+def test_reduction_in_chunks_is_the_triple_product(aircraft, monkeypatch):
+    """_reduction builds P with (TR^T A TR).data = P a a chunk of raw entries at a time: any chunk
+    size gives the same keys and operator, and P a equals the sparse product TR^T A TR formed
+    directly (random raw values a on the skin group's mass entries)."""
+    import scipy.sparse as sp
+
+    import structures.subassembly as subassembly
+
+    sub, _, _ = aircraft
+    group = max(sub.groups, key=lambda g: g.m_rc[0].size)
+    rows, cols = group.m_rc
+    keys, op = subassembly._reduction(rows, cols, sub.tr)
+    monkeypatch.setattr(subassembly, "CHUNK", 97)
+    keys_c, op_c = subassembly._reduction(rows, cols, sub.tr)
+    np.testing.assert_array_equal(keys, keys_c)
+    assert (op != op_c).nnz == 0
+    a = np.random.default_rng(5).standard_normal(rows.size)
+    ng = sub.tr.shape[0]
+    direct = (sub.tr.T @ sp.csr_matrix((a, (rows, cols)), shape=(ng, ng)) @ sub.tr).tocsc()
+    got = sp.csc_matrix((op @ a, (keys % sub.n, keys // sub.n)), shape=direct.shape)
+    assert abs(got - direct).max() <= 1e-13 * abs(direct).max()
+
+
+def test_fit_samples_are_stored_on_their_non_zero_entries():
+    """_Samples keeps each sample on the union of the entries non-zero so far and pads the
+    earlier ones when a later sample adds entries; expand() restores the full arrays."""
+    from types import SimpleNamespace
+
+    from structures.subassembly import _Samples
+
+    def values(x):
+        u = x[0]
+        return np.array([u, 0.0, u ** 2 if u > 1.2 else 0.0, 0.0]), np.array([2.0 * u, 0.0])
+
+    group = SimpleNamespace(variables=np.array([0]), values=values,
+                            owner=SimpleNamespace(space=SimpleNamespace(x0=np.array([1.0]))),
+                            m0_of=lambda m: np.diag(np.full(6, m.sum())))
+    samples = _Samples(group)
+    first = samples([(1.0,)], 0)
+    np.testing.assert_array_equal(first[0], [1.0])
+    k = samples([(1.0,), (1.3,)], 0)
+    np.testing.assert_array_equal(samples.used[0], [True, False, True, False])
+    np.testing.assert_allclose(np.array(k), [[1.0, 0.0], [1.3, 1.69]], rtol=1e-15)
+    np.testing.assert_allclose(samples.expand(np.array(k), 0),
+                               [[1.0, 0, 0, 0], [1.3, 0, 1.69, 0]], rtol=1e-15)
+    np.testing.assert_allclose(np.array(samples([(1.3,)], 1)), [[2.6]], rtol=1e-15)
+    assert np.array(samples([(1.0,), (1.3,)], 2)).shape == (2, 6)

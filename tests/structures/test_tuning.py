@@ -396,3 +396,46 @@ def test_design_change_indices(beam):
     renamed = TuningConfiguration("design", cfg.model, cfg.gvt, nmodes=6)
     with pytest.raises(InputError, match="named 'design'"):
         Evaluator(TuningProblem((renamed,), problem.variables, (("design:frequency:*", 1.0),)))
+
+
+# ---------------------------------------------------------------------------------------- threads
+def test_each_configuration_stays_on_one_worker_thread(tmp_path):
+    """scipy's SuperLU frees a factor only on the thread that allocated it, so a configuration's
+    kept factor must be made and dropped on one thread (structures.tuning, memory): with two
+    workers each configuration is evaluated on one thread over designs and gradients, the two
+    on different threads, and when the evaluator goes its kept solves are released on those same
+    threads. The values equal a one-thread evaluator's."""
+    import gc
+    import threading
+
+    problem, _, _ = _recovery_problem(tmp_path, noise=False)
+    ev = Evaluator(problem, workers=2)
+    seen = {c.cfg.name: [] for c in ev.configs}
+    released = {c.cfg.name: [] for c in ev.configs}
+
+    def watch(conf, log, method):
+        def call(*args):
+            log[conf.cfg.name].append(threading.get_ident())
+            return method(*args)
+        return call
+
+    for conf in ev.configs:
+        conf.evaluate = watch(conf, seen, conf.evaluate)
+        conf.release = watch(conf, released, conf.release)
+    configs = ev.configs
+    designs = [ev.space.x0 * (1.0 + 0.01 * k) for k in range(3)]
+    values = [ev.evaluate(x, gradient=bool(k % 2)) for k, x in enumerate(designs)]
+    threads = {name: set(ids) for name, ids in seen.items()}
+    assert all(len(ids) == 1 for ids in threads.values()), threads
+    assert threads["empty"] != threads["full"]
+    assert threading.get_ident() not in threads["empty"] | threads["full"]
+    del ev
+    gc.collect()
+    assert all(c._last is None for c in configs)
+    assert {name: set(ids) for name, ids in released.items()} == threads
+    serial = Evaluator(problem, workers=1)
+    for k, (x, (v, g)) in enumerate(zip(designs, values)):
+        v1, g1 = serial.evaluate(x, gradient=bool(k % 2))
+        np.testing.assert_allclose(v, v1, rtol=1e-9, atol=1e-14)
+        if g is not None:
+            np.testing.assert_allclose(g, g1, rtol=1e-6, atol=1e-9 * np.abs(g1).max())
