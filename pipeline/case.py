@@ -43,6 +43,7 @@ expected type.
 """
 from __future__ import annotations
 
+import fnmatch
 import tomllib  # Python >= 3.11 (pyproject requires-python)
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -307,6 +308,23 @@ class Case:
                     "stages = 0.")
 
 
+def _index_pattern(pattern: str, configurations: set, where: str) -> str:
+    """A tuning index name or glob, checked before anything runs: CONFIG:KIND:MODES with a
+    configuration of the case (or ``design:change:VARIABLE``) and a kind of structures.indices."""
+    from structures.indices import KINDS
+
+    parts = pattern.split(":")
+    kinds = (*KINDS, "change")
+    if len(parts) != 3 or not (
+            any(fnmatch.fnmatchcase(c, parts[0]) for c in (*configurations, "design"))
+            and any(fnmatch.fnmatchcase(k, parts[1]) for k in kinds)):
+        raise InputError(f"{where}: index = {pattern!r} names no index of this case: an index is "
+                         f"CONFIGURATION:KIND:MODES with a configuration of {sorted(configurations)} "
+                         f"and a kind of {list(KINDS)} (or design:change:VARIABLE); globs allowed. "
+                         f"Fix: e.g. index = \"{sorted(configurations)[0]}:frequency:*\".")
+    return pattern
+
+
 def _tuning(table: dict, path: Path, case_name: str, configs: tuple) -> TuningSettings:
     from structures.design import DesignVariable
 
@@ -326,14 +344,15 @@ def _tuning(table: dict, path: Path, case_name: str, configs: tuple) -> TuningSe
                                 fields=tuple(tuple(f) for f in v["fields"]), lower=v.get("lower"),
                                 upper=v.get("upper"), scale=v.get("scale")))
     objective, constraints = [], []
-    for i, term in enumerate(table.get("objective", [])):
-        _checked(term, OBJECTIVE_KEYS, f"file {path}, [[tuning.objective]] #{i + 1}", ("index",))
-        objective.append((term["index"], float(term.get("weight", 1.0))))
-    for i, term in enumerate(table.get("constraints", [])):
-        _checked(term, CONSTRAINT_KEYS, f"file {path}, [[tuning.constraints]] #{i + 1}",
-                 ("index", "limit"))
-        constraints.append((term["index"], float(term["limit"])))
     names = {c.name for c in configs}
+    for i, term in enumerate(table.get("objective", [])):
+        at = f"file {path}, [[tuning.objective]] #{i + 1}"
+        _checked(term, OBJECTIVE_KEYS, at, ("index",))
+        objective.append((_index_pattern(term["index"], names, at), float(term.get("weight", 1.0))))
+    for i, term in enumerate(table.get("constraints", [])):
+        at = f"file {path}, [[tuning.constraints]] #{i + 1}"
+        _checked(term, CONSTRAINT_KEYS, at, ("index", "limit"))
+        constraints.append((_index_pattern(term["index"], names, at), float(term["limit"])))
     per = []
     for name, sub in table.get("configurations", {}).items():
         at = f"file {path}, [tuning.configurations.{name}]"

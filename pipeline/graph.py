@@ -3,14 +3,16 @@
 A :class:`Stage` declares what it reads -- settings (a case section, any JSON-able value), files
 (decks, GVT files) and the outputs of the stages named in ``after`` -- and computes its outputs
 into a staging folder. Its **fingerprint** is the SHA-256 of all of it: the settings, the content
-of every input file and the recorded content hash of every upstream output. A change anywhere
-therefore reruns exactly the stages downstream of it, and a stage whose upstream result came out
-the same (a rerun that reproduced identical bytes) is not rerun.
+of every input file, the recorded content hash of every upstream output and the version of the
+code (:func:`source_version`: a hash of the project's sources). A change anywhere therefore
+reruns exactly the stages downstream of it, and a stage whose upstream result came out the same
+(a rerun that reproduced identical bytes) is not rerun.
 
 The **manifest** (``manifest.json`` in the run folder) records per stage its fingerprint, the
 SHA-256 of every output file and the seconds its computation took. A stage is *done* when its
-fingerprint matches and every recorded output is present with the recorded hash; a damaged or partial output (a truncated file, a file
-edited by hand) is detected, reported with a warning and recomputed.
+fingerprint matches and every recorded output is present with the recorded hash; a damaged or
+partial output (a truncated file, a file edited by hand) is detected, reported with a warning and
+recomputed.
 
 Atomicity: a stage computes into ``.staging/<stage>/`` inside the run folder; only when its
 compute returns are the files moved into place (one rename each) and then the manifest is
@@ -23,6 +25,7 @@ upstream stage is not done, or an output is damaged); ``missing`` (never compute
 from __future__ import annotations
 
 import fnmatch
+import functools
 import hashlib
 import json
 import os
@@ -47,6 +50,19 @@ def file_hash(path: Path) -> str:
     with open(path, "rb") as fh:
         for block in iter(lambda: fh.read(_CHUNK), b""):
             digest.update(block)
+    return digest.hexdigest()
+
+
+@functools.lru_cache(maxsize=None)
+def source_version(*packages: str) -> str:
+    """SHA-256 of the Python sources of ``packages`` (folders beside this package's parent):
+    changes with any edit of the code, so a fixed kernel recomputes what it computed."""
+    root = Path(__file__).resolve().parents[1]
+    digest = hashlib.sha256()
+    for package in packages:
+        for path in sorted((root / package).rglob("*.py")):
+            digest.update(path.relative_to(root).as_posix().encode())
+            digest.update(path.read_bytes())
     return digest.hexdigest()
 
 
@@ -110,11 +126,15 @@ class Graph:
         In an order where every stage comes after those it names in ``after``.
     log : callable(str)
         One line per stage event.
+    code : str
+        Version of the code that computes the stages (e.g. :func:`source_version`): part of every
+        fingerprint, so results computed by other code are not reused.
     """
 
-    def __init__(self, run_dir, stages=(), log=print):
+    def __init__(self, run_dir, stages=(), log=print, code: str = ""):
         self.dir = Path(run_dir)
         self.log = log
+        self.code = code
         self.stages: dict[str, Stage] = {}
         self.manifest_path = self.dir / MANIFEST
         self.manifest = self._read_manifest()
@@ -171,9 +191,10 @@ class Graph:
         return manifest
 
     def fingerprint(self, stage: Stage) -> str:
-        """SHA-256 of the stage's settings, input file contents and upstream output hashes
-        (the upstream stages must be done)."""
+        """SHA-256 of the code version, the stage's settings, input file contents and upstream
+        output hashes (the upstream stages must be done)."""
         record = {"stage": stage.name,
+                  "code": self.code,
                   "settings": stage.settings,
                   "files": [[Path(f).name, file_hash(Path(f))] for f in stage.files],
                   "after": {s: self.manifest[s]["outputs"] for s in stage.after}}

@@ -121,7 +121,8 @@ def tuning_section(k: int, path: Path) -> str:
     """Frequencies before / after the tuning of stage ``k`` (paper Tables 7, 14)."""
     if not path.exists():
         return note(f"Stage {k}: no tuning/history.nc (the tuning did not finish).")
-    ft = frequency_table(read_dataset(path))
+    history = read_dataset(path)
+    ft = frequency_table(history, after=int(history.attrs.get("chosen_iteration", -1)))
     rows = [(str(p), fmt(ft["test_frequency"].sel(pair=p), ".4g"),
              int(ft["fe_mode_before"].sel(pair=p)), fmt(ft["fe_frequency_before"].sel(pair=p), ".4g"),
              fmt(ft["error_before"].sel(pair=p), "+.2f"), int(ft["fe_mode_after"].sel(pair=p)),
@@ -141,9 +142,12 @@ def design_change_section(stages: list) -> str:
     against the start of stage 1's tuning.
     """
     head = '<h2 id="table24">Design-variable changes per stage (paper Table 24)</h2>'
-    tables = {k: design_change_table(read_dataset(folder / "tuning" / "history.nc"))
-              for k, folder in enumerate(stages, start=1)
-              if (folder / "tuning" / "history.nc").exists()}
+    histories = {k: read_dataset(folder / "tuning" / "history.nc")
+                 for k, folder in enumerate(stages, start=1)
+                 if (folder / "tuning" / "history.nc").exists()}
+    # after: the design the stage wrote out (pipeline.stages: the restart rule's pick)
+    tables = {k: design_change_table(h, after=int(h.attrs.get("chosen_iteration", -1)))
+              for k, h in histories.items()}
     if not tables:
         return head + note("No tuning stage in the run folder: no design-variable changes.")
     names = list(dict.fromkeys(str(v) for t in tables.values() for v in t["design_variable"].values))

@@ -15,13 +15,15 @@ from __future__ import annotations
 import shutil
 from pathlib import Path
 
-from pipeline.graph import Graph
+from pipeline.graph import Graph, source_version
 from pipeline.progress import Display
 from pipeline.stage import running
 from pipeline.stages import final_stages, possible_stage_names, read_targets, stage_plan
 from structures.common.files import check_output
 
 EXAMPLE_CASE = Path(__file__).resolve().parents[1] / "data" / "bah_wing" / "case.toml"
+#: The packages whose code computes the stages (their sources version every fingerprint).
+PACKAGES = ("structures", "aero", "flutter", "pipeline")
 
 
 def _walk(case, graph: Graph, display: Display, execute: bool, baseline_only: bool = False) -> int:
@@ -80,7 +82,7 @@ def run_case(case, out_dir, log=None, from_stage: str | None = None,
     display = Display()
     if log is not None:
         display.log = log
-    graph = Graph(out, log=display.log)
+    graph = Graph(out, log=display.log, code=source_version(*PACKAGES))
     if from_stage is not None:
         graph.force(from_stage, valid=possible_stage_names(case))
     graph.clean_staging()
@@ -104,6 +106,6 @@ def run_case(case, out_dir, log=None, from_stage: str | None = None,
 def run_status(case, out_dir) -> list[tuple[str, str, str]]:
     """(stage, status, reason) of every stage of ``case`` known from ``out_dir`` (done / stale /
     missing; nothing is computed)."""
-    graph = Graph(Path(out_dir), log=lambda line: None)
+    graph = Graph(Path(out_dir), log=lambda line: None, code=source_version(*PACKAGES))
     _walk(case, graph, Display(live=False), execute=False)
     return graph.status()

@@ -133,7 +133,7 @@ def _modes_by_config(selection, roles, role: str) -> str:
 def _tuning(ctx: StageContext, case, n: int, progress=None) -> None:
     from pipeline.loop import loop_terms, relaxed_at_start, tuning_problem
     from structures.design import write_tuned_bdf
-    from structures.tuning import best_from_history, tune
+    from structures.tuning import best_from_history, best_iteration, tune
     from structures.tuning_report import tuning_report
 
     settings = case.tuning
@@ -144,8 +144,9 @@ def _tuning(ctx: StageContext, case, n: int, progress=None) -> None:
     prior = tuple(t for t in settings.objective if str(t[0]).startswith("design:"))
     problem = tuning_problem(case, objective + prior, constraints + settings.constraints,
                              test_modes)
-    if n > 1:   # go on from where the previous stage ended
-        start = read_dataset(ctx.run_dir / f"stage{n - 1}/tuning/history.nc")["design"].values[-1]
+    if n > 1:   # go on from the design the previous stage wrote out
+        previous = read_dataset(ctx.run_dir / f"stage{n - 1}/tuning/history.nc")
+        start = previous["design"].values[int(previous.attrs["chosen_iteration"])]
     elif settings.restart is not None:
         start = best_from_history(read_dataset(settings.restart), settings.allowed_violation)
     else:
@@ -153,17 +154,23 @@ def _tuning(ctx: StageContext, case, n: int, progress=None) -> None:
     problem, relaxed = relaxed_at_start(problem, start)
     result = tune(problem, method=settings.method, start=start, maxiter=settings.maxiter,
                   progress=progress)
+    # the design written out: the restart rule's pick of the whole history (the optimiser's last
+    # point when it converged feasibly; a better earlier one when maxiter cut it short)
+    chosen = best_iteration(result.history, settings.allowed_violation)
+    design = result.history["design"].values[chosen]
     history = result.history.assign_attrs(
-        success=int(result.success), message=result.message, stage=n,
+        success=int(result.success), message=result.message, stage=n, chosen_iteration=chosen,
         objective_terms="; ".join(name for name, _ in objective),
         relaxed_constraints="; ".join(f"{name}: {eps:.4g} -> {new:.4g}"
                                       for name, eps, new in relaxed))
     write_dataset(history, ctx.output(f"stage{n}/tuning/history.nc"))
-    write_text(tuning_report(history) + "\n", ctx.output(f"stage{n}/tuning/report.txt"))
+    write_text(tuning_report(history, after=chosen) + "\n",
+               ctx.output(f"stage{n}/tuning/report.txt"))
     for c in case.configurations:
-        write_tuned_bdf(c.deck, ctx.output(_tuned_deck(n, c.name)), result.space, result.x)
+        write_tuned_bdf(c.deck, ctx.output(_tuned_deck(n, c.name)), result.space, design)
     return (f"{'converged' if result.success else 'not converged'} after {result.iterations} "
-            f"iterations, objective {float(history['objective'].values[-1]):.4e}, "
+            f"iterations, objective {float(history['objective'].values[chosen]):.4e} "
+            f"(evaluation {chosen}), "
             f"{len(objective)} objective terms, {len(problem.constraints)} constraints "
             f"({len(relaxed)} relaxed to the start design)")
 

@@ -417,18 +417,22 @@ class TuningResult:
     iterations: int
 
 
+def best_iteration(history: xr.Dataset, allowed_violation: float = 0.05) -> int:
+    """The evaluation the restart rule picks (module docstring): lowest objective with max
+    violation <= ``allowed_violation``, else the least violating one."""
+    viol, obj = history["max_violation"].values, history["objective"].values
+    ok = np.flatnonzero(viol <= allowed_violation)
+    return int(ok[np.argmin(obj[ok])] if ok.size else np.argmin(viol))
+
+
 def best_from_history(history: xr.Dataset, allowed_violation: float = 0.05) -> np.ndarray:
-    """The restart design (module docstring rule): lowest objective with max violation <=
-    ``allowed_violation``, else the least violating evaluation.
+    """The restart design: that of :func:`best_iteration`.
 
     Returns
     -------
     (nvar,) design values
     """
-    viol, obj = history["max_violation"].values, history["objective"].values
-    ok = np.flatnonzero(viol <= allowed_violation)
-    pick = ok[np.argmin(obj[ok])] if ok.size else int(np.argmin(viol))
-    return history["design"].values[pick].copy()
+    return history["design"].values[best_iteration(history, allowed_violation)].copy()
 
 
 def tune(problem: TuningProblem, *, method: str = "slsqp", start=None, maxiter: int = 50,

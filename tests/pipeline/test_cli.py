@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import json
+import re
 import warnings
 from pathlib import Path
 
@@ -75,3 +76,23 @@ def test_case_file_unknown_key_lists_valid_ones(tmp_path):
     case.write_text('name = "x"\nunits = "imperial"\n[[configurations]]\nname = "a"\ndeck = "m.bdf"\n')
     with pytest.raises(InputError, match="valid: si, english_in, english_ft"):
         read_case(case)
+
+
+@pytest.mark.parametrize("index", ["empty:frequency:*", "baseline:frequencies:*", "frequency:3",
+                                   "baseline:frequency"])
+def test_tuning_index_patterns_checked_before_any_run(tmp_path, index):
+    """A [tuning] index that can name no index of the case fails when the case is read, not at the
+    first tuning stage after the baseline analyses."""
+    example = Path(__file__).resolve().parents[2] / "data" / "bah_wing"
+    text = (example / "case.toml").read_text().replace('index = "*:mass:weight"',
+                                                       f'index = "{index}"')
+    for path in example.iterdir():
+        if path.is_file():
+            (tmp_path / path.name).write_bytes(path.read_bytes())
+    (tmp_path / "case.toml").write_text(text)
+    with pytest.raises(InputError, match=r"\[\[tuning.constraints\]\] #1: index = "
+                                         + re.escape(f"'{index}'")
+                                         + r" names no index of this case.*'baseline', 'fuel'"):
+        read_case(tmp_path / "case.toml")
+    (tmp_path / "case.toml").write_text(text.replace(f'index = "{index}"', 'index = "f*:mass:*"'))
+    assert read_case(tmp_path / "case.toml").tuning.constraints[0] == ("f*:mass:*", 1e-4)
