@@ -19,7 +19,18 @@ from flutter.system import ModalSystem
 from structures.common.errors import InputError, SolverError
 
 
-def _label_crossings(ds: xr.Dataset, units: Units) -> xr.Dataset:
+def label_crossings(ds: xr.Dataset, units: Units) -> xr.Dataset:
+    """A sweep with its crossings' flight labels (:func:`flutter.atmosphere.flight_labels`):
+    ``crossing_ktas``, ``crossing_keas`` [kn], ``crossing_altitude`` [m] (US76 density altitude)
+    and ``crossing_matched_mach`` (V / a there) on the ``crossing`` dimension.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A p-k sweep (flutter.pk.pk_solve) with velocity and density in model units.
+    units : Units
+        Model units.
+    """
     n = ds.sizes.get("crossing", 0)
     if n == 0:
         return ds
@@ -61,7 +72,31 @@ def velocity_sweep_at_altitude(system: ModalSystem, gaf, velocity, *, altitude_m
                           keas=("velocity", V_si * np.sqrt(rho * units.density / 1.225) / (1852 / 3600)),
                           matched_mach=("velocity", V_si / a))
     ds.attrs["altitude_m"] = float(altitude_m)
-    return _label_crossings(ds, units)
+    return label_crossings(ds, units)
+
+
+def line_points(altitudes_m, mach: float, units: Units = Units()) -> tuple[np.ndarray, np.ndarray]:
+    """Density and true airspeed of the matched points of a constant-Mach line.
+
+    Parameters
+    ----------
+    altitudes_m : array_like, shape (npts,)
+        Geometric altitudes, m, decreasing (so the density increases along the line).
+    mach : float
+    units : Units
+        Model units.
+
+    Returns
+    -------
+    density, velocity : ndarray, shape (npts,)
+        US76 density rho(h) and V = M a(h) (US76 eqs. 42, 50), in model units.
+    """
+    h = np.asarray(altitudes_m, dtype=float)
+    if np.any(np.diff(h) >= 0):
+        raise InputError("matched line: altitudes must decrease strictly (density increasing). "
+                         "Fix: sort the altitude list from high to low.")
+    atm = atmosphere(h)
+    return atm["density"] / units.density, mach * atm["speed_of_sound"] / units.length
 
 
 def mach_line(system: ModalSystem, gaf, altitudes_m, *, mach: float, units: Units = Units(),
@@ -80,15 +115,10 @@ def mach_line(system: ModalSystem, gaf, altitudes_m, *, mach: float, units: Unit
         PKNL sweep on ``density`` with ``altitude`` coordinate; crossings carry KEAS/KTAS/altitude.
     """
     h = np.asarray(altitudes_m, dtype=float)
-    if np.any(np.diff(h) >= 0):
-        raise InputError("mach_line: altitudes must decrease strictly (density increasing). Fix: "
-                         "sort the altitude list from high to low.")
-    atm = atmosphere(h)
-    V = mach * atm["speed_of_sound"] / units.length
-    rho = atm["density"] / units.density
+    rho, V = line_points(h, mach, units)
     ds = pk_solve(system, gaf, V, density=rho, mach=mach, sweep="density", **options)
     ds = ds.assign_coords(altitude=("density", h))
-    return _label_crossings(ds, units)
+    return label_crossings(ds, units)
 
 
 def matched_flutter(system: ModalSystem, gaf, velocity, *, altitude_m: float, mach0: float,

@@ -182,11 +182,15 @@ def crossings_of(ds: xr.Dataset) -> list[dict]:
 
     Each entry: ``mach``, ``density``, ``velocity``, ``frequency`` [Hz], ``root``, ``kind``,
     ``converged``, ``method`` and ``units`` (:func:`units_entry` of the Dataset's ``unit_system``
-    attribute, set by :func:`label_units`; "model units" when absent).
+    attribute, set by :func:`label_units`; "model units" when absent); matched points
+    (:func:`flutter.matched.label_crossings`) add ``altitude`` [m], ``ktas`` and ``keas`` [kn],
+    their units in ``units`` too.
     """
     if "crossing_root" not in ds:
         return []
     units = units_entry(ds.attrs.get("unit_system"))
+    flight = [name for name in ("altitude", "ktas", "keas") if f"crossing_{name}" in ds]
+    units.update({name: ds[f"crossing_{name}"].attrs["units"] for name in flight})
     out = []
     for i in range(ds.sizes.get("crossing", 0)):
         out.append({"mach": float(ds.crossing_mach[i]), "density": float(ds.crossing_density[i]),
@@ -194,7 +198,8 @@ def crossings_of(ds: xr.Dataset) -> list[dict]:
                     "frequency": float(ds.crossing_frequency[i]),
                     "root": int(ds.crossing_root[i]), "kind": str(ds.crossing_kind.values[i]),
                     "converged": bool(ds.crossing_converged[i]),
-                    "method": str(ds.attrs.get("method", "")), "units": dict(units)})
+                    "method": str(ds.attrs.get("method", "")), "units": dict(units),
+                    **{name: float(ds[f"crossing_{name}"][i]) for name in flight}})
     return out
 
 

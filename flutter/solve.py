@@ -49,6 +49,8 @@ class FlutterRequest:
         Structural damping of the modes for this request.
     source : str
         Where the request came from (e.g. the deck's file name), named in error messages.
+    name : str
+        Label of its sweeps (default "FLUTTER <sid>"), e.g. "Mach 0.160 matched line".
     """
 
     sid: int
@@ -59,8 +61,11 @@ class FlutterRequest:
     rhoref: float = 1.0
     damping: StructuralDamping = field(default_factory=StructuralDamping)
     source: str = ""
+    name: str = ""
 
     def __post_init__(self):
+        if not self.name:
+            object.__setattr__(self, "name", f"FLUTTER {self.sid}")
         if self.method not in METHODS:
             raise UnsupportedCardError(card_message(
                 f"flutter method {self.method!r} is not supported.", card="FLUTTER",
@@ -123,11 +128,11 @@ def solve_request(system: ModalSystem, gaf: xr.Dataset,
     -------
     list of (dict, xarray.Dataset)
         One per sweep: the label (``mach``, ``density`` (not for PKNL), ``configuration`` =
-        "FLUTTER <sid>") and the :func:`flutter.pk.pk_solve` / :func:`flutter.kmethod.k_solve`
-        result.
+        the request's ``name``) and the :func:`flutter.pk.pk_solve` /
+        :func:`flutter.kmethod.k_solve` result.
     """
     out = []
-    name = f"FLUTTER {req.sid}"
+    name = req.name
     if METHODS[req.method] == "pk":
         V = np.unique(req.values)
         points = [(rho, m) for rho in req.density for m in req.mach]
@@ -175,7 +180,7 @@ def solve_flutter(modes: xr.Dataset, gaf: xr.Dataset, requests, units: str | Non
     results = []
     for i, req in enumerate(requests):
         if progress is not None:
-            progress(f"FLUTTER {req.sid} ({req.method}), request {i + 1} of {len(requests)}")
+            progress(f"{req.name} ({req.method}), request {i + 1} of {len(requests)}")
         system = modal_system(modes, req.damping)
         for lab, ds in solve_request(system, gaf, req):
             ds = label_units(ds, units)

@@ -20,6 +20,13 @@ Example (``data/bah_wing/case.toml``)::
     structural_damping = 0.01   # optional: g on every mode, replaces the decks' SDAMP table
     envelope = { mach = [0.2, 0.6], velocity = [300.0, 320.0] }  # optional: V_D per Mach, model units
 
+    [flutter.matched]        # optional: matched-point flutter instead of the decks' FLUTTER cards
+    mach = [0.130, 0.160]    # one p-k line per Mach number (0 < M < 1)
+    altitude = [-1000.0, 20000.0]   # range, swept from high to low (US76 -5 km .. 86 km)
+    altitude_units = "ft"    # "ft" or "m"
+    points = 60              # flight points per Mach line: US76 density, V = M a(h)
+    method = "pknl"          # p-k at each matched point (the only method for now)
+
     [selection]              # optional: participation-based mode selection (defaults shown)
     primary = 0.90           # primary modes: with the rigid modes, >= 90 % of every critical root
     secondary = 0.98         # secondary modes: the next ones up to 98 %
@@ -83,7 +90,8 @@ _EXAMPLES = {"measured_mass": "{ weight = 18950.0, x_cg = 0.1 }", "mass": '"lump
              "fields": '[["PBAR", 11, "I1"]]', "method": '"slsqp"', "index": '"*:frequency:*"',
              "envelope": "{ mach = [0.2, 0.6], velocity = [300.0, 320.0] }",
              "standard": '"MIL-STD-1540C"', "structural_damping": "0.01", "primary": "0.9",
-             "secondary": "0.98", "stages": "3", "flutter_modes": "2"}
+             "secondary": "0.98", "stages": "3", "flutter_modes": "2",
+             "altitude": "[-1000.0, 20000.0]", "altitude_units": '"ft"', "points": "60"}
 _TOML_TYPES = {str: "a string", bool: "a boolean", int: "an integer", float: "a number",
                list: "a list", dict: "a table"}
 
@@ -93,8 +101,13 @@ CASE_KEYS = {"name": "str", "units": "str", "configurations": "table list", "flu
 CONFIGURATION_KEYS = {"name": "str", "deck": "str", "nmodes": "int", "mass": "str", "gvt": "str",
                       "measured_mass": "table or str"}
 FLUTTER_KEYS = {"kernel": "str", "flutter_ids": "int list", "structural_damping": "float",
-                "envelope": "table"}
+                "envelope": "table", "matched": "table"}
 ENVELOPE_KEYS = {"mach": "float list", "velocity": "float list"}
+MATCHED_KEYS = {"mach": "float list", "altitude": "float list", "altitude_units": "str",
+                "points": "int", "method": "str"}
+#: metres per unit of ``[flutter.matched] altitude``
+ALTITUDE_UNITS = {"ft": 0.3048, "m": 1.0}
+MATCHED_METHODS = ("pknl",)
 SELECTION_KEYS = {"primary": "float", "secondary": "float", "rigid_hz": "float",
                   "flutter_modes": "int"}
 LOOP_KEYS = {"stages": "int", "standard": "str"}
@@ -177,8 +190,56 @@ class Configuration:
 
 
 @dataclass(frozen=True)
+class MatchedSettings:
+    """``[flutter.matched]``: matched-point flutter in place of the decks' FLUTTER cards.
+
+    One p-k line per Mach number: ``points`` altitudes from the top of the ``altitude`` range
+    down to its bottom (in ``altitude_units``), each at the US76 density and V = M a(h)
+    (pipeline.flight_points).
+    """
+
+    mach: tuple
+    altitude: tuple
+    altitude_units: str
+    points: int = 60
+    method: str = "pknl"
+
+    def __post_init__(self):
+        object.__setattr__(self, "mach", tuple(float(m) for m in self.mach))
+        object.__setattr__(self, "altitude", tuple(float(h) for h in self.altitude))
+        if self.altitude_units not in ALTITUDE_UNITS:
+            raise InputError(f"altitude_units = {self.altitude_units!r}; valid: "
+                             f"{', '.join(ALTITUDE_UNITS)}.")
+        if not all(0.0 < m < 1.0 for m in self.mach):
+            raise InputError(f"mach = {list(self.mach)}: every Mach number must be in (0, 1) (the "
+                             "doublet lattice is subsonic). Fix: e.g. mach = [0.13, 0.16].")
+        if len(set(self.mach)) != len(self.mach):
+            raise InputError(f"mach = {list(self.mach)} repeats a Mach number. Fix: list each "
+                             "once.")
+        low, high = self.altitude_range_m if len(self.altitude) == 2 else (0.0, 0.0)
+        if len(self.altitude) != 2 or low == high:
+            raise InputError(f"altitude = {list(self.altitude)} must be a range of two different "
+                             "altitudes. Fix: e.g. altitude = [-1000.0, 20000.0].")
+        if low < -5000.0 or high > 86000.0:
+            raise InputError(f"altitude = {list(self.altitude)} {self.altitude_units} is outside "
+                             "the US76 atmosphere (-5 km .. 86 km). Fix: check the range and "
+                             "altitude_units.")
+        if self.points < 2:
+            raise InputError(f"points = {self.points} must be >= 2. Fix: e.g. points = 60.")
+        if self.method not in MATCHED_METHODS:
+            raise InputError(f"method = {self.method!r}; valid: {', '.join(MATCHED_METHODS)}.")
+
+    @property
+    def altitude_range_m(self) -> tuple[float, float]:
+        """(lowest, highest) altitude of the range, m."""
+        metres = ALTITUDE_UNITS.get(self.altitude_units, 1.0)
+        return min(self.altitude) * metres, max(self.altitude) * metres
+
+
+@dataclass(frozen=True)
 class FlutterSettings:
-    """``[flutter]``: run each configuration's FLUTTER cards (modes -> GAFs -> p-k / k).
+    """``[flutter]``: run each configuration's FLUTTER cards (modes -> GAFs -> p-k / k), or the
+    matched points of ``matched`` (:class:`MatchedSettings`) instead.
 
     ``structural_damping`` (g, e.g. 0.01) replaces the decks' SDAMP tables when given;
     ``envelope`` is the flight envelope whose 1.15 x speed the flutter boundary is held against.
@@ -188,11 +249,16 @@ class FlutterSettings:
     flutter_ids: tuple = ()
     structural_damping: float | None = None
     envelope: Envelope | None = None
+    matched: MatchedSettings | None = None
 
     def __post_init__(self):
         if self.kernel not in KERNELS:
             raise InputError(f"kernel = {self.kernel!r}; valid: {', '.join(KERNELS)}.")
         object.__setattr__(self, "flutter_ids", tuple(int(i) for i in self.flutter_ids))
+        if self.matched is not None and self.flutter_ids:
+            raise InputError(f"flutter_ids = {list(self.flutter_ids)} and [flutter.matched] both "
+                             "choose the flight points. Fix: remove flutter_ids to run the matched "
+                             "points, or [flutter.matched] to run the decks' FLUTTER cards.")
         if self.structural_damping is not None and not 0.0 <= self.structural_damping < 1.0:
             raise InputError(f"structural_damping = {self.structural_damping} must be a g value in "
                              "[0, 1). Fix: e.g. structural_damping = 0.01 (1 %).")
@@ -428,6 +494,11 @@ def read_case(path) -> Case:
             table["envelope"] = _built(Envelope, at, mach=table["envelope"]["mach"],
                                        velocity=table["envelope"]["velocity"],
                                        units=unit_labels(units).velocity)
+        if "matched" in table:
+            at = f"file {path}, [flutter.matched]"
+            _checked(table["matched"], MATCHED_KEYS, at,
+                     required=("mach", "altitude", "altitude_units"))
+            table["matched"] = _built(MatchedSettings, at, **table["matched"])
         flutter = _built(FlutterSettings, where, **table)
     sections = {}
     for key, cls, schema in (("selection", SelectionSettings, SELECTION_KEYS),

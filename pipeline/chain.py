@@ -2,8 +2,9 @@
 tuning loop.
 
 :func:`flutter_chain` reads a deck once (structures.common.nastran.read_pynastran): its FLUTTER
-requests (:mod:`pipeline.flutter_cards`) and its aerodynamic model (aero.model); computes the GAFs
-of the given modes (aero.gaf) and solves flutter from them as data (:func:`flutter.solve.
+requests (:mod:`pipeline.flutter_cards`), or the matched points of a case's ``[flutter.matched]``
+in their place (:mod:`pipeline.flight_points`), and its aerodynamic model (aero.model); computes
+the GAFs of the given modes (aero.gaf) and solves flutter from them as data (:func:`flutter.solve.
 solve_flutter`); then the participation of every mode in every flutter crossing
 (:func:`flutter.participation.crossing_participation`), stacked as ``participation.nc``.
 :func:`case_flutter` is that chain with a case's settings, :func:`deck_modes` and
@@ -22,10 +23,12 @@ from aero.model import read_aero_model
 from flutter.participation import crossing_participation
 from flutter.results import summary_entries, write_flutter
 from flutter.solve import METHODS, solve_flutter
-from pipeline.case import Case, Configuration, FlutterSettings
-from pipeline.flutter_cards import lmodes, read_flutter_requests
+from pipeline.case import Case, Configuration, FlutterSettings, MatchedSettings
+from pipeline.flight_points import label_lines, matched_requests
+from pipeline.flutter_cards import deck_damping, lmodes, read_flutter_requests
 from structures.assembly import assemble
 from structures.bdf import read_model
+from structures.common.errors import InputError
 from structures.common.files import write_dataset
 from structures.common.nastran import read_pynastran
 from structures.massprops import mass_properties
@@ -118,6 +121,21 @@ def _gaf_ks(aero_ks: np.ndarray, requests) -> np.ndarray:
     return ks[ks > 0]
 
 
+def _requests(bdf, deck: str, flutter_ids, structural_damping: float | None,
+              matched: MatchedSettings | None, units: str | None) -> list:
+    """The deck's FLUTTER requests, or the matched lines of ``matched`` in their place."""
+    if matched is None:
+        return read_flutter_requests(bdf, deck, flutter_ids, structural_damping)
+    if flutter_ids:
+        raise InputError(f"FLUTTER ids {list(flutter_ids)} (--flutter-id) and the case's "
+                         "[flutter.matched] both choose the flight points. Fix: drop the FLUTTER "
+                         "ids (--flutter-id) to run the matched points, or remove "
+                         "[flutter.matched].")
+    rhoref = float(bdf.aero.rho_ref) if bdf.aero is not None else 1.0
+    return matched_requests(matched, units, deck_damping(bdf, deck, structural_damping),
+                            rhoref=rhoref, source=deck)
+
+
 def flutter_participation(results, modes: xr.Dataset, *, rigid_hz: float = 0.05,
                           units: str | None = None, configuration: str = "") -> xr.Dataset:
     """Participation of every mode in every flutter crossing of every sweep (``participation.nc``).
@@ -143,12 +161,18 @@ def flutter_participation(results, modes: xr.Dataset, *, rigid_hz: float = 0.05,
         ``density``, ``velocity``, ``frequency`` [Hz], ``root`` and ``flutter_mode`` (1, 2, ... in
         order of speed within its sweep), on ``mode`` the coordinates ``rigid`` and
         ``fe_frequency`` [Hz]; attrs ``configuration``, ``units``, ``rigid_hz``. Flutter crossings
-        only (no divergence); ``flutter_point`` has length 0 when there is none.
+        only (no divergence); ``flutter_point`` has length 0 when there is none. Sweeps of matched
+        points (:func:`pipeline.flight_points.label_lines`) add ``altitude`` [m], ``ktas`` and
+        ``keas`` [kn] on ``flutter_point`` (NaN for points of other sweeps).
     """
     mass = np.diag(np.asarray(modes["generalized_mass"].values, dtype=float))
     fe_frequency = np.asarray(modes["frequency"].values, dtype=float)
     omega = 2 * np.pi * np.maximum(fe_frequency, 0.0)
-    rows, shares = [], []
+    flight = {name: next(ds[f"crossing_{name}"].attrs["units"] for _, ds in results
+                         if f"crossing_{name}" in ds)
+              for name in ("altitude", "ktas", "keas")
+              if any(f"crossing_{name}" in ds for _, ds in results)}
+    rows, shares, labels_at = [], [], []
     for case, (_, ds) in enumerate(results):
         part = crossing_participation(ds, mass, omega, rigid_hz, kinds=("flutter",))
         for f in range(part.sizes["flutter_mode"]):
@@ -158,12 +182,15 @@ def flutter_participation(results, modes: xr.Dataset, *, rigid_hz: float = 0.05,
                          float(part.velocity[f]), float(part.frequency[f]), int(part.root[f]),
                          int(part.flutter_mode[f])))
             shares.append(part.participation.values[f])
+            labels_at.append([float(ds[f"crossing_{name}"][i]) if f"crossing_{name}" in ds
+                              else np.nan for name in flight])
     nmode = modes.sizes["mode"]
     P = np.array(shares, dtype=float).reshape(len(shares), nmode)
     col = list(zip(*rows)) if rows else [()] * 7
+    at = np.array(labels_at, dtype=float).reshape(len(labels_at), len(flight))
     labels = unit_labels(units)
     point = "flutter_point"
-    return xr.Dataset(
+    out = xr.Dataset(
         {"participation": ((point, "mode"), P, {
             "units": "%", "long_name": "modal participation",
             "definition": "100 Re(conj(u_j)(M u)_j) / (u^H M u)"})},
@@ -184,13 +211,16 @@ def flutter_participation(results, modes: xr.Dataset, *, rigid_hz: float = 0.05,
         },
         attrs={"configuration": configuration, "units": labels.system, "rigid_hz": float(rigid_hz)},
     )
+    return out.assign_coords({name: (point, at[:, j], {"units": unit})
+                             for j, (name, unit) in enumerate(flight.items())})
 
 
 def flutter_chain(deck: str | os.PathLike, modes: xr.Dataset, *, kernel: str = "quartic",
                   flutter_ids=None, structural_damping: float | None = None,
                   rigid_hz: float = 0.05, units: str | None = None,
                   out_dir: str | os.PathLike | None = None,
-                  configuration: str | None = None, progress=None) -> dict:
+                  configuration: str | None = None, progress=None,
+                  matched: MatchedSettings | None = None) -> dict:
     """GAFs, flutter and participation of a deck's FLUTTER requests on ``modes``.
 
     Parameters
@@ -219,6 +249,11 @@ def flutter_chain(deck: str | os.PathLike, modes: xr.Dataset, *, kernel: str = "
         Name stored in participation.nc (default: the deck's file stem).
     progress : callable(str), optional
         Told what is being computed (the GAFs, each FLUTTER request's sweeps).
+    matched : pipeline.case.MatchedSettings, optional
+        Matched-point lines (:func:`pipeline.flight_points.matched_requests`) in place of the
+        deck's FLUTTER cards (with ``flutter_ids`` an error; needs ``units``); the GAFs are then
+        computed at the lines' Mach numbers (MKAERO1's reduced frequencies) and every crossing
+        carries its altitude, KTAS and KEAS.
 
     Returns
     -------
@@ -230,17 +265,20 @@ def flutter_chain(deck: str | os.PathLike, modes: xr.Dataset, *, kernel: str = "
     unit_labels(units)  # an unknown name fails before any work
     deck = Path(deck)
     bdf = read_pynastran(deck)
-    requests = read_flutter_requests(bdf, str(deck), flutter_ids, structural_damping)
     if units is None:
         units = system_of(modes.attrs)
     elif modes.attrs.get("units") != units:
         modes = modes.assign_attrs(units=units)  # modes.nc and the GAFs' labels name the system
+    requests = _requests(bdf, str(deck), flutter_ids, structural_damping, matched, units)
     aero = read_aero_model(bdf)
     ks = _gaf_ks(aero.ks, requests)
+    machs = aero.machs if matched is None else np.asarray(matched.mach, dtype=float)
     if progress is not None:
-        progress(f"GAFs: {len(aero.machs)} Mach x {ks.size} k, {modes.sizes['mode']} modes")
-    gaf = generalized_aero_forces(aero, modes, aero.machs, ks, method=kernel)
+        progress(f"GAFs: {len(machs)} Mach x {ks.size} k, {modes.sizes['mode']} modes")
+    gaf = generalized_aero_forces(aero, modes, machs, ks, method=kernel)
     results = solve_flutter(modes, gaf, requests, units, progress=progress)
+    if matched is not None:
+        results = label_lines(results, matched, units)
     sweeps, labels = [ds for _, ds in results], [lab for lab, _ in results]
     participation = flutter_participation(results, modes, rigid_hz=rigid_hz, units=units,
                                           configuration=configuration or deck.stem)
@@ -264,8 +302,9 @@ def case_flutter(case: Case, config: Configuration, modes: xr.Dataset,
                  progress=None) -> dict:
     """:func:`flutter_chain` of one configuration with the case's settings.
 
-    Kernel, FLUTTER ids and structural damping from ``[flutter]`` (``flutter_ids``, a
-    command-line override, replaces the case's; both empty: the deck's FMETHOD selection),
+    Kernel, FLUTTER ids (or the matched points of ``[flutter.matched]``) and structural damping
+    from ``[flutter]`` (``flutter_ids``, a command-line override, replaces the case's; both empty:
+    the deck's FMETHOD selection),
     ``rigid_hz`` from ``[selection]``, the unit system from ``units``. The flutter stage of
     ``pipeline run`` and ``pipeline flutter CASE`` both call this; ``progress`` as
     :func:`flutter_chain`.
@@ -280,23 +319,26 @@ def case_flutter(case: Case, config: Configuration, modes: xr.Dataset,
                          flutter_ids=_flutter_ids(settings, flutter_ids),
                          structural_damping=settings.structural_damping,
                          rigid_hz=case.selection.rigid_hz, units=case.units, out_dir=out_dir,
-                         configuration=config.name, progress=progress)
+                         configuration=config.name, progress=progress, matched=settings.matched)
 
 
 def check_flutter_requests(case: Case, flutter_ids=None) -> None:
     """Before any computation: every configuration's deck defines the FLUTTER cards (their FLFACT
     lists and SDAMP tables) that the case's ``[flutter]`` (or the ``flutter_ids`` override)
-    selects.
+    selects; with ``[flutter.matched]``, that no FLUTTER id is asked for and the deck's SDAMP
+    selection is usable.
 
     Raises
     ------
     InputError
         Naming the deck, the card, its id and the fix
-        (:func:`pipeline.flutter_cards.read_flutter_requests`).
+        (:func:`pipeline.flutter_cards.read_flutter_requests`,
+        :func:`pipeline.flutter_cards.deck_damping`).
     """
     if case.flutter is None and not flutter_ids:
         return
     settings = case.flutter or FlutterSettings()
     for config in case.configurations:
-        read_flutter_requests(read_pynastran(config.deck), str(config.deck),
-                              _flutter_ids(settings, flutter_ids), settings.structural_damping)
+        _requests(read_pynastran(config.deck), str(config.deck),
+                  _flutter_ids(settings, flutter_ids), settings.structural_damping,
+                  settings.matched, case.units)

@@ -72,11 +72,9 @@ def _damping(bdf, sdamp: int | None, structural_damping: float | None,
     return StructuralDamping() if sdamp is None else _sdamp_table(bdf, sdamp, filename)
 
 
-def _selection(bdf, flutter_ids) -> list[tuple[int, int | None]]:
-    """(FLUTTER id, SDAMP id) pairs: each subcase's FMETHOD (with its SDAMP, else the global one),
-    else every FLUTTER card undamped; the ``flutter_ids`` override keeps the SDAMP of the subcase
-    whose FMETHOD names the id (the global one for an id no FMETHOD names). pyNastran files the case
-    control's SDAMP under its full name SDAMPING."""
+def _case_control(bdf) -> tuple[list[tuple[int, int | None]], int | None]:
+    """(FMETHOD id, SDAMP id) of every subcase with an FMETHOD (its SDAMP, else the global one),
+    and the global SDAMP. pyNastran files the case control's SDAMP under its full name SDAMPING."""
     selected = []
     glob_sdamp = None
     cc = bdf.case_control_deck
@@ -88,6 +86,14 @@ def _selection(bdf, flutter_ids) -> list[tuple[int, int | None]]:
                 glob_sdamp = sdamp
             if "FMETHOD" in sc.params:
                 selected.append((int(sc.get_parameter("FMETHOD")[0]), sdamp or glob_sdamp))
+    return selected, glob_sdamp
+
+
+def _selection(bdf, flutter_ids) -> list[tuple[int, int | None]]:
+    """(FLUTTER id, SDAMP id) pairs: each subcase's FMETHOD (with its SDAMP, else the global one),
+    else every FLUTTER card undamped; the ``flutter_ids`` override keeps the SDAMP of the subcase
+    whose FMETHOD names the id (the global one for an id no FMETHOD names)."""
+    selected, glob_sdamp = _case_control(bdf)
     if flutter_ids is not None:
         by_fmethod = dict(selected)
         return [(int(sid), by_fmethod.get(int(sid), glob_sdamp)) for sid in flutter_ids]
@@ -153,3 +159,41 @@ def read_flutter_requests(bdf, filename: str = "", flutter_ids=None,
                              filename),
             source=filename))
     return out
+
+
+def deck_damping(bdf, filename: str = "",
+                 structural_damping: float | None = None) -> StructuralDamping:
+    """Structural damping of flight points that replace the deck's FLUTTER cards (a case's
+    ``[flutter.matched]``): the case's constant g if given, else the TABDMP1 that the case
+    control's SDAMP selects for flutter (that of the subcases with an FMETHOD, which must agree;
+    without one, the global SDAMP), else none.
+
+    Parameters
+    ----------
+    bdf : pyNastran BDF
+    filename : str
+        The deck's file name, for messages.
+    structural_damping : float, optional
+        The case's g on every mode (modal viscous, as Nastran's KDAMP = 1).
+
+    Returns
+    -------
+    StructuralDamping
+
+    Raises
+    ------
+    InputError
+        The FMETHOD subcases select different SDAMP tables (and no ``structural_damping``); the
+        selected TABDMP1 is not defined.
+    UnsupportedCardError
+        TABDMP1 TYPE other than G, CRIT, Q; PARAM KDAMP < 0.
+    """
+    selected, glob_sdamp = _case_control(bdf)
+    tables = sorted({sdamp for _, sdamp in selected}, key=str) if selected else [glob_sdamp]
+    if structural_damping is None and len(tables) > 1:
+        raise InputError(card_message(
+            f"the FMETHOD subcases select different SDAMP tables {tables}; matched flight "
+            "points take one structural damping.", card="SDAMP", filename=filename,
+            fix="set [flutter] structural_damping, or give the subcases one SDAMP."))
+    sdamp = tables[0]
+    return _damping(bdf, None if sdamp is None else int(sdamp), structural_damping, filename)

@@ -194,7 +194,7 @@ def _flutter_settings(case) -> dict:
     f = case.flutter
     return {"kernel": f.kernel, "flutter_ids": list(f.flutter_ids),
             "structural_damping": f.structural_damping, "rigid_hz": case.selection.rigid_hz,
-            "units": case.units}
+            "units": case.units, "matched": None if f.matched is None else repr(f.matched)}
 
 
 def _tuning_settings(case) -> dict:
