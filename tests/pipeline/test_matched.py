@@ -306,3 +306,32 @@ def test_command_line_flutter_id_conflicts_with_matched(tmp_path, soft):
         check_flutter_requests(case, flutter_ids=[502])
     with pytest.raises(InputError, match=r"--flutter-id.*\[flutter.matched\].*Fix"):
         case_flutter(case, case.configurations[0], soft, flutter_ids=[502])
+
+
+def test_case_flutter_runs_the_case_matched_lines(tmp_path, soft, line):
+    """case_flutter (the flutter stage and ``pipeline flutter CASE``) runs the case's matched
+    lines with its structural damping: the undamped line's crossings when g = 0, a later one with
+    g = 0.03; and the flutter stage's declared settings change with [flutter.matched], so the
+    stage reruns."""
+    from dataclasses import replace
+
+    from pipeline.stages import stage_plan
+
+    flutter = ('[flutter]\nstructural_damping = {g}\n[flutter.matched]\nmach = [0.2]\n'
+               'altitude = [-1000.0, 20000.0]\naltitude_units = "ft"\n')
+    case = read_case(_case(tmp_path, flutter.format(g=0.0)))
+    res = _quiet(case_flutter, case, case.configurations[0], soft)
+    assert res["summary"] == line[2]["summary"]
+    damped = read_case(_case(tmp_path, flutter.format(g=0.03)))
+    res = _quiet(case_flutter, damped, damped.configurations[0], soft)
+    undamped, with_g = ([c for c in r["summary"] if c["kind"] == "flutter"][0]
+                        for r in (line[2], res))
+    assert with_g["velocity"] > undamped["velocity"]
+
+    def settings(c):
+        (stage,) = [s for s in stage_plan(c, 0) if s.name == "stage0/flutter/baseline"]
+        return stage.settings
+
+    other = replace(case, flutter=replace(case.flutter, matched=replace(case.flutter.matched,
+                                                                        points=30)))
+    assert settings(other) != settings(case)
