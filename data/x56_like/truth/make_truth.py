@@ -22,8 +22,8 @@ generator's hooks (``dataclasses.replace`` of ``X56Parameters``) -- see ``truth_
 ``README.md`` beside this script for the values:
 
 * main landing gear: tapered (``MAIN_GEAR_ROOT`` x the model's section size at the root,
-  ``MAIN_GEAR_TAPER`` tip/root) and curved (``MAIN_GEAR_BOW`` in lateral bow), ``MAIN_GEAR_SEGMENTS``
-  segments, where the model has two uniform straight bars;
+  ``MAIN_GEAR_TAPER`` tip/root) and curved (``MAIN_GEAR_BOW`` in lateral bow),
+  ``MAIN_GEAR_SEGMENTS`` segments, where the model has two uniform straight bars;
 * engines on six CELAS2 mount springs (``ENGINE_MOUNT``) where the model has an RBE2;
 * ``CABLE_WEIGHT`` lb of GVT sensor cables spread along both wings' elastic axes;
 * the soft suspension: three bungees from ground points 60 in above the nose-gear bay and the
@@ -90,7 +90,7 @@ ENGINE_MOUNT = (1.0e4, 1.0e4, 1.6e4, 1.5e5, 1.5e5, 1.5e5)     # lbf/in (T1-T3), 
 #: A test mode takes the name of the pre-test analysis mode it matches at least this well (MAC).
 NAME_MAC = 0.8
 CABLE_WEIGHT = 8.0                   # lb, both wings
-BUNGEE_VERTICAL = 8.0                # lbf/in per bungee (x and y: make_model.SUSPENSION_PENDULUM x it)
+BUNGEE_VERTICAL = 8.0                # lbf/in per bungee (x, y: make_model.SUSPENSION_PENDULUM x it)
 UNITS = "english_in"
 
 # Sensor layout: (analysis grid ids, components) per part of the aircraft; right side, the left
@@ -212,13 +212,15 @@ def test_names(truth: np.ndarray, own: list[str], analysis: np.ndarray,
     """
     m = mac(truth.T, analysis.T)
     names = list(own)
+    named: set = set()
     taken: set = set()
     for flat in np.argsort(-m, axis=None, kind="stable"):
         i, j = divmod(int(flat), m.shape[1])
         if m[i, j] < NAME_MAC:
             break
-        if names[i] is own[i] and j not in taken and analysis_names[j] != "RB":
+        if i not in named and j not in taken and analysis_names[j] != "RB":
             names[i] = analysis_names[j]
+            named.add(i)
             taken.add(j)
     out: list[str] = []
     for name in names:
