@@ -75,6 +75,9 @@ RHOREF = 1.146e-7             # 1.225 kg/m^3 in slinch/in^3, to the 4 digits of 
 #: Structural damping g on every mode (the paper's 1 %).
 STRUCTURAL_G = 0.01
 CONFIGURATIONS = ("efew", "fffw")
+#: PBARs of members on the centre line or shared by both sides (spine and engine deck, boom, nose
+#: gear); every other PBAR has a left-side copy with id + 100.
+CENTRE_LINE_PROPERTIES = (101, 102, 141)
 #: Truth hook: horizontal (pendulum) stiffness of a suspension point relative to its vertical one.
 SUSPENSION_PENDULUM = 0.25
 
@@ -140,8 +143,8 @@ class X56Parameters:
     nu: float = 0.3
     spine: Section = Section(6.0, 60.0, 40.0, 60.0)
     carry_through: Section = Section(4.0, 8.0, 40.0, 6.0)
-    wing_root: Section = Section(2.0, 0.62, 20.0, 0.22)
-    wing_tip: Section = Section(0.4, 0.125, 2.0, 0.15)
+    wing_root: Section = Section(2.0, 0.62, 20.0, 0.30)
+    wing_tip: Section = Section(0.4, 0.125, 2.0, 0.20)
     winglet: Section = Section(0.5, 0.8, 0.02, 0.05)
     engine_pylon: Section = Section(0.8, 0.035, 0.025, 0.05)
     boom: Section = Section(0.3, 0.047, 0.047, 0.06)
@@ -294,7 +297,8 @@ def structure_bulk(params: X56Parameters = ANALYSIS) -> list[str]:
     for i in range(n):
         r = 1.0 + (params.main_gear_taper - 1.0) * (i + 0.5) / n
         props.append((151 + i, params.main_gear.scaled(r)))
-    props += [(pid + 100, sec) for pid, sec in props]   # left side: ids + 100 (linked in tuning)
+    props += [(pid + 100, sec) for pid, sec in props    # left side: ids + 100 (linked in tuning)
+              if pid not in CENTRE_LINE_PROPERTIES]
     out += [_pbar(pid, sec, fac) for pid, sec in sorted(props)]
     up, fore = (0.0, 0.0, 1.0), (1.0, 0.0, 0.0)      # orientation vectors: I1 vertical / fore-aft
     line = [1101, 1102] + [1001 + i for i in range(len(SPINE_X))]
@@ -310,7 +314,7 @@ def structure_bulk(params: X56Parameters = ANALYSIS) -> list[str]:
         bars += [(3301 + side + i, 121 + pside, a, b, fore)
                  for i, (a, b) in enumerate(zip(winglet[:-1], winglet[1:]))]
         side = 100 * k
-        bars += [(5001 + side, 101 + pside, 1006, 5001 + side, up),            # engine deck
+        bars += [(5001 + side, 101, 1006, 5001 + side, up),                    # engine deck
                  (5002 + side, 132 + pside, 5001 + side, 5011 + side, fore)]    # pylon
         bars.append((6100 + side, 103 + pside, 2001 + side, 6101 + side, up))   # gear bay
         bars += [(6101 + side + i, 151 + i + pside, 6101 + side + i, 6102 + side + i, fore)

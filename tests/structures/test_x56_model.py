@@ -71,7 +71,7 @@ def _mystran_deck(folder: Path, configuration: str) -> Path:
 @pytest.mark.parametrize("configuration", mm.CONFIGURATIONS)
 def test_modes_against_mystran(tmp_path, modes, configuration):
     """34 modes (6 rigid + 28 flexible) of each configuration. Measured: ours vs MYSTRAN within
-    2.2e-8 on every flexible mode (MYSTRAN's OP2 eigenvalues are float32); asserted 1e-5, far
+    2.5e-8 on every flexible mode (MYSTRAN's OP2 eigenvalues are float32); asserted 1e-5, far
     inside the issue's 1 %. Rigid modes below 1e-3 Hz in both."""
     theirs = run_mystran(_mystran_deck(tmp_path, configuration))
     ours = np.asarray(modes[configuration]["frequency"].values, dtype=float)
@@ -118,14 +118,15 @@ def test_tanks_are_the_only_difference():
 
 
 #: Kinds of mode in the reference paper's Table 1 (GVT columns), per configuration, and the ones
-#: our model does not have among its 34 modes: no winglet mode in either (the winglets swing with
-#: the wing-tip torsion and never carry most of a mode's energy, see mode_names.WINGLET_SHARE), and
-#: the EFEW's third bending modes SW3B / AW3B are above its 34th mode (35 Hz).
+#: our model does not have among its 34 modes: the EFEW's antisymmetric second and third bending
+#: (its antisymmetric modes above AW1B up to 36 Hz are torsion, gear, boom and engine modes) and a
+#: FFFW winglet mode (the full tanks make the winglets swing with the wing-tip torsion, and no
+#: mode has them carrying most of the energy, see mode_names.WINGLET_SHARE).
 PAPER_KINDS = {"efew": {"SW1B", "AW1B", "SW1T", "AW1T", "SW2B", "AMLGL", "SMLGL", "BoomH", "AW2B",
                         "SWL", "SW3B", "AW3B", "AMLGFA", "AW2T"},
                "fffw": {"SW1B", "AW1B", "SW1T", "AW1T", "SW2B", "AMLGL", "SMLGL", "BoomH", "SWL",
                         "SW3B", "NLGFA", "AW2T"}}
-NOT_IN_MODEL = {"efew": {"SWL", "SW3B", "AW3B"}, "fffw": {"SWL"}}
+NOT_IN_MODEL = {"efew": {"AW2B", "AW3B"}, "fffw": {"SWL"}}
 
 
 @pytest.mark.parametrize("configuration", mm.CONFIGURATIONS)
