@@ -10,8 +10,8 @@ ballast tanks in the wings and fuel in the centre body. It is a beam ("stick") m
   (lbf s^2/in) by ``PARAM WTMASS 0.00259`` (1/386.1), as in US Nastran decks; inertias in lbm in^2.
   Axes: x aft from a datum 110 in ahead of the centre-body leading edge, y to starboard, z up.
 * structure: CBAR/PBAR/MAT1 beams for the centre-body spine, the wing carry-through, the wings
-  (elastic axis at 40 % chord, properties scaling with chord^3), winglets, engine pylons, the nose
-  boom and nose / main landing gear (uniform straight members). Rigid chords: every wing and
+  (elastic axis at 40 % chord, sections geometric from ``wing_root`` to ``wing_tip``), winglets,
+  engine pylons, the nose boom and nose / main landing gear (uniform straight members). Rigid chords: every wing and
   winglet station has leading- and trailing-edge grids (the GVT's sensor sites and the splines'
   anchors) tied to the elastic-axis grid by RBE2; the engines hang on their pylons by RBE2 (the
   paper's rigid elements). All mass is CONM2 (MAT1 RHO = 0), so lumped and coupled mass agree and
@@ -33,6 +33,7 @@ API (import with ``data/x56_like`` on ``sys.path``; nothing in the packages impo
     deck_texts(params) -> {file name: text}        # the same files as strings (byte-deterministic)
     mass_items(params, "efew") -> list[MassItem]   # every CONM2 for hand sums
     structure_bulk(params) -> list[str]            # structure cards only (for solver cross-checks)
+    write_mode_table(folder, params)               # modes of both decks -> mode_table.md (named)
 
 Hooks for a richer TRUTH model (``data/x56_like/truth/`` builds one with ``dataclasses.replace``):
 ``main_gear_taper`` (tip/root section size of the main-gear leg, with ``main_gear_segments``
@@ -40,8 +41,13 @@ segments of varying PBARs), ``main_gear_bow`` (lateral offset of the leg's middl
 ``engine_mount`` (six CELAS2 stiffnesses between pylon and engine instead of the RBE2),
 ``cable_weight`` (GVT cables, distributed along both wings' elastic axes), ``suspension``
 (bungees at the nose and mid-wings: CELAS2 springs of that vertical stiffness, lb/in, and
-``SUSPENSION_PENDULUM`` times it horizontally, to SPC'd ground grids 60 in above) and ``property_factors`` / ``mass_factors``
-(scatter: (PBAR id, field, factor) and (CONM2 id, factor) applied when the cards are written).
+``SUSPENSION_PENDULUM`` times it horizontally, to SPC'd ground grids 60 in above) and
+``property_factors`` / ``mass_factors`` (scatter: (PBAR id, field, factor) and (CONM2 id, factor)
+applied when the cards are written). Ids: grids by component in ``COMPONENTS`` (left side +1000
+for wing / winglet, +100 for engine and gear); PBAR 101 spine, 102 boom, 103 carry-through, 111-119
+wing segments root to tip, 121 winglet, 132 pylon, 141 nose gear, 151.. main-gear segments, left
+copies +100 (not for ``CENTRE_LINE_PROPERTIES``); CONM2 8xxx (left carry-through, wing, cables
+and winglet +1000; left engine and gear +1), tanks 8901-8902 fuel, 8911-8923 water.
 
 Run ``python data/x56_like/make_model.py`` to rewrite the committed files.
 """
