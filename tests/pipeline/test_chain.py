@@ -8,9 +8,7 @@ CASE`` against the library calls it makes.
 from __future__ import annotations
 
 import json
-import shutil
 import warnings
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -24,10 +22,8 @@ from pipeline.flutter_cards import read_flutter_requests
 from structures.common.errors import UnsupportedCardError
 from structures.common.files import read_dataset
 from structures.common.nastran import read_pynastran
+from tests.pipeline.bah_deck import DECK, deck_copy
 
-ROOT = Path(__file__).resolve().parents[2]
-DECK = ROOT / "data" / "bah_wing" / "bah_plane.bdf"
-BAH_FILES = ("bah_plane.bdf", "structure_bah.inc", "aero_bah.inc", "interface_bah.inc")
 
 
 def _chain(deck, modes, **kw):
@@ -56,15 +52,6 @@ def plain(modes, tmp_path_factory):
 @pytest.fixture(scope="module")
 def damped(modes):
     return _chain(DECK, modes, structural_damping=0.03)
-
-
-def _deck_copy(folder: Path, edit) -> Path:
-    """The BAH deck with its INCLUDE files in ``folder``, the main file edited by ``edit``."""
-    for name in BAH_FILES:
-        shutil.copy(DECK.parent / name, folder / name)
-    path = folder / "bah_plane.bdf"
-    path.write_text(edit(path.read_text()))
-    return path
 
 
 def test_bah_flutter_point_against_nastran(plain):
@@ -143,7 +130,7 @@ def test_structural_damping_raises_the_flutter_speed(plain, damped):
 def test_case_damping_equals_the_deck_route_with_a_constant_table(modes, damped, tmp_path):
     """The case's structural_damping = 0.03 gives the crossings that the deck's own SDAMP selecting
     a TABDMP1 of constant g = 0.03 gives (the independent route through the cards)."""
-    deck = _deck_copy(tmp_path, lambda text: text.replace(
+    deck = deck_copy(tmp_path, lambda text: text.replace(
         "METHOD = 401\n", "METHOD = 401\nSDAMP = 2001\n").replace(
         "+TAB100,0.,0.01,100.,0.005,ENDT", "+TAB100,0.,0.03,100.,0.03,ENDT"))
     (req,) = read_flutter_requests(read_pynastran(deck), str(deck), [502])
@@ -164,7 +151,7 @@ def test_case_damping_equals_the_deck_route_with_a_constant_table(modes, damped,
 def test_flutter_id_override_keeps_its_subcase_sdamp(tmp_path):
     """A FLUTTER id asked for by [flutter] flutter_ids gets the SDAMP of the subcase whose FMETHOD
     names it (Nastran's pairing); an id no FMETHOD names gets the global SDAMP (none here)."""
-    deck = _deck_copy(tmp_path, lambda text: text.replace(
+    deck = deck_copy(tmp_path, lambda text: text.replace(
         "  FMETHOD = 501\n", "  FMETHOD = 501\n  SDAMP = 2001\n"))
     bdf = read_pynastran(deck)
     (fmethod,) = read_flutter_requests(bdf, str(deck))
@@ -177,7 +164,7 @@ def test_flutter_id_override_keeps_its_subcase_sdamp(tmp_path):
 
 
 def test_kdamp_minus_one_is_refused(tmp_path):
-    deck = _deck_copy(tmp_path, lambda text: text.replace("PARAM,LMODES,10",
+    deck = deck_copy(tmp_path, lambda text: text.replace("PARAM,LMODES,10",
                                                           "PARAM,LMODES,10\nPARAM,KDAMP,-1"))
     with pytest.raises(UnsupportedCardError, match="KDAMP.*Fix: remove PARAM KDAMP"):
         read_flutter_requests(read_pynastran(deck), str(deck), [502])

@@ -17,7 +17,6 @@ References:
 from __future__ import annotations
 
 import json
-import shutil
 import warnings
 from pathlib import Path
 
@@ -34,10 +33,8 @@ from pipeline.flutter_cards import deck_damping, read_flutter_requests
 from structures.common.errors import InputError
 from structures.common.files import read_dataset
 from structures.common.nastran import read_pynastran
+from tests.pipeline.bah_deck import DECK, deck_copy
 
-ROOT = Path(__file__).resolve().parents[2]
-DECK = ROOT / "data" / "bah_wing" / "bah_plane.bdf"
-BAH_FILES = ("bah_plane.bdf", "structure_bah.inc", "aero_bah.inc", "interface_bah.inc")
 SOFT = 0.15  # in-vacuo frequency factor of the softened wing
 
 # US76 Table I: geometric altitude [m] -> (density [kg/m^3], speed of sound [m/s])
@@ -52,15 +49,6 @@ def _quiet(fun, *args, **kw):
         warnings.simplefilter("ignore", UserWarning)
         warnings.simplefilter("ignore", RuntimeWarning)
         return fun(*args, **kw)
-
-
-def _deck_copy(folder: Path, edit) -> Path:
-    """The BAH deck with its INCLUDE files in ``folder``, the main file edited by ``edit``."""
-    for name in BAH_FILES:
-        shutil.copy(DECK.parent / name, folder / name)
-    path = folder / "bah_plane.bdf"
-    path.write_text(edit(path.read_text()))
-    return path
 
 
 def _flfact(sid: int, values) -> str:
@@ -161,7 +149,7 @@ def test_matched_line_equals_the_decks_pknl_card(soft, line, tmp_path):
     (req,) = matched_requests(matched, "si", StructuralDamping(), rhoref=1.225)
     cards = ("FLUTTER,503,PKNL,11,12,13\n" + _flfact(11, np.array(req.density) / 1.225)
              + _flfact(12, req.mach) + _flfact(13, req.values) + "ENDDATA")
-    deck = _deck_copy(tmp_path, lambda text: text.replace("ENDDATA", cards))
+    deck = deck_copy(tmp_path, lambda text: text.replace("ENDDATA", cards))
     (card,) = read_flutter_requests(read_pynastran(deck), str(deck), [503])
     np.testing.assert_allclose(card.density, req.density, rtol=1e-15)
     assert card.values == req.values and card.mach == req.mach
@@ -241,12 +229,12 @@ def test_matched_damping_from_the_case_or_the_decks_sdamp(tmp_path):
     bdf = read_pynastran(DECK)  # no SDAMP in its case control
     assert deck_damping(bdf, str(DECK)) == StructuralDamping()
     assert deck_damping(bdf, str(DECK), 0.01) == StructuralDamping(g=0.01, kind="viscous")
-    deck = _deck_copy(tmp_path, lambda text: text.replace(
+    deck = deck_copy(tmp_path, lambda text: text.replace(
         "  FMETHOD = 501\n", "  FMETHOD = 501\n  SDAMP = 2001\n"))
     # TABDMP1 2001: g = 0.01 at 0 Hz, 0.005 at 100 Hz
     assert deck_damping(read_pynastran(deck), str(deck)) == StructuralDamping(
         frequency=(0.0, 100.0), table_g=(0.01, 0.005), kind="viscous")
-    two = _deck_copy(tmp_path, lambda text: text.replace(
+    two = deck_copy(tmp_path, lambda text: text.replace(
         "  FMETHOD = 501\n", "  FMETHOD = 501\n  SDAMP = 2001\n").replace(
         "$SUBCASE 2\n$  FMETHOD = 502\n", "SUBCASE 2\n  FMETHOD = 502\n"))
     with pytest.raises(InputError, match=r"bah_plane.bdf.*SDAMP.*Fix: set \[flutter\] "
