@@ -25,7 +25,6 @@ from structures.common.nastran import read_pynastran
 from tests.pipeline.bah_deck import DECK, deck_copy
 
 
-
 def _chain(deck, modes, **kw):
     with warnings.catch_warnings():
         # DLM box-size advice at the largest k; roots 9-10 beyond the k table at 30 m/s
