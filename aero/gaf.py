@@ -178,9 +178,120 @@ def _warn_k_limit(aero_model, mach: float, ks: np.ndarray) -> None:
         warnings.warn(message, stacklevel=3)
 
 
+def _check_points(machs, ks, method: str) -> tuple[np.ndarray, np.ndarray]:
+    if method not in METHODS:
+        raise InputError(f"generalized_aero_forces: unknown method {method!r}. Fix: use one of "
+                         f"{METHODS}.")
+    machs = np.atleast_1d(np.asarray(machs, dtype=float))
+    ks = np.atleast_1d(np.asarray(ks, dtype=float))
+    if machs.ndim != 1 or ks.ndim != 1 or machs.size == 0 or ks.size == 0 or np.any(ks < 0):
+        raise InputError("generalized_aero_forces: machs and ks must be non-empty 1-D lists, "
+                         "k >= 0. Fix: pass e.g. machs=[0.5], ks=[0.1, 0.5].")
+    return machs, ks
+
+
+def _spline_dofs(aero_model) -> tuple[SplineMatrices, np.ndarray, dict]:
+    """The splines' G_kg, the columns (grid degrees of freedom) that move some box, and the
+    splines' grid positions {grid id: (3,) basic}."""
+    G = spline_matrices(aero_model)
+    used = np.flatnonzero((np.abs(G.h_colloc) + np.abs(G.slope_colloc)
+                           + np.abs(G.h_load)).sum(axis=0) > 0)
+    xyz = {int(g): p for sp in aero_model.splines for g, p in zip(sp.grid_ids, sp.grid_xyz)}
+    return G, used, xyz
+
+
+def grid_aero_forces(aero_model, machs, ks, *, method: str = "quartic") -> xr.Dataset:
+    """Q_gg(M, k): the aerodynamic forces on the splines' grid degrees of freedom, the part of
+    Q_hh that does not depend on the modes.
+
+    With G_kg restricted to the grid degrees of freedom g that move some box,
+    Q_gg = G_kg^T W_kk S_kj A_jj^-1 D_jk G_kg (module docstring) and, for any modes Phi_g of the
+    structure at those degrees of freedom, Q_hh = Phi_g^T Q_gg Phi_g (:func:`project_gaf`). The
+    doublet-lattice matrices (the cost) are computed once for every set of modes: a tuned model,
+    another weight configuration on the same aerodynamic grid.
+
+    Parameters
+    ----------
+    aero_model : aero.model.AeroModel
+    machs : array_like, shape (nm,)
+    ks : array_like, shape (nk,)
+        Reduced frequencies k = omega * b / V, b = REFC / 2.
+    method : {"quartic", "parabolic"}
+
+    Returns
+    -------
+    xarray.Dataset
+        ``Q(mach, k, gdof_i, gdof_j)`` complex with coordinates ``grid(gdof_i)``,
+        ``component(gdof_i)`` (basic 1..6) and the grids' ``x, y, z(gdof_i)``; attrs as
+        :func:`generalized_aero_forces`.
+    """
+    machs, ks = _check_points(machs, ks, method)
+    G, used, xyz = _spline_dofs(aero_model)
+    h_c, s_c, h_l = G.h_colloc[:, used], G.slope_colloc[:, used], G.h_load[:, used]
+    area = np.asarray(aero_model.mesh.area, dtype=float)
+    b = aero_model.refc / 2.0
+    Q = np.empty((machs.size, ks.size, used.size, used.size), dtype=complex)
+    for im, mach in enumerate(machs):
+        _warn_k_limit(aero_model, mach, ks)
+        D = _dlm.dlm_aic(aero_model.mesh, float(mach), ks, refc=aero_model.refc, method=method,
+                         symxz=aero_model.symxz)
+        dcp = pressure_coefficients(D, h_c, s_c, ks, b)
+        Q[im] = np.einsum("bi,b,kbj->kij", h_l, area, dcp)  # G_kg^T S_kj Delta Cp
+    grid, comp = G.grid[used], G.component[used]
+    pos = np.array([xyz[int(g)] for g in grid], dtype=float).reshape(-1, 3)
+    ds = xr.Dataset(
+        {"Q": (("mach", "k", "gdof_i", "gdof_j"), Q)},
+        coords={"mach": machs, "k": ks, "grid": ("gdof_i", grid), "component": ("gdof_i", comp),
+                "x": ("gdof_i", pos[:, 0]), "y": ("gdof_i", pos[:, 1]),
+                "z": ("gdof_i", pos[:, 2])},
+        attrs={"refc": float(aero_model.refc), "rhoref": float(aero_model.rhoref),
+               "symxz": int(aero_model.symxz), "k_convention": K_CONVENTION, "method": method,
+               "deck": aero_model.filename})
+    ds["Q"].attrs["long_name"] = ("aerodynamic force on the spline grids' degrees of freedom per "
+                                  "unit dynamic pressure and unit displacement")
+    return ds
+
+
+def project_gaf(grid_gaf: xr.Dataset, modes_ds: xr.Dataset) -> xr.Dataset:
+    """Q_hh = Phi_g^T Q_gg Phi_g of ``modes_ds`` from :func:`grid_aero_forces`.
+
+    Parameters
+    ----------
+    grid_gaf : xarray.Dataset
+        ``Q(mach, k, gdof_i, gdof_j)`` with its grid coordinates.
+    modes_ds : xarray.Dataset
+        Modes of the structure (DESIGN.md section 6) holding every spline grid, at the positions
+        the aerodynamic deck gives them.
+
+    Returns
+    -------
+    xarray.Dataset
+        As :func:`generalized_aero_forces`.
+    """
+    grid = np.asarray(grid_gaf["grid"].values, dtype=int)
+    xyz = {int(g): (x, y, z) for g, x, y, z in zip(grid, grid_gaf["x"].values,
+                                                  grid_gaf["y"].values, grid_gaf["z"].values)}
+    phi = mode_columns(modes_ds, grid, np.asarray(grid_gaf["component"].values, dtype=int), xyz)
+    Q = np.einsum("gi,mkgh,hj->mkij", phi, np.asarray(grid_gaf["Q"].values), phi)
+    modes = np.asarray(modes_ds["mode"].values)
+    units = modes_ds.attrs.get("units", "model units")
+    ds = xr.Dataset(
+        {"Q": (("mach", "k", "mode_i", "mode_j"), Q)},
+        coords={"mach": grid_gaf["mach"].values, "k": grid_gaf["k"].values, "mode_i": modes,
+                "mode_j": modes},
+        attrs={**{a: grid_gaf.attrs[a] for a in ("refc", "rhoref", "symxz", "k_convention",
+                                                  "method", "deck")},
+               "units": f"Q: area x (mode shape units)^2 ({units}); "
+                        "generalized force = q * Q @ u_h",
+               "modes_source": str(modes_ds.attrs.get("source", ""))})
+    ds["Q"].attrs["long_name"] = "generalized aerodynamic force matrix per unit dynamic pressure"
+    return ds
+
+
 def generalized_aero_forces(aero_model, modes_ds: xr.Dataset, machs, ks, *,
                             method: str = "quartic") -> xr.Dataset:
-    """Q_hh(M, k) of the modes on the aerodynamic model (Nastran's QHH; see module docstring).
+    """Q_hh(M, k) of the modes on the aerodynamic model (Nastran's QHH; see module docstring):
+    :func:`project_gaf` of :func:`grid_aero_forces`.
 
     Parameters
     ----------
@@ -202,36 +313,10 @@ def generalized_aero_forces(aero_model, modes_ds: xr.Dataset, machs, ks, *,
         pressure and unit modal coordinate j); attrs ``refc``, ``rhoref``, ``symxz``,
         ``k_convention``, ``method``, ``units``, ``deck``.
     """
-    if method not in METHODS:
-        raise InputError(f"generalized_aero_forces: unknown method {method!r}. Fix: use one of "
-                         f"{METHODS}.")
-    machs = np.atleast_1d(np.asarray(machs, dtype=float))
-    ks = np.atleast_1d(np.asarray(ks, dtype=float))
-    if machs.ndim != 1 or ks.ndim != 1 or machs.size == 0 or ks.size == 0 or np.any(ks < 0):
-        raise InputError("generalized_aero_forces: machs and ks must be non-empty 1-D lists, "
-                         "k >= 0. Fix: pass e.g. machs=[0.5], ks=[0.1, 0.5].")
-    h_c, s_c, h_l = modal_box_motion(aero_model, modes_ds)
-    area = np.asarray(aero_model.mesh.area, dtype=float)
-    b = aero_model.refc / 2.0
-    Q = np.empty((machs.size, ks.size, h_c.shape[1], h_c.shape[1]), dtype=complex)
-    for im, mach in enumerate(machs):
-        _warn_k_limit(aero_model, mach, ks)
-        D = _dlm.dlm_aic(aero_model.mesh, float(mach), ks, refc=aero_model.refc, method=method,
-                         symxz=aero_model.symxz)
-        dcp = pressure_coefficients(D, h_c, s_c, ks, b)
-        Q[im] = np.einsum("bi,b,kbj->kij", h_l, area, dcp)  # Phi^T G_kg^T S_kj Delta Cp
-    modes = np.asarray(modes_ds["mode"].values)
-    units = modes_ds.attrs.get("units", "model units")
-    ds = xr.Dataset(
-        {"Q": (("mach", "k", "mode_i", "mode_j"), Q)},
-        coords={"mach": machs, "k": ks, "mode_i": modes, "mode_j": modes},
-        attrs={"refc": float(aero_model.refc), "rhoref": float(aero_model.rhoref),
-               "symxz": int(aero_model.symxz), "k_convention": K_CONVENTION, "method": method,
-               "units": f"Q: area x (mode shape units)^2 ({units}); "
-                        "generalized force = q * Q @ u_h",
-               "deck": aero_model.filename, "modes_source": str(modes_ds.attrs.get("source", ""))})
-    ds["Q"].attrs["long_name"] = "generalized aerodynamic force matrix per unit dynamic pressure"
-    return ds
+    _check_points(machs, ks, method)
+    G, used, xyz = _spline_dofs(aero_model)
+    mode_columns(modes_ds, G.grid[used], G.component[used], xyz)  # before the costly part
+    return project_gaf(grid_aero_forces(aero_model, machs, ks, method=method), modes_ds)
 
 
 def interpolate_q(q_ds: xr.Dataset, mach: float, k) -> np.ndarray:

@@ -296,3 +296,25 @@ def test_modes_must_hold_the_spline_grids(tmp_path):
     moved = modes.assign_coords(x=modes["x"] + 0.5)
     with pytest.raises(InputError, match=r"other positions in the modes Dataset"):
         generalized_aero_forces(half, moved, [0.0], [0.1])
+
+
+def test_grid_gaf_projects_to_the_modal_gaf_of_any_modes(tmp_path):
+    """Q_gg computed once gives, for two different mode sets, the Q_hh of the modal formula
+    Phi^T G^T S A^-1 D G Phi evaluated directly here (box motion of the modes, one solve per k)."""
+    from aero import dlm
+    from aero.gaf import grid_aero_forces, modal_box_motion, pressure_coefficients, project_gaf
+
+    half, _ = half_and_full_decks(tmp_path, 1)
+    qgg = grid_aero_forces(half, [0.0, 0.5], [0.1, 0.6])
+    assert qgg["Q"].dims == ("mach", "k", "gdof_i", "gdof_j")
+    for fields in ([lambda x, y: np.ones_like(x), lambda x, y: -(x - 0.5)],
+                   [lambda x, y: y ** 2, lambda x, y: y * (x - 0.3), lambda x, y: x * x]):
+        modes = synthetic_modes(half, fields)
+        h_c, s_c, h_l = modal_box_motion(half, modes)
+        for im, mach in enumerate((0.0, 0.5)):
+            D = dlm.dlm_aic(half.mesh, mach, np.array([0.1, 0.6]), refc=half.refc,
+                            symxz=half.symxz)
+            dcp = pressure_coefficients(D, h_c, s_c, np.array([0.1, 0.6]), half.refc / 2)
+            direct = np.einsum("bi,b,kbj->kij", h_l, half.mesh.area, dcp)
+            got = project_gaf(qgg, modes)["Q"].values[im]
+            np.testing.assert_allclose(got, direct, rtol=1e-10, atol=1e-12 * np.abs(direct).max())
