@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from aero.gaf import generalized_aero_forces
+from aero.gaf import generalized_aero_forces, grid_aero_forces, project_gaf
 from aero.model import read_aero_model
 from flutter.participation import crossing_participation
 from flutter.results import summary_entries, write_flutter
@@ -121,6 +121,45 @@ def _gaf_ks(aero_ks: np.ndarray, requests) -> np.ndarray:
     return ks[ks > 0]
 
 
+def _gaf_points(aero, requests, matched: MatchedSettings | None) -> tuple:
+    """(machs, ks) of the GAFs the requests need: MKAERO1's Mach numbers (the matched lines'
+    own with [flutter.matched]) and :func:`_gaf_ks`."""
+    machs = aero.machs if matched is None else np.asarray(matched.mach, dtype=float)
+    return np.asarray(machs, dtype=float), _gaf_ks(aero.ks, requests)
+
+
+def _covering(grid_gaf: xr.Dataset, machs, ks, kernel: str, deck: str) -> xr.Dataset:
+    """``grid_gaf`` at exactly ``machs`` x ``ks`` (it must hold them, with the same kernel)."""
+    have_m, have_k = grid_gaf["mach"].values, grid_gaf["k"].values
+    im = [int(np.flatnonzero(np.isclose(have_m, m, rtol=0, atol=1e-9))[0])
+          for m in machs if np.isclose(have_m, m, rtol=0, atol=1e-9).any()]
+    ik = [int(np.flatnonzero(np.isclose(have_k, k, rtol=1e-12, atol=0))[0])
+          for k in ks if np.isclose(have_k, k, rtol=1e-12, atol=0).any()]
+    if len(im) != len(machs) or len(ik) != len(ks) or grid_gaf.attrs.get("method") != kernel:
+        raise InputError(f"deck {deck}: the grid GAFs given (Mach {have_m.tolist()}, "
+                         f"{have_k.size} k, {grid_gaf.attrs.get('method')} kernel) do not cover "
+                         f"what its flutter requests need (Mach {np.asarray(machs).tolist()}, "
+                         f"{len(ks)} k, {kernel} kernel). Fix: compute them with pipeline.chain."
+                         "deck_grid_gaf for the same deck and settings.")
+    return grid_gaf.isel(mach=im, k=ik)
+
+
+def deck_grid_gaf(deck, *, kernel: str = "quartic", flutter_ids=None,
+             structural_damping: float | None = None, units: str | None = None,
+             matched: MatchedSettings | None = None, progress=None) -> xr.Dataset:
+    """The deck's grid GAFs (:func:`aero.gaf.grid_aero_forces`) at the Mach numbers and reduced
+    frequencies its flutter requests need (arguments as :func:`flutter_chain`): computed once,
+    they serve every set of modes of that aerodynamic grid (:func:`flutter_chain`'s
+    ``grid_gaf``)."""
+    bdf = read_pynastran(deck)
+    requests = _requests(bdf, str(deck), flutter_ids, structural_damping, matched, units)
+    aero = read_aero_model(bdf)
+    machs, ks = _gaf_points(aero, requests, matched)
+    if progress is not None:
+        progress(f"grid GAFs: {len(machs)} Mach x {ks.size} k")
+    return grid_aero_forces(aero, machs, ks, method=kernel)
+
+
 def _requests(bdf, deck: str, flutter_ids, structural_damping: float | None,
               matched: MatchedSettings | None, units: str | None) -> list:
     """The deck's FLUTTER requests, or the matched lines of ``matched`` in their place."""
@@ -220,7 +259,8 @@ def flutter_chain(deck: str | os.PathLike, modes: xr.Dataset, *, kernel: str = "
                   rigid_hz: float = 0.05, units: str | None = None,
                   out_dir: str | os.PathLike | None = None,
                   configuration: str | None = None, progress=None,
-                  matched: MatchedSettings | None = None) -> dict:
+                  matched: MatchedSettings | None = None,
+                  grid_gaf: xr.Dataset | None = None) -> dict:
     """GAFs, flutter and participation of a deck's FLUTTER requests on ``modes``.
 
     Parameters
@@ -254,6 +294,10 @@ def flutter_chain(deck: str | os.PathLike, modes: xr.Dataset, *, kernel: str = "
         deck's FLUTTER cards (with ``flutter_ids`` an error; needs ``units``); the GAFs are then
         computed at the lines' Mach numbers (MKAERO1's reduced frequencies) and every crossing
         carries its altitude, KTAS and KEAS.
+    grid_gaf : xarray.Dataset, optional
+        The deck's grid GAFs (:func:`deck_grid_gaf`, :func:`aero.gaf.grid_aero_forces`) at the Mach
+        numbers and reduced frequencies these requests need: Q_hh is then projected on the modes
+        and no doublet-lattice matrix is computed.
 
     Returns
     -------
@@ -271,11 +315,13 @@ def flutter_chain(deck: str | os.PathLike, modes: xr.Dataset, *, kernel: str = "
         modes = modes.assign_attrs(units=units)  # modes.nc and the GAFs' labels name the system
     requests = _requests(bdf, str(deck), flutter_ids, structural_damping, matched, units)
     aero = read_aero_model(bdf)
-    ks = _gaf_ks(aero.ks, requests)
-    machs = aero.machs if matched is None else np.asarray(matched.mach, dtype=float)
-    if progress is not None:
-        progress(f"GAFs: {len(machs)} Mach x {ks.size} k, {modes.sizes['mode']} modes")
-    gaf = generalized_aero_forces(aero, modes, machs, ks, method=kernel)
+    machs, ks = _gaf_points(aero, requests, matched)
+    if grid_gaf is None:
+        if progress is not None:
+            progress(f"GAFs: {len(machs)} Mach x {ks.size} k, {modes.sizes['mode']} modes")
+        gaf = generalized_aero_forces(aero, modes, machs, ks, method=kernel)
+    else:
+        gaf = project_gaf(_covering(grid_gaf, machs, ks, kernel, str(deck)), modes)
     results = solve_flutter(modes, gaf, requests, units, progress=progress)
     if matched is not None:
         results = label_lines(results, matched, units)
@@ -299,15 +345,15 @@ def _flutter_ids(settings: FlutterSettings, flutter_ids) -> list | None:
 
 def case_flutter(case: Case, config: Configuration, modes: xr.Dataset,
                  out_dir: str | os.PathLike | None = None, flutter_ids=None,
-                 progress=None) -> dict:
+                 progress=None, grid_gaf: xr.Dataset | None = None) -> dict:
     """:func:`flutter_chain` of one configuration with the case's settings.
 
     Kernel, FLUTTER ids (or the matched points of ``[flutter.matched]``) and structural damping
     from ``[flutter]`` (``flutter_ids``, a command-line override, replaces the case's; both empty:
     the deck's FMETHOD selection),
     ``rigid_hz`` from ``[selection]``, the unit system from ``units``. The flutter stage of
-    ``pipeline run`` and ``pipeline flutter CASE`` both call this; ``progress`` as
-    :func:`flutter_chain`.
+    ``pipeline run`` and ``pipeline flutter CASE`` both call this; ``progress`` and ``grid_gaf``
+    as :func:`flutter_chain` (:func:`case_grid_gaf`).
 
     Returns
     -------
@@ -319,7 +365,43 @@ def case_flutter(case: Case, config: Configuration, modes: xr.Dataset,
                          flutter_ids=_flutter_ids(settings, flutter_ids),
                          structural_damping=settings.structural_damping,
                          rigid_hz=case.selection.rigid_hz, units=case.units, out_dir=out_dir,
-                         configuration=config.name, progress=progress, matched=settings.matched)
+                         configuration=config.name, progress=progress, matched=settings.matched,
+                         grid_gaf=grid_gaf)
+
+
+def case_aero_signature(case: Case, config: Configuration) -> str:
+    """SHA-256 of what :func:`case_grid_gaf` computes from: the aerodynamic mesh, the splines
+    (their G_kg and grid positions), REFC, SYMXZ, the Mach numbers, reduced frequencies and
+    kernel. Configurations with equal signatures (e.g. two weight configurations of one airframe)
+    share their grid GAFs."""
+    import hashlib
+
+    from aero.gaf import spline_matrices
+
+    settings = case.flutter or FlutterSettings()
+    bdf = read_pynastran(config.deck)
+    requests = _requests(bdf, str(config.deck), _flutter_ids(settings, None),
+                         settings.structural_damping, settings.matched, case.units)
+    aero = read_aero_model(bdf)
+    machs, ks = _gaf_points(aero, requests, settings.matched)
+    digest = hashlib.sha256(repr((float(aero.refc), int(aero.symxz), settings.kernel)).encode())
+    for obj in (aero.mesh, spline_matrices(aero)):
+        for name, value in sorted(vars(obj).items()):
+            if isinstance(value, np.ndarray):
+                digest.update(name.encode())
+                digest.update(np.ascontiguousarray(value).tobytes())
+    for array in (machs, ks):
+        digest.update(np.ascontiguousarray(array, dtype=float).tobytes())
+    return digest.hexdigest()
+
+
+def case_grid_gaf(case: Case, config: Configuration, progress=None) -> xr.Dataset:
+    """:func:`deck_grid_gaf` of one configuration's deck with the case's ``[flutter]`` settings."""
+    settings = case.flutter or FlutterSettings()
+    return deck_grid_gaf(config.deck, kernel=settings.kernel,
+                         flutter_ids=_flutter_ids(settings, None),
+                         structural_damping=settings.structural_damping, units=case.units,
+                         matched=settings.matched, progress=progress)
 
 
 def check_flutter_requests(case: Case, flutter_ids=None) -> None:

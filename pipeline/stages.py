@@ -12,7 +12,10 @@ stage                       reads                                    writes
                                                                      ``mass_properties.nc``
 ``stageN/correlation/C``    modes, mass properties, GVT file         ``stageN/C/correlation.nc``,
                                                                      ``stageN/C/correlation/*.png``
-``stageN/flutter/C``        modes, deck, [flutter], [selection]      ``stageN/C/flutter/*``
+``stage0/aero/C``           deck, [flutter]                          ``stage0/aero/C/grid_gaf.nc``
+                            (one per distinct aerodynamic grid)
+``stageN/flutter/C``        modes, deck, grid GAFs, [flutter],       ``stageN/C/flutter/*``
+                            [selection]
 ``stageN/selection``        participation, correlation, [selection]  ``stageN/selection.nc``,
                             [loop]                                   ``selection.txt``,
                                                                      ``targets.json`` (with [loop])
@@ -80,13 +83,24 @@ def _correlation(ctx: StageContext, config, n: int) -> None:
             f"{worst:.2f} %")
 
 
-def _flutter(ctx: StageContext, case, config, n: int, progress=None) -> None:
+def _aero(ctx: StageContext, case, config, progress=None) -> None:
+    from pipeline.chain import case_grid_gaf
+
+    gaf = case_grid_gaf(case, config, progress=progress)
+    write_dataset(gaf, ctx.output(f"stage0/aero/{config.name}/grid_gaf.nc"))
+    return (f"grid GAFs on {gaf.sizes['gdof_i']} spline degrees of freedom, "
+            f"{gaf.sizes['mach']} Mach x {gaf.sizes['k']} k")
+
+
+def _flutter(ctx: StageContext, case, config, n: int, aero: str, progress=None) -> None:
     from pipeline.chain import case_flutter
     from structures.modes import read_modes
 
     modes = read_modes(ctx.run_dir / f"stage{n}/{config.name}/modes.nc")
     out = ctx.output(f"stage{n}/{config.name}/flutter/x").parent
-    result = case_flutter(case, _deck(ctx, config, n), modes, out_dir=out, progress=progress)
+    grid = read_dataset(ctx.run_dir / f"stage0/aero/{aero}/grid_gaf.nc")
+    result = case_flutter(case, _deck(ctx, config, n), modes, out_dir=out, progress=progress,
+                          grid_gaf=grid)
     flutter = [c for c in result["summary"] if c["kind"] == "flutter"]
     if not flutter:
         return "no flutter crossing"
@@ -210,6 +224,20 @@ def _tuning_settings(case) -> dict:
 
 
 # ------------------------------------------------------------------------------------ the plan
+def aero_groups(case) -> dict:
+    """configuration -> (the first configuration with the same aerodynamic grid, Mach numbers,
+    reduced frequencies and kernel, whose grid GAFs it uses; that signature,
+    pipeline.chain.case_aero_signature)."""
+    from pipeline.chain import case_aero_signature
+
+    first, out = {}, {}
+    for c in case.configurations:
+        signature = case_aero_signature(case, c)
+        out[c.name] = (first.setdefault(signature, c.name), signature)
+    return out
+
+
+
 def stage_plan(case, n: int, display=None) -> list[Stage]:
     """The stages of stage ``n`` (0: baseline; n >= 1: a tuning stage and its analyses);
     ``display`` (pipeline.progress.Display) is told the optimiser's iterations and the flutter
@@ -217,6 +245,15 @@ def stage_plan(case, n: int, display=None) -> list[Stage]:
     iteration = None if display is None else display.iteration
     note = None if display is None else display.note
     out = []
+    aero = aero_groups(case) if case.flutter is not None else {}
+    if n == 0:   # the grid GAFs, once per aerodynamic grid, serve every stage's modes
+        for config in case.configurations:
+            if config.name in aero and aero[config.name][0] == config.name:
+                out.append(Stage(f"stage0/aero/{config.name}",
+                                 partial(_aero, case=case, config=config, progress=note),
+                                 settings={**_flutter_settings(case),
+                                           "signature": aero[config.name][1]},
+                                 files=tuple(deck_files(config.deck))))
     after_deck = ()
     if n >= 1:
         files = tuple(f for c in case.configurations for f in (*deck_files(c.deck), c.gvt))
@@ -237,9 +274,11 @@ def stage_plan(case, n: int, display=None) -> list[Stage]:
                              files=(c.gvt,), after=(f"stage{n}/modes/{c.name}",)))
         if case.flutter is not None:
             out.append(Stage(f"stage{n}/flutter/{c.name}",
-                             partial(_flutter, case=case, config=c, n=n, progress=note),
+                             partial(_flutter, case=case, config=c, n=n,
+                                     aero=aero[c.name][0], progress=note),
                              settings=_flutter_settings(case), files=files,
-                             after=(f"stage{n}/modes/{c.name}",) + after_deck))
+                             after=(f"stage{n}/modes/{c.name}",
+                                    f"stage0/aero/{aero[c.name][0]}") + after_deck))
     if case.flutter is not None:
         after = tuple(s.name for s in out if "/flutter/" in s.name or "/correlation/" in s.name)
         settings = {"selection": [case.selection.primary, case.selection.secondary,

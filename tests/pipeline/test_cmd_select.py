@@ -41,8 +41,10 @@ def test_select_rejects_bad_thresholds(text, capsys):
 def test_status_lists_done_stale_missing(tmp_path, capsys):
     out = tmp_path / "run"
     assert main(["status", "--out", str(out)]) == 0
-    rows = capsys.readouterr().out.splitlines()[1:]
-    assert rows[0].split()[:3] == ["stage0/modes/baseline", "missing", "never"]
+    rows = {r.split()[0]: r.split()[1:3] for r in capsys.readouterr().out.splitlines()[1:]}
+    assert rows["stage0/modes/baseline"] == ["missing", "never"]
+    # one aerodynamic grid for both configurations: one grid-GAF stage
+    assert [name for name in rows if name.startswith("stage0/aero/")] == ["stage0/aero/baseline"]
     assert main(["select", "--out", str(out)]) == 0            # the baseline stages only
     capsys.readouterr()
     assert main(["status", "--out", str(out)]) == 0

@@ -237,7 +237,7 @@ def test_changed_gvt_reruns_correlation_and_after_but_not_the_modes(reference, c
     run_dir = _copy_run(reference, "gvt")
     before = _manifest(run_dir)
     kept = [f"stage0/modes/{c}" for c in CONFIGS] + [f"stage0/flutter/{c}" for c in CONFIGS] + \
-        ["stage0/correlation/fuel"]
+        ["stage0/correlation/fuel", "stage0/aero/baseline"]
     mtimes = _mtimes(run_dir, kept)
 
     status = _status(case, run_dir, capsys)
@@ -287,7 +287,9 @@ def test_pipeline_flutter_and_pipeline_run_give_the_same_flutter_points(referenc
 
 def test_from_flutter_reruns_flutter_and_after_not_modes_or_correlation(reference):
     run_dir = _copy_run(reference, "from_flutter")
-    kept = [f"stage0/{s}/{c}" for s in ("modes", "correlation") for c in CONFIGS]
+    # both configurations share the baseline's grid GAFs (one aerodynamic grid)
+    kept = [f"stage0/{s}/{c}" for s in ("modes", "correlation") for c in CONFIGS] + \
+        ["stage0/aero/baseline"]
     rerun = [name for name in _manifest(run_dir) if name not in kept]
     assert {f"stage0/flutter/{c}" for c in CONFIGS} | {"stage0/selection", "flutter_change",
                                                        "report"} <= set(rerun)

@@ -122,3 +122,33 @@ def test_stages_reading_decks_declare_their_include_files(case):
     # stage n >= 1 analyses read the tuned deck, an output of stage n's tuning
     for name in ("stage1/modes/baseline", "stage1/flutter/baseline"):
         assert "stage1/tuning" in _stage(case, name).after, name
+
+
+def test_configurations_share_grid_gafs_only_on_one_aerodynamic_grid(case, tmp_path):
+    """The example's two configurations (one airframe, two mass loadings) share one grid-GAF
+    stage; a configuration whose aerodynamic grid differs (one more chordwise box row) gets its
+    own, and its flutter stages read that one."""
+    names = [s.name for s in stage_plan(case, 0) if s.name.startswith("stage0/aero/")]
+    assert names == ["stage0/aero/baseline"]
+    assert "stage0/aero/baseline" in _stage(case, "stage1/flutter/fuel").after
+    example = CASE.parent
+    for path in example.iterdir():
+        if path.is_file():
+            (tmp_path / path.name).write_bytes(path.read_bytes())
+    fuel = (tmp_path / "bah_plane_fuel.bdf").read_text()
+    aero = (tmp_path / "aero_bah.inc").read_text()
+    (tmp_path / "aero_fuel.inc").write_text(aero)
+    (tmp_path / "bah_plane_fuel.bdf").write_text(fuel.replace("aero_bah.inc", "aero_fuel.inc"))
+    same = read_case(tmp_path / "case.toml")
+    assert [s.name for s in stage_plan(same, 0) if "/aero/" in s.name] == ["stage0/aero/baseline"]
+    lines = aero.splitlines()
+    caero = next(i for i, line in enumerate(lines) if line.startswith("CAERO1"))
+    fields = lines[caero].split(",")                           # free field: CAERO1,EID,PID,CP,
+    fields[5] = str(int(fields[5]) + 1)                        # NSPAN,NCHORD: one more box row
+    lines[caero] = ",".join(fields)
+    (tmp_path / "aero_fuel.inc").write_text("\n".join(lines) + "\n")
+    other = read_case(tmp_path / "case.toml")
+    plan = stage_plan(other, 0)
+    assert [s.name for s in plan if "/aero/" in s.name] == ["stage0/aero/baseline",
+                                                            "stage0/aero/fuel"]
+    assert "stage0/aero/fuel" in next(s for s in plan if s.name == "stage0/flutter/fuel").after
