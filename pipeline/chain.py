@@ -395,6 +395,16 @@ def case_aero_signature(case: Case, config: Configuration) -> str:
     return digest.hexdigest()
 
 
+def aero_groups(case: Case) -> dict:
+    """configuration -> (the first configuration with the same :func:`case_aero_signature`, whose
+    grid GAFs it uses; that signature)."""
+    first, out = {}, {}
+    for c in case.configurations:
+        signature = case_aero_signature(case, c)
+        out[c.name] = (first.setdefault(signature, c.name), signature)
+    return out
+
+
 def case_grid_gaf(case: Case, config: Configuration, progress=None) -> xr.Dataset:
     """:func:`deck_grid_gaf` of one configuration's deck with the case's ``[flutter]`` settings."""
     settings = case.flutter or FlutterSettings()

@@ -39,11 +39,13 @@ def run(args) -> int:
     file: for every configuration the same two library calls as ``pipeline run``
     (:func:`pipeline.chain.configuration_modes` with the configuration's nmodes and mass option,
     :func:`pipeline.chain.case_flutter` with the case's ``[flutter]`` and ``[selection]``
-    settings); ``--nmodes`` / ``--flutter-id`` override them. All outputs are written only when
+    settings, on the grid GAFs that configurations with one aerodynamic grid share,
+    :func:`pipeline.chain.aero_groups`); ``--nmodes`` / ``--flutter-id`` override them (with
+    ``--flutter-id`` each configuration computes its own GAFs). All outputs are written only when
     every configuration has finished."""
     # here, not when every command's parser is built
-    from pipeline.chain import (case_flutter, check_flutter_requests, configuration_modes,
-                                deck_modes, flutter_chain)
+    from pipeline.chain import (aero_groups, case_flutter, case_grid_gaf, check_flutter_requests,
+                                configuration_modes, deck_modes, flutter_chain)
 
     target = Path(args.target)
     if args.out:
@@ -53,13 +55,22 @@ def run(args) -> int:
 
         case = read_case(target)
         check_flutter_requests(case, args.flutter_id)
-        done = []
+        done, grids = [], {}
+        groups = aero_groups(case) if args.flutter_id is None else {}
         with staged_folder(args.out) if args.out else nullcontext() as staged:
             for conf in case.configurations:
                 with running(f"flutter/{conf.name}"):
+                    grid = None
+                    if conf.name in groups:
+                        leader = groups[conf.name][0]
+                        if leader not in grids:
+                            grids[leader] = case_grid_gaf(case, next(
+                                c for c in case.configurations if c.name == leader))
+                        grid = grids[leader]
                     modes, _ = configuration_modes(conf, args.nmodes)
                     out = None if staged is None else staged / conf.name
-                    done.append((conf.name, case_flutter(case, conf, modes, out, args.flutter_id)))
+                    done.append((conf.name, case_flutter(case, conf, modes, out, args.flutter_id,
+                                                         grid_gaf=grid)))
         for name, res in done:
             _print(name, res["summary"])
         if args.out:

@@ -224,20 +224,6 @@ def _tuning_settings(case) -> dict:
 
 
 # ------------------------------------------------------------------------------------ the plan
-def aero_groups(case) -> dict:
-    """configuration -> (the first configuration with the same aerodynamic grid, Mach numbers,
-    reduced frequencies and kernel, whose grid GAFs it uses; that signature,
-    pipeline.chain.case_aero_signature)."""
-    from pipeline.chain import case_aero_signature
-
-    first, out = {}, {}
-    for c in case.configurations:
-        signature = case_aero_signature(case, c)
-        out[c.name] = (first.setdefault(signature, c.name), signature)
-    return out
-
-
-
 def stage_plan(case, n: int, display=None) -> list[Stage]:
     """The stages of stage ``n`` (0: baseline; n >= 1: a tuning stage and its analyses);
     ``display`` (pipeline.progress.Display) is told the optimiser's iterations and the flutter
@@ -245,6 +231,8 @@ def stage_plan(case, n: int, display=None) -> list[Stage]:
     iteration = None if display is None else display.iteration
     note = None if display is None else display.note
     out = []
+    from pipeline.chain import aero_groups
+
     aero = aero_groups(case) if case.flutter is not None else {}
     if n == 0:   # the grid GAFs, once per aerodynamic grid, serve every stage's modes
         for config in case.configurations:
