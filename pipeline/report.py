@@ -25,6 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
+from flutter.summary import classify
 from pipeline.report_figures import (boundary_figure, figure_data_uri, png_data_uri, vg_overlay)
 from pipeline.report_tables import (correlation_section, design_change_section, fmt,
                                     mass_section, modes_section, note, selection_roles,
@@ -117,7 +118,49 @@ def _overview(case, stages: list[Path], labels: UnitLabels) -> str:
     return out
 
 
-def _flutter_change_section(run_dir: Path, labels: UnitLabels) -> str:
+def mechanisms(folder: Path, config: str) -> list[tuple]:
+    """Flutter mechanism of every flutter point of one stage and configuration.
+
+    Parameters
+    ----------
+    folder : Path
+        The stage folder (``stage<n>/``).
+    config : str
+        The configuration.
+
+    Returns
+    -------
+    list of tuple
+        ``(case, root, flutter_mode, velocity, mechanism)`` per flutter point of
+        ``<config>/flutter/participation.nc`` ([] without one): :func:`flutter.summary.classify`
+        ("body-freedom" when the rigid-body modes take >= 30 % of the root's participation, else
+        the two most participating flexible modes), each mode named by its paired GVT test mode
+        (``<config>/correlation.nc`` ``test_name`` / ``paired_fe_mode``; "mode n" when unpaired).
+    """
+    path = folder / config / "flutter" / "participation.nc"
+    if not path.exists():
+        return []
+    part = read_dataset(path)
+    corr_path = folder / config / "correlation.nc"
+    corr = read_dataset(corr_path) if corr_path.exists() else None
+    names = ({} if corr is None or "test_name" not in corr else
+             {int(fe): str(name) for fe, name in zip(corr["paired_fe_mode"].values,
+                                                     corr["test_name"].values) if str(name)})
+    return [(int(part["case"].values[i]), int(part["root"].values[i]),
+             int(part["flutter_mode"].values[i]), float(part["velocity"].values[i]),
+             classify(part, i, names)) for i in range(part.sizes["flutter_point"])]
+
+
+def _mechanism_of(points: list[tuple], entry: dict) -> str:
+    """Mechanism of one summary.json crossing (same case, root and speed); "\u2013" if none."""
+    for case, root, _, velocity, name in points:
+        if (case == entry.get("case", 0) and root == entry["root"]
+                and np.isclose(velocity, entry["velocity"], rtol=1e-9)):
+            return name
+    return "\u2013"
+
+
+def _flutter_change_section(run_dir: Path, case, stages: list[Path], labels: UnitLabels) -> str:
     head = '<h2 id="table5">Flutter speed and frequency per stage (paper Table 5)</h2>'
     path = run_dir / "flutter_change.nc"
     if not path.exists():
@@ -128,12 +171,15 @@ def _flutter_change_section(run_dir: Path, labels: UnitLabels) -> str:
         return head + note("No flutter crossing at any stage, Mach or configuration.")
     v_u = fc["velocity"].attrs.get("units", labels.velocity)
     d_u = fc["density"].attrs.get("units", labels.density)
-    stages = fc["stage"].values
+    numbers = fc["stage"].values
+    named = {(k, c.name): {(p[0], p[2]): p[4] for p in mechanisms(folder, c.name)}
+             for k, folder in enumerate(stages) for c in case.configurations}
     header = ["configuration", "Mach [-]", f"density [{d_u}]", "flutter mode",
-              f"stage 0 speed [{v_u}]", "stage 0 frequency [Hz]"]
-    for k in stages[1:]:
+              f"stage 0 speed [{v_u}]", "stage 0 frequency [Hz]", "stage 0 mechanism"]
+    for k in numbers[1:]:
         header += [f"stage {k} speed [{v_u}]", f"stage {k} speed change [%]",
-                   f"stage {k} frequency [Hz]", f"stage {k} frequency change [%]"]
+                   f"stage {k} frequency [Hz]", f"stage {k} frequency change [%]",
+                   f"stage {k} mechanism"]
     rows = []
     for config in fc["configuration"].values:
         for case in fc["case"].values:
@@ -143,15 +189,21 @@ def _flutter_change_section(run_dir: Path, labels: UnitLabels) -> str:
                     continue
                 row = [str(config), fmt(one["mach"], ".4g"), fmt(one["density"], ".5g"),
                        ordinal(int(mode)), fmt(one["velocity"].sel(stage=0), ".5g"),
-                       fmt(one["frequency"].sel(stage=0), ".4g")]
-                for k in stages[1:]:
+                       fmt(one["frequency"].sel(stage=0), ".4g"),
+                       named.get((0, str(config)), {}).get((int(case), int(mode)), "\u2013")]
+                for k in numbers[1:]:
                     at = one.sel(stage=k)
                     row += [fmt(at["velocity"], ".5g"), fmt(at["velocity_change"], "+.2f"),
-                            fmt(at["frequency"], ".4g"), fmt(at["frequency_change"], "+.2f")]
+                            fmt(at["frequency"], ".4g"), fmt(at["frequency_change"], "+.2f"),
+                            named.get((int(k), str(config)), {}).get((int(case), int(mode)),
+                                                                      "\u2013")]
                 rows.append(row)
     return (head + "<p>The n-th flutter crossing (by speed) of each sweep at stage k against the "
             "n-th at stage 0; change = 100 (stage k - stage 0) / stage 0, signed (positive: "
-            "faster / higher). \u2013: no such crossing at that stage (no change is given).</p>"
+            "faster / higher). \u2013: no such crossing at that stage (no change is given). "
+            "Mechanism: body-freedom when the rigid-body modes take >= 30 % of the root's "
+            "participation, else its two most participating flexible modes, named by their "
+            "paired GVT test modes (\"mode n\": unpaired).</p>"
             + table(header, rows, table_id="flutter-change"))
 
 
@@ -203,14 +255,14 @@ def _overlay_section(case, stages: list[Path], labels: UnitLabels) -> str:
     return out
 
 
-def _crossing_table(entries: list[dict], labels: UnitLabels) -> str:
+def _crossing_table(entries: list[dict], points: list[tuple], labels: UnitLabels) -> str:
     if not entries:
         return note("No flutter or divergence crossing in the analysed range.")
     rows = [(e["kind"], e["root"], fmt(e["mach"], ".4g"), fmt(e["density"], ".5g"),
-             fmt(e["velocity"], ".5g"), fmt(e["frequency"], ".4g"))
+             fmt(e["velocity"], ".5g"), fmt(e["frequency"], ".4g"), _mechanism_of(points, e))
             for e in sorted(entries, key=lambda e: (e.get("case", 0), e["velocity"]))]
     return table(("kind", "root", "Mach [-]", f"density [{labels.density}]",
-                  f"velocity [{labels.velocity}]", "frequency [Hz]"), rows)
+                  f"velocity [{labels.velocity}]", "frequency [Hz]", "mechanism"), rows)
 
 
 def _stage_section(k: int, folder: Path, case, labels: UnitLabels) -> str:
@@ -238,8 +290,8 @@ def _stage_section(k: int, folder: Path, case, labels: UnitLabels) -> str:
             out += mass_section(read_dataset(base / "mass_properties.nc"), corr, labels, where)
         summary = _read_json(base / "flutter" / "summary.json")
         if summary is not None:
-            out += f"<h4>{html.escape(where)}: flutter crossings</h4>" + _crossing_table(summary,
-                                                                                        labels)
+            out += (f"<h4>{html.escape(where)}: flutter crossings</h4>" +
+                    _crossing_table(summary, mechanisms(folder, config.name), labels))
     out += selection_section(k, folder / "selection.nc")
     return out
 
@@ -270,7 +322,7 @@ def write_report(case, run_dir, *, out=None) -> Path:
     run_dir = Path(run_dir)
     labels = unit_labels(case.units)
     stages = stage_folders(run_dir, case)
-    body = (_overview(case, stages, labels) + _flutter_change_section(run_dir, labels) +
+    body = (_overview(case, stages, labels) + _flutter_change_section(run_dir, case, stages, labels) +
             (_boundary_section(case, stages, labels) + _overlay_section(case, stages, labels)
              if case.flutter is not None else
              note("No [flutter] section in the case: no flutter boundary and no V-g / V-f.")) +

@@ -14,10 +14,10 @@ import xarray as xr
 
 from pipeline.case import Case, Configuration, LoopSettings
 from pipeline.flutter_change import flutter_change
-from pipeline.report import write_report
+from pipeline.report import mechanisms, write_report
 from pipeline.report_figures import figure_data_uri, vg_overlay
 from structures.common.errors import InputError
-from structures.common.files import read_dataset
+from structures.common.files import read_dataset, write_dataset
 from tests.pipeline.run_fixture import (CONFIGS, CROSSINGS, DESIGN, EXPECTED_CHANGE, STOP_REASON,
                                         make_run)
 
@@ -26,7 +26,8 @@ DASH = "\u2013"
 NAME_HEADERS = {"configuration", "deck", "GVT", "stage", "standard", "stop reason", "test mode",
                 "FE mode", "name", "check", "unit", "kind", "root", "flutter mode",
                 "design variable", "acceptance check", "limits", "configuration:test mode",
-                "FE mode before", "FE mode after", "selection role"}
+                "FE mode before", "FE mode after", "selection role", "mechanism",
+                "stage 0 mechanism", "stage 1 mechanism"}
 
 
 class Tables(HTMLParser):
@@ -94,6 +95,41 @@ def test_table5_entries_and_signs_by_hand(run):
             assert float(row["stage 0 speed [m/s]"]) == pytest.approx(v0, rel=1e-12)
             assert float(row["stage 0 frequency [Hz]"]) == pytest.approx(f0, rel=1e-12)
     assert rows[("FFFW", 0.2, 1)]["stage 1 speed change [%]"].startswith("-")   # slower: negative
+
+
+#: by hand from run_fixture.PARTICIPATION (modes 1 rigid, 2..4 flexible; test modes SW1B, SW1T,
+#: SW2B paired with FE modes 2, 3, 4): 1st crossings rigid 20 % < 30 %, top flexible modes 2 (55 %)
+#: and 3 (20 %); 2nd crossings rigid 10 %, modes 3 (70 %) and 2 (15 %)
+FIRST, SECOND = "SW1B-SW1T (bending-torsion)", "SW1T-SW1B (bending-torsion)"
+
+
+def test_flutter_mechanisms_named_in_table5_and_crossing_tables(run):
+    rows = _table5(run[2])
+    for (config, mach, mode) in EXPECTED_CHANGE:
+        name = FIRST if mode == 1 else SECOND
+        assert rows[(config, mach, mode)]["stage 1 mechanism"] == name
+        assert rows[(config, mach, mode)]["stage 0 mechanism"] == (
+            DASH if (config, mach, mode) == ("EFEW", 0.6, 2) else name)   # absent at stage 0
+    crossing = [t for t in Tables(run[2]).tables if "mechanism" in t["header"]]
+    assert len(crossing) == 4                              # 2 stages x 2 configurations
+    efew0 = {(r[2], r[4]): r[-1] for r in crossing[0]["rows"]}
+    assert efew0 == {("0.2", "200"): FIRST, ("0.2", "250"): SECOND, ("0.6", "180"): FIRST}
+
+
+def test_mechanism_body_freedom_and_unpaired_modes(run, tmp_path):
+    _, run_dir, _ = run
+    folder = tmp_path / "stage0"
+    shutil.copytree(run_dir / "stage0" / "EFEW", folder / "EFEW")
+    part = read_dataset(folder / "EFEW" / "flutter" / "participation.nc")
+    part["participation"][:] = [[30.0, 50.0, 15.0, 5.0], [29.0, 11.0, 20.0, 40.0],
+                                [0.0, 10.0, 45.0, 45.5]]
+    write_dataset(part, folder / "EFEW" / "flutter" / "participation.nc")
+    corr = read_dataset(folder / "EFEW" / "correlation.nc")
+    corr["paired_fe_mode"][:] = [2, 3, 2]                  # FE mode 4 unpaired
+    write_dataset(corr, folder / "EFEW" / "correlation.nc")
+    names = [m[-1] for m in mechanisms(folder, "EFEW")]
+    assert names == ["body-freedom", "mode 4-SW1T", "mode 4-SW1T"]
+    assert mechanisms(folder, "FFFW") == []               # no participation.nc: nothing to name
 
 
 def _points(rows, mach=(0.2, 0.6), units="si"):
