@@ -322,7 +322,8 @@ def write_report(case, run_dir, *, out=None) -> Path:
     run_dir = Path(run_dir)
     labels = unit_labels(case.units)
     stages = stage_folders(run_dir, case)
-    body = (_overview(case, stages, labels) + _flutter_change_section(run_dir, case, stages, labels) +
+    body = (_overview(case, stages, labels) +
+            _flutter_change_section(run_dir, case, stages, labels) +
             (_boundary_section(case, stages, labels) + _overlay_section(case, stages, labels)
              if case.flutter is not None else
              note("No [flutter] section in the case: no flutter boundary and no V-g / V-f.")) +
