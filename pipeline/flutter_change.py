@@ -11,6 +11,11 @@ signed (positive: the stage flutters faster / at a higher frequency than the bas
 paper's "difference = (after tuning - baseline) / baseline". A crossing present at only one of the
 two stages (a sweep whose number of crossings changed) has a NaN change: the n-th crossings would
 then not be the same flutter mechanism, and the table says so rather than pair unlike roots.
+
+Matched-point sweeps (``keas`` on the participation points, pipeline.flight_points) also give the
+equivalent airspeed and its change, ``keas_change = 100 (KEAS_k - KEAS_0) / KEAS_0``: along a
+matched line the true airspeed is M a(h), constant wherever the speed of sound is (11-20 km in
+US76), so two crossings there differ in altitude and KEAS but not in velocity.
 """
 from __future__ import annotations
 
@@ -22,10 +27,11 @@ from structures.units import system_of, unit_labels
 
 
 def _points(part: xr.Dataset, where: str) -> tuple:
-    """(case, flutter_mode, mach, density, velocity, frequency) arrays of one participation.nc."""
+    """(case, flutter_mode, mach, density, velocity, frequency, keas) arrays of one
+    participation.nc (keas NaN where the file has none)."""
     if part.sizes.get("flutter_point", 0) == 0:
         empty = np.zeros(0)
-        return empty.astype(int), empty.astype(int), empty, empty, empty, empty
+        return empty.astype(int), empty.astype(int), empty, empty, empty, empty, empty
     case = part["case"].values.astype(int)
     mode = part["flutter_mode"].values.astype(int)
     if np.any(mode < 1):
@@ -36,8 +42,10 @@ def _points(part: xr.Dataset, where: str) -> tuple:
         raise InputError(f"{where}: two flutter points share a case and flutter_mode. Fix: number "
                          "the flutter crossings of every sweep 1, 2, ... in order of speed "
                          "(pipeline.chain writes participation.nc so).")
+    keas = (part["keas"].values.astype(float) if "keas" in part.coords else
+            np.full(case.size, np.nan))
     return (case, mode, part["mach"].values.astype(float), part["density"].values.astype(float),
-            part["velocity"].values.astype(float), part["frequency"].values.astype(float))
+            part["velocity"].values.astype(float), part["frequency"].values.astype(float), keas)
 
 
 def _per_case(case: np.ndarray, values: np.ndarray, ncase: int, name: str) -> np.ndarray:
@@ -65,16 +73,17 @@ def flutter_change(stages: list) -> xr.Dataset:
     stages : list of dict[str, xarray.Dataset]
         ``stages[k][configuration]`` is the participation.nc Dataset of stage ``k`` (stage 0 the
         baseline): dim ``flutter_point`` with coords ``case``, ``flutter_mode``, ``mach``,
-        ``density``, ``velocity``, ``frequency`` [Hz]. A configuration absent from a stage gives
-        NaN for that stage.
+        ``density``, ``velocity``, ``frequency`` [Hz], optional ``keas`` [kn]. A configuration
+        absent from a stage gives NaN for that stage.
 
     Returns
     -------
     xarray.Dataset
         dims ``stage`` (0 .. len(stages) - 1), ``configuration``, ``case``, ``flutter_mode``
-        (1 .. the most crossings of any sweep); ``velocity``, ``frequency`` [Hz] of the n-th
-        flutter crossing of the sweep (NaN: absent), ``velocity_change``, ``frequency_change`` [%]
-        relative to stage 0 (module docstring; NaN where either is absent); coords ``mach(case)``,
+        (1 .. the most crossings of any sweep); ``velocity``, ``frequency`` [Hz], ``keas`` [kn]
+        (matched-point sweeps only) of the n-th flutter crossing of the sweep (NaN: absent),
+        ``velocity_change``, ``frequency_change``, ``keas_change`` [%] relative to stage 0
+        (module docstring; NaN where either is absent); coords ``mach(case)``,
         ``density(case)`` (NaN when the crossings of a case lie at different densities, i.e. a
         density sweep); attrs ``units`` (the unit system of the participation files).
 
@@ -97,12 +106,15 @@ def flutter_change(stages: list) -> xr.Dataset:
     shape = (len(stages), len(configs), ncase, nmode)
     velocity = np.full(shape, np.nan)
     frequency = np.full(shape, np.nan)
-    for (k, c), (case, mode, _, _, v, f) in read.items():
+    keas = np.full(shape, np.nan)
+    for (k, c), (case, mode, _, _, v, f, e) in read.items():
         velocity[k, configs.index(c), case, mode - 1] = v
         frequency[k, configs.index(c), case, mode - 1] = f
+        keas[k, configs.index(c), case, mode - 1] = e
     with np.errstate(invalid="ignore", divide="ignore"):
         dv = 100.0 * (velocity - velocity[:1]) / velocity[:1]
         df = 100.0 * (frequency - frequency[:1]) / frequency[:1]
+        de = 100.0 * (keas - keas[:1]) / keas[:1]
     mach = _per_case(all_case, np.concatenate([p[2] for p in read.values()] or [np.zeros(0)]),
                      ncase, "mach")
     density = _per_case(all_case, np.concatenate([p[3] for p in read.values()] or [np.zeros(0)]),
@@ -116,7 +128,10 @@ def flutter_change(stages: list) -> xr.Dataset:
          "frequency": (dims, frequency, {"units": "Hz",
                                          "long_name": "frequency of the n-th flutter crossing"}),
          "velocity_change": (dims, dv, {"units": "%", "long_name": "100 (V_k - V_0) / V_0"}),
-         "frequency_change": (dims, df, {"units": "%", "long_name": "100 (f_k - f_0) / f_0"})},
+         "frequency_change": (dims, df, {"units": "%", "long_name": "100 (f_k - f_0) / f_0"}),
+         "keas": (dims, keas, {"units": "kn", "long_name": "equivalent airspeed of the n-th "
+                                                          "flutter crossing (NaN: not matched)"}),
+         "keas_change": (dims, de, {"units": "%", "long_name": "100 (KEAS_k - KEAS_0) / KEAS_0"})},
         coords={"stage": np.arange(len(stages)), "configuration": np.array(configs, dtype=str),
                 "case": np.arange(ncase), "flutter_mode": np.arange(1, nmode + 1),
                 "mach": ("case", mach, {"units": "1"}),

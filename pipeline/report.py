@@ -174,12 +174,15 @@ def _flutter_change_section(run_dir: Path, case, stages: list[Path], labels: Uni
     numbers = fc["stage"].values
     named = {(k, c.name): {(p[0], p[2]): p[4] for p in mechanisms(folder, c.name)}
              for k, folder in enumerate(stages) for c in case.configurations}
+    matched = "keas" in fc and bool(np.isfinite(fc["keas"].values).any())
     header = ["configuration", "Mach [-]", f"density [{d_u}]", "flutter mode",
-              f"stage 0 speed [{v_u}]", "stage 0 frequency [Hz]", "stage 0 mechanism"]
+              f"stage 0 speed [{v_u}]"] + (["stage 0 KEAS [kn]"] if matched else []) + [
+              "stage 0 frequency [Hz]", "stage 0 mechanism"]
     for k in numbers[1:]:
-        header += [f"stage {k} speed [{v_u}]", f"stage {k} speed change [%]",
-                   f"stage {k} frequency [Hz]", f"stage {k} frequency change [%]",
-                   f"stage {k} mechanism"]
+        header += ([f"stage {k} speed [{v_u}]", f"stage {k} speed change [%]"] +
+                   ([f"stage {k} KEAS [kn]", f"stage {k} KEAS change [%]"] if matched else []) +
+                   [f"stage {k} frequency [Hz]", f"stage {k} frequency change [%]",
+                    f"stage {k} mechanism"])
     rows = []
     for config in fc["configuration"].values:
         for case in fc["case"].values:
@@ -187,23 +190,28 @@ def _flutter_change_section(run_dir: Path, case, stages: list[Path], labels: Uni
                 one = fc.sel(configuration=config, case=case, flutter_mode=mode)
                 if np.all(np.isnan(one["velocity"].values)):
                     continue
-                row = [str(config), fmt(one["mach"], ".4g"), fmt(one["density"], ".5g"),
-                       ordinal(int(mode)), fmt(one["velocity"].sel(stage=0), ".5g"),
-                       fmt(one["frequency"].sel(stage=0), ".4g"),
-                       named.get((0, str(config)), {}).get((int(case), int(mode)), "\u2013")]
+                row = ([str(config), fmt(one["mach"], ".4g"), fmt(one["density"], ".5g"),
+                        ordinal(int(mode)), fmt(one["velocity"].sel(stage=0), ".5g")] +
+                       ([fmt(one["keas"].sel(stage=0), ".4g")] if matched else []) +
+                       [fmt(one["frequency"].sel(stage=0), ".4g"),
+                        named.get((0, str(config)), {}).get((int(case), int(mode)), "\u2013")])
                 for k in numbers[1:]:
                     at = one.sel(stage=k)
-                    row += [fmt(at["velocity"], ".5g"), fmt(at["velocity_change"], "+.2f"),
-                            fmt(at["frequency"], ".4g"), fmt(at["frequency_change"], "+.2f"),
-                            named.get((int(k), str(config)), {}).get((int(case), int(mode)),
-                                                                      "\u2013")]
+                    row += ([fmt(at["velocity"], ".5g"), fmt(at["velocity_change"], "+.2f")] +
+                            ([fmt(at["keas"], ".4g"), fmt(at["keas_change"], "+.2f")]
+                             if matched else []) +
+                            [fmt(at["frequency"], ".4g"), fmt(at["frequency_change"], "+.2f"),
+                             named.get((int(k), str(config)), {}).get((int(case), int(mode)),
+                                                                       "\u2013")])
                 rows.append(row)
     return (head + "<p>The n-th flutter crossing (by speed) of each sweep at stage k against the "
             "n-th at stage 0; change = 100 (stage k - stage 0) / stage 0, signed (positive: "
             "faster / higher). \u2013: no such crossing at that stage (no change is given). "
             "Mechanism: body-freedom when the rigid-body modes take >= 30 % of the root's "
             "participation, else its two most participating flexible modes, named by their "
-            "paired GVT test modes (\"mode n\": unpaired).</p>"
+            "paired GVT test modes (\"mode n\": unpaired). KEAS (matched-point flutter): the "
+            "equivalent airspeed, which changes where the true airspeed M a(h) of a matched "
+            "line does not (constant speed of sound, 11-20 km).</p>"
             + table(header, rows, table_id="flutter-change"))
 
 

@@ -164,6 +164,28 @@ def test_flutter_change_matches_nth_crossing_and_signs():
     assert fc["velocity_change"].attrs["units"] == "%"
 
 
+def test_flutter_change_keas_of_matched_points_by_hand(tmp_path):
+    # a matched line in the stratosphere: same true airspeed (M a, a constant), the stage-1
+    # crossing lower (denser air): KEAS 65 -> 64 kn is -1.538 % while the speed change is 0
+    stage0 = {"A": _points([(0, 1, 3299.2, 1.33)]).assign_coords(
+        keas=("flutter_point", [65.0]))}
+    stage1 = {"A": _points([(0, 1, 3299.2, 1.27)]).assign_coords(
+        keas=("flutter_point", [64.0]))}
+    fc = flutter_change([stage0, stage1])
+    at = fc.sel(stage=1, configuration="A", case=0, flutter_mode=1)
+    assert float(at["velocity_change"]) == 0.0
+    assert float(at["keas_change"]) == pytest.approx(100.0 * (64.0 - 65.0) / 65.0, rel=1e-12)
+    assert fc["keas"].attrs["units"] == "kn" and fc["keas_change"].attrs["units"] == "%"
+    plain = flutter_change([{"A": _points([(0, 1, 200.0, 5.0)])}])
+    assert np.isnan(plain["keas"].values).all()        # not matched-point: no KEAS
+    case, run_dir = make_run(tmp_path)
+    write_dataset(fc.assign_coords(configuration=["EFEW"], mach=("case", [0.2])),
+                  run_dir / "flutter_change.nc")
+    rows = _table5(write_report(case, run_dir).read_text())
+    assert rows[("EFEW", 0.2, 1)]["stage 0 KEAS [kn]"] == "65"
+    assert rows[("EFEW", 0.2, 1)]["stage 1 KEAS change [%]"] == "-1.54"
+
+
 def test_flutter_change_mismatched_crossing_counts_are_nan():
     stage0 = {"A": _points([(0, 1, 200.0, 5.0), (0, 2, 250.0, 8.0)]), "B": _points([(0, 1, 90.0, 2.0)])}
     fewer = {"A": _points([(0, 1, 220.0, 5.0)])}                           # no B, one crossing of A
