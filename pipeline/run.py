@@ -21,7 +21,7 @@ from pipeline.stage import running
 from pipeline.stages import final_stages, possible_stage_names, read_targets, stage_plan
 from structures.common.files import check_output
 
-EXAMPLE_CASE = Path(__file__).resolve().parents[1] / "data" / "bah_wing" / "case.toml"
+EXAMPLE_CASE = Path(__file__).resolve().parents[1] / "data" / "x56_like" / "case.toml"
 #: The packages whose code computes the stages (their sources version every fingerprint).
 PACKAGES = ("structures", "aero", "flutter", "pipeline")
 

@@ -16,6 +16,7 @@ from structures.modes import read_modes
 from structures.common.files import read_dataset
 
 DATA = Path(__file__).resolve().parents[1] / "data"
+BAH_CASE = Path(__file__).resolve().parents[2] / "data" / "bah_wing" / "case.toml"
 
 
 def test_modes_command_prints_table_and_writes_contract(tmp_path, capsys):
@@ -32,18 +33,18 @@ def test_modes_command_prints_table_and_writes_contract(tmp_path, capsys):
 
 
 @pytest.mark.filterwarnings("ignore::UserWarning", "ignore::RuntimeWarning")
-def test_run_shipped_example_then_resume(tmp_path, capsys):
+def test_run_bah_example_then_resume(tmp_path, capsys):
     out = tmp_path / "run"
     base = out / "stage0" / "baseline"
-    assert main(["run", "--out", str(out)]) == 0
+    assert main(["run", str(BAH_CASE), "--out", str(out)]) == 0
     assert (out / "report.html").exists() and (base / "modes.nc").exists()
     assert "[stage0/modes/baseline] 10 modes" in capsys.readouterr().out
-    assert main(["run", "--out", str(out)]) == 0
+    assert main(["run", str(BAH_CASE), "--out", str(out)]) == 0
     assert "[stage0/modes/baseline] up to date, skipped" in capsys.readouterr().out
     (base / "modes.nc").unlink()  # a lost output is redone
     with warnings.catch_warnings():
         warnings.simplefilter("always")   # the test's marks ignore UserWarning
-        assert main(["run", "--out", str(out)]) == 0
+        assert main(["run", str(BAH_CASE), "--out", str(out)]) == 0
     captured = capsys.readouterr()
     assert "output stage0/baseline/modes.nc is missing or damaged; recomputing" in captured.err
     assert "[stage0/modes/baseline] 10 modes" in captured.out

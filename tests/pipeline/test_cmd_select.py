@@ -1,5 +1,7 @@
-"""``pipeline select`` (the mode-selection study) and ``pipeline status`` on the shipped example."""
+"""``pipeline select`` (the mode-selection study) and ``pipeline status`` on the BAH example."""
 from __future__ import annotations
+
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -7,11 +9,14 @@ import pytest
 from pipeline.cli import main
 from structures.common.files import read_dataset
 
+BAH_CASE = Path(__file__).resolve().parents[2] / "data" / "bah_wing" / "case.toml"
+
 
 @pytest.mark.filterwarnings("ignore::UserWarning", "ignore::RuntimeWarning")
 def test_select_study_on_the_example(tmp_path, capsys):
     out = tmp_path / "run"
-    assert main(["select", "--out", str(out), "--thresholds", "0.97,0.85,0.9"]) == 0
+    assert main(["select", str(BAH_CASE), "--out", str(out),
+                 "--thresholds", "0.97,0.85,0.9"]) == 0
     printed = capsys.readouterr().out
     study = read_dataset(out / "selection_study" / "study.nc")
     assert study["threshold"].values.tolist() == [0.85, 0.9, 0.97]     # sorted
@@ -40,21 +45,21 @@ def test_select_rejects_bad_thresholds(text, capsys):
 @pytest.mark.filterwarnings("ignore::UserWarning", "ignore::RuntimeWarning")
 def test_status_lists_done_stale_missing(tmp_path, capsys):
     out = tmp_path / "run"
-    assert main(["status", "--out", str(out)]) == 0
+    assert main(["status", str(BAH_CASE), "--out", str(out)]) == 0
     rows = {r.split()[0]: r.split()[1:3] for r in capsys.readouterr().out.splitlines()[1:]}
     assert rows["stage0/modes/baseline"] == ["missing", "never"]
     # one aerodynamic grid for both configurations: one grid-GAF stage
     assert [name for name in rows if name.startswith("stage0/aero/")] == ["stage0/aero/baseline"]
-    assert main(["select", "--out", str(out)]) == 0            # the baseline stages only
+    assert main(["select", str(BAH_CASE), "--out", str(out)]) == 0    # the baseline stages only
     capsys.readouterr()
-    assert main(["status", "--out", str(out)]) == 0
+    assert main(["status", str(BAH_CASE), "--out", str(out)]) == 0
     status = {r.split()[0]: r.split()[1] for r in capsys.readouterr().out.splitlines()[1:]}
     assert all(status[s] == "done" for s in status if s.startswith("stage0/"))
     assert status["report"] == "missing" and status["flutter_change"] == "missing"
     # stage 0 misses the targets (fuel W1T +3.08 %), so stage 1 is listed, not yet computed
     assert status["stage1/tuning"] == "missing"
     (out / "stage0" / "fuel" / "correlation.nc").write_bytes(b"cut")
-    assert main(["status", "--out", str(out)]) == 0
+    assert main(["status", str(BAH_CASE), "--out", str(out)]) == 0
     rows = {r.split()[0]: " ".join(r.split()[1:]) for r in capsys.readouterr().out.splitlines()[1:]}
     assert rows["stage0/correlation/fuel"] == (
         "stale output stage0/fuel/correlation.nc is missing or damaged")
