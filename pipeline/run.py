@@ -18,7 +18,8 @@ from pathlib import Path
 from pipeline.graph import Graph, source_version
 from pipeline.progress import Display
 from pipeline.stage import running
-from pipeline.stages import final_stages, possible_stage_names, read_targets, stage_plan
+from pipeline.stages import (case_aero_groups, final_stages, possible_stage_names, read_targets,
+                             stage_plan)
 from structures.common.files import check_output
 
 EXAMPLE_CASE = Path(__file__).resolve().parents[1] / "data" / "x56_like" / "case.toml"
@@ -32,8 +33,9 @@ def _walk(case, graph: Graph, display: Display, execute: bool, baseline_only: bo
     are known (its selection done) to be missed. ``baseline_only``: stage 0 and nothing else."""
     last = case.loop.stages if case.loop is not None and not baseline_only else 0
     names, n = [], 0
+    aero = case_aero_groups(case)
     while True:
-        for stage in stage_plan(case, n, display):
+        for stage in stage_plan(case, n, display, aero):
             graph.add(stage)
             names.append(stage.name)
             if execute:

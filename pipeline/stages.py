@@ -224,16 +224,22 @@ def _tuning_settings(case) -> dict:
 
 
 # ------------------------------------------------------------------------------------ the plan
-def stage_plan(case, n: int, display=None) -> list[Stage]:
+def case_aero_groups(case) -> dict:
+    """pipeline.chain.aero_groups of a case with [flutter] ({} without): compute it once per run
+    and give it to every :func:`stage_plan` (it parses every deck)."""
+    from pipeline.chain import aero_groups
+
+    return aero_groups(case) if case.flutter is not None else {}
+
+
+def stage_plan(case, n: int, display=None, aero: dict | None = None) -> list[Stage]:
     """The stages of stage ``n`` (0: baseline; n >= 1: a tuning stage and its analyses);
     ``display`` (pipeline.progress.Display) is told the optimiser's iterations and the flutter
-    requests."""
+    requests; ``aero`` is :func:`case_aero_groups` (computed when not given)."""
     iteration = None if display is None else display.iteration
     note = None if display is None else display.note
     out = []
-    from pipeline.chain import aero_groups
-
-    aero = aero_groups(case) if case.flutter is not None else {}
+    aero = case_aero_groups(case) if aero is None else aero
     if n == 0:   # the grid GAFs, once per aerodynamic grid, serve every stage's modes
         for config in case.configurations:
             if config.name in aero and aero[config.name][0] == config.name:
@@ -306,6 +312,7 @@ def read_targets(run_dir, n: int) -> dict | None:
 def possible_stage_names(case) -> list[str]:
     """Every stage a run of ``case`` may have (for ``--from``)."""
     last = case.loop.stages if case.loop is not None else 0
-    names = [s.name for n in range(last + 1) for s in stage_plan(case, n)]
+    aero = case_aero_groups(case)
+    names = [s.name for n in range(last + 1) for s in stage_plan(case, n, aero=aero)]
     return names + [s.name for s in final_stages(case, last, [])]
 
