@@ -4,6 +4,17 @@ A crossing is a change of the damping g of one tracked root from negative to abo
 (DESIGN.md section 3): a root whose |g| never leaves the band |g| <= ``g_tol`` (~1e-6) never crosses,
 so numerically neutral roots (|g| ~ 1e-15) are never reported. A crossing of an oscillatory root is
 ``"flutter"``; of a zero-frequency (real) root, ``"divergence"``.
+
+Rigid-body drift roots. A free aircraft without gravity has exact zero eigenvalues: altitude and
+flight-path angle (and, laterally, side displacement and heading) change no aerodynamic force. The
+GAF tables hold them only to their small-k accuracy, so each double zero splits into a +-sqrt pair
+(Wilkinson: a perturbed Jordan block) whose sign is rounding: on Nastran's bah_plane QHH a near-zero
+root of ours turns from g = -1e-5 to +9e-4 at 363 m/s at |p| b / V = 6e-5, and Nastran's own point 1
+is a real root of +9.3e-4 rad/s at 30 m/s. A root that starts as a rigid-body mode below the
+tables' resolution, |p| b / V < k_min (the smallest tabulated reduced frequency), is such a drift
+root (:func:`drift_roots`); while it stays below that resolution its sign changes are not crossings
+(:func:`resolved_damping`). Once it leaves it (a real static instability, or a drift root caught by
+another mode), its crossings count as any other root's.
 """
 from __future__ import annotations
 
@@ -74,6 +85,52 @@ def find_brackets(damping: np.ndarray, g_tol: float = G_TOL) -> list[tuple[int, 
     up = (g[:-1] < 0) & (g[1:] > g_tol)
     i, r = np.nonzero(up)
     return [(int(rr), int(ii)) for ii, rr in sorted(zip(i, r))]
+
+
+def drift_roots(p: np.ndarray, velocity: np.ndarray, b: float, k_min: np.ndarray,
+                rigid: np.ndarray) -> np.ndarray:
+    """Rigid-body drift roots and where they are below the GAF tables' resolution (module docstring).
+
+    Parameters
+    ----------
+    p : ndarray, shape (npts, nroot), complex
+        Eigenvalues of the tracked roots along a sweep.
+    velocity : ndarray, shape (npts,)
+        Flight velocity of each point (or, k method, of each root: shape (npts, nroot)).
+    b : float
+        Reference semi-chord (REFC / 2).
+    k_min : ndarray, shape (npts,)
+        Smallest tabulated reduced frequency at each point's Mach number (0: no table).
+    rigid : ndarray of bool, shape (nroot,)
+        Roots that start from a rigid-body mode.
+
+    Returns
+    -------
+    ndarray of bool, shape (npts, nroot)
+        True where a drift root (rigid, below the resolution at the first point) is below the
+        resolution, |p| b / V < k_min.
+    """
+    V = np.asarray(velocity, dtype=float)
+    V = V[:, None] if V.ndim == 1 else V
+    below = np.abs(p) * b / V < np.asarray(k_min, dtype=float)[:, None]
+    return below & (np.asarray(rigid, dtype=bool) & below[0])[None, :]
+
+
+def resolved_damping(damping: np.ndarray, drift: np.ndarray) -> np.ndarray:
+    """Damping with the points of unresolved drift roots set to NaN (no crossing there).
+
+    Parameters
+    ----------
+    damping : ndarray, shape (npts, nroot)
+    drift : ndarray of bool, shape (npts, nroot)
+        From :func:`drift_roots`.
+
+    Returns
+    -------
+    ndarray, shape (npts, nroot)
+        A new array for :func:`find_brackets` (NaN compares false, so no bracket touches them).
+    """
+    return np.where(drift, np.nan, np.asarray(damping, dtype=float))
 
 
 def interpolate_zero(g0: float, g1: float) -> float:

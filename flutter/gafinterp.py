@@ -3,8 +3,16 @@
 The p-k equation needs Q_hh at each root's own reduced frequency k = omega * b / V (b = REFC / 2).
 The damping term uses Q^I / k (Nastran Aeroelastic Analysis User's Guide, PK method, eq. for the
 aerodynamic damping matrix ``-(1/4) rho cbar V Q^I_hh / k``); Q^I / k is smooth down to k = 0 and is
-interpolated directly, so zero-frequency (rigid-body, divergence) roots are well defined: below the
-smallest tabulated k both Q^R and Q^I / k are held at their values there (Q^I is linear in k at small k).
+interpolated directly, so zero-frequency (rigid-body, divergence) roots are well defined.
+
+Below the smallest tabulated k, Q^R and Q^I / k are continued as even functions of k through the two
+smallest tabulated k, Q^R(k) = Q^R_0 + c_R k^2 and Q^I(k)/k = D_0 + c_D k^2: the GAFs of harmonic
+motion satisfy Q(-ik) = conj(Q(ik)), so both are even in k and their small-k form is a value at k = 0
+plus O(k^2) (the apparent-mass term of Q^R is -k^2 times an apparent mass). Holding them at the
+smallest tabulated k instead keeps that term, k_min^2 times the apparent mass, as a spurious
+stiffness on every rigid-body mode: it splits the exact double zero of altitude and flight-path angle
+of a free aircraft into a +-sqrt pair (Nastran's bah_plane QHH at 30 m/s: 0.0055 rad/s, slightly
+unstable, held; 0.0003 rad/s and stable, continued).
 """
 from __future__ import annotations
 
@@ -59,6 +67,14 @@ class GafInterpolator:
         self.n = Q.shape[-1]
         self._QR = Q.real
         self._D = Q.imag / k[:, None, None]
+        # even continuation below the table: Q^R = QR0 + cR k^2, Q^I/k = D0 + cD k^2 (module docstring)
+        if k.size > 1:
+            dk2 = k[1] ** 2 - k[0] ** 2
+            self._cR, self._cD = (self._QR[1] - self._QR[0]) / dk2, (self._D[1] - self._D[0]) / dk2
+        else:
+            self._cR = self._cD = np.zeros_like(self._QR[0])
+        self._QR0 = self._QR[0] - self._cR * k[0] ** 2
+        self._D00 = self._D[0] - self._cD * k[0] ** 2
         self.interpolation = interpolation
         if interpolation == "cubic":
             if k.size < 3:
@@ -90,8 +106,9 @@ class GafInterpolator:
         QR, D : ndarray, shape (r, n, n)
             Real part of Q and imaginary part divided by k.
         outside : ndarray of bool, shape (r,)
-            True where k lies above the tabulated range (not covered by the GAFs). Below the
-            smallest tabulated k, Q^R and Q^I/k are held constant (quasi-steady limit) and not flagged.
+            True where k lies above the tabulated range (not covered by the GAFs; Q is held at the
+            largest tabulated k there). Below the smallest tabulated k, Q^R and Q^I/k are continued
+            as even functions of k (module docstring) and not flagged.
         """
         QR, D, _, _, outside = self.with_slopes(k, slopes=False)
         return QR, D, outside
@@ -111,8 +128,8 @@ class GafInterpolator:
         QR, D : ndarray, shape (r, n, n)
             As :meth:`__call__`.
         dQR, dD : ndarray, shape (r, n, n) or None
-            d Q^R / dk and d (Q^I/k) / dk of the interpolant (zero where k is held outside the
-            table; one-sided finite difference, step 1e-6 k, for a callable).
+            d Q^R / dk and d (Q^I/k) / dk of the interpolant (zero above the table; one-sided
+            finite difference, step 1e-6 k, for a callable).
         outside : ndarray of bool, shape (r,)
         """
         k = np.asarray(k, dtype=float)
@@ -130,22 +147,34 @@ class GafInterpolator:
         tol = 1e-9
         outside = k > self.k_max * (1 + tol)
         kc = np.clip(k, self.k_min, self.k_max)
-        held = ((k < self.k_min) | outside)[:, None, None]
         if self.interpolation == "cubic":
             QR, D = self._sR(kc), self._sD(kc)
-            if not slopes:
-                return QR, D, None, None, outside
-            return QR, D, np.where(held, 0.0, self._dR(kc)), np.where(held, 0.0, self._dD(kc)), outside
-        i = np.clip(np.searchsorted(self.k_grid, kc) - 1, 0, self.k_grid.size - 2)
-        R1, D1 = self._R1[i], self._D1[i]
-        kb = kc[:, None, None]
-        QR = self._R0[i] + R1 * kb   # linear interpolation in k, as Nastran's PK
-        D = self._D0[i] + D1 * kb
+            dQR, dD = (self._dR(kc), self._dD(kc)) if slopes else (None, None)
+        else:
+            i = np.clip(np.searchsorted(self.k_grid, kc) - 1, 0, self.k_grid.size - 2)
+            dQR, dD = self._R1[i], self._D1[i]
+            kb = kc[:, None, None]
+            QR = self._R0[i] + dQR * kb   # linear interpolation in k, as Nastran's PK
+            D = self._D0[i] + dD * kb
+        below = k < self.k_min
+        if below.any():
+            QR, D, eR, eD = self._even(k, below, QR, D)
+            if slopes:
+                dQR, dD = np.where(below[:, None, None], eR, dQR), np.where(below[:, None, None], eD, dD)
         if not slopes:
             return QR, D, None, None, outside
-        if held.any():
-            R1, D1 = np.where(held, 0.0, R1), np.where(held, 0.0, D1)
-        return QR, D, R1, D1, outside
+        if outside.any():
+            dQR, dD = np.where(outside[:, None, None], 0.0, dQR), np.where(outside[:, None, None], 0.0, dD)
+        return QR, D, dQR, dD, outside
+
+    def _even(self, k: np.ndarray, below: np.ndarray, QR: np.ndarray, D: np.ndarray):
+        """Q^R, Q^I/k and their k-slopes with the rows ``below`` the table replaced by the even
+        continuation Q^R_0 + c_R k^2, D_0 + c_D k^2 (module docstring); new arrays."""
+        kb = k[:, None, None]
+        sel = below[:, None, None]
+        QR = np.where(sel, self._QR0 + self._cR * kb ** 2, QR)
+        D = np.where(sel, self._D00 + self._cD * kb ** 2, D)
+        return QR, D, 2 * self._cR * kb, 2 * self._cD * kb
 
     def linearised(self, k: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """The interpolant as a line in k about each k: Q^R = G0 + kc G1 and Q^I/k = G2 + kc G3.
@@ -171,13 +200,21 @@ class GafInterpolator:
         k = np.asarray(k, dtype=float)
         if self.callable is None and self.interpolation == "linear":
             outside = k > self.k_max * (1 + 1e-9)
+            below = k < self.k_min
             kc = np.minimum(np.maximum(k, self.k_min), self.k_max)  # (np.clip: same, slower)
             i = np.minimum(np.maximum(np.searchsorted(self.k_grid, kc) - 1, 0), self.k_grid.size - 2)
-            return self._table[i], kc, (k >= self.k_min) & ~outside, outside
+            G = self._table[i]
+            if below.any():  # the even continuation as a line about each root's own k
+                kb = np.where(below, k, 0.0)
+                QR, D, dQR, dD = self._even(kb, np.ones(k.size, dtype=bool), G[:, 0], G[:, 2])
+                line = np.stack([QR - kb[:, None, None] * dQR, dQR, D - kb[:, None, None] * dD, dD], 1)
+                G = np.where(below[:, None, None, None], line, G)
+                kc = np.where(below, k, kc)
+            return G, kc, ~outside, outside
         QR, D, dQR, dD, outside = self.with_slopes(k)
-        kb = k[:, None, None]
+        kb = np.minimum(k, self.k_max)[:, None, None] if self.callable is None else k[:, None, None]
         G = np.stack([QR - kb * dQR, dQR, D - kb * dD, dD], axis=1)
-        return G, k, np.ones(k.shape, dtype=bool), outside
+        return G, kb[:, 0, 0], ~outside, outside
 
 
 def _q_at_mach(gaf: xr.Dataset, mach: float) -> np.ndarray:

@@ -25,7 +25,8 @@ import numpy as np
 import xarray as xr
 from threadpoolctl import threadpool_limits
 
-from flutter.crossings import G_TOL, Crossing, find_brackets, illinois, interpolate_zero
+from flutter.crossings import (G_TOL, Crossing, drift_roots, find_brackets, illinois,
+                               interpolate_zero, resolved_damping)
 from flutter.parallel import map_cases
 from flutter.pk_solver import PKSolver, RootState
 from flutter.results import vg_dataset, attach_crossings
@@ -269,7 +270,9 @@ def _case_dataset(solver: PKSolver, states: list[RootState], V, rho, M, *, sweep
     g = solver.damping(p, V[:, None])
     pts = list(zip(V, rho, M))
     crossings, vectors = [], []
-    for r, i in find_brackets(g, g_tol):
+    k_min = np.array([solver.interpolator(m).k_min for m in M])
+    drift = drift_roots(p, V, solver.b, k_min, solver.omega0 < 2 * np.pi * solver.rigid_hz)
+    for r, i in find_brackets(resolved_damping(g, drift), g_tol):
         if refine:
             t, s, ok = _refine(solver, states, pts, r, i, g[i, r], g[i + 1, r])
             pr, ur = s.p[r], s.u[r]

@@ -19,9 +19,11 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.linalg as sla
+from scipy.optimize import linear_sum_assignment
 
 from flutter.gafinterp import GafInterpolator
-from flutter.linalg import inverse_iteration, path_length, pencil_system, rayleigh
+from flutter.linalg import inverse_iteration, path_length, pencil_system, rayleigh, unit_rows
 from flutter.system import ModalSystem
 from structures.common.errors import InputError
 
@@ -67,11 +69,14 @@ class PKSolver:
         Minimum eigenvector correlation between consecutive points before the step is bisected.
     max_depth : int
         Maximum number of step bisections.
+    rigid_hz : float
+        In-vacuo modes below this frequency [Hz] are rigid-body modes; their roots start from the
+        quasi-steady eigenvalues at the first flight point (:meth:`start`).
     """
 
     def __init__(self, system: ModalSystem, gaf, *, refc: float | None = None,
                  interpolation: str = "linear", tol: float = 1e-6, max_iter: int = 60,
-                 mac_min: float = 0.7, max_depth: int = 8):
+                 mac_min: float = 0.7, max_depth: int = 8, rigid_hz: float = 0.05):
         self.system = system
         self.gaf = gaf
         if refc is None:
@@ -85,6 +90,9 @@ class PKSolver:
         self.b = 0.5 * float(refc)
         self.interpolation = interpolation
         self.tol, self.max_iter, self.mac_min, self.max_depth = tol, max_iter, mac_min, max_depth
+        if not rigid_hz >= 0:
+            raise InputError(f"p-k: rigid_hz = {rigid_hz} must be >= 0. Fix: e.g. rigid_hz = 0.05.")
+        self.rigid_hz = float(rigid_hz)
         self._interp: dict[float, GafInterpolator] = {}
         omega, self.phi = system.in_vacuo()
         self.omega0 = omega
@@ -260,14 +268,72 @@ class PKSolver:
         return out
 
     def start(self, V: float, rho: float, mach: float) -> RootState:
-        """Roots at the first flight point, followed up from in-vacuo modes at a tiny speed."""
+        """Roots at the first flight point.
+
+        Elastic roots are followed up from their in-vacuo modes at a tiny speed. Rigid-body roots
+        (in-vacuo frequency below ``rigid_hz``) cannot be: at V -> 0 all of them sit at p = 0, so a
+        continuation from there picks an eigenvalue branch at random, and the p-k's k-matching
+        has several solutions on the near-zero branch (the plunge / flight-path pair), because a
+        small change of Q^R with k moves a root that has no structural stiffness a lot. Two rigid
+        roots then settled on that one branch at two matching k, and the short period was never
+        followed (Nastran's bah_plane: two slightly unstable ~0 Hz roots instead of a short period
+        with g ~ -2.3). They start instead from the eigenvalues of the quasi-steady system at the
+        first flight point (:meth:`_rigid_start`): one root per eigenvalue branch.
+        """
         n = self.system.n
+        rigid = np.flatnonzero(self.omega0 < 2 * np.pi * self.rigid_hz)
+        elastic = np.setdiff1d(np.arange(n), rigid)
         phi = self.phi / np.linalg.norm(self.phi, axis=0)
         p = 1j * self.omega0.astype(complex)
         state = RootState(p, phi.T.astype(complex), phi.T.astype(complex),
                           np.ones(n, dtype=bool), np.zeros(n, dtype=bool))
-        state = self.correct(state, 1e-3 * V, rho, mach)
-        return self.advance(state, (1e-3 * V, rho, mach), (V, rho, mach))
+        if rigid.size:
+            state = _subset(state, elastic)
+        if elastic.size:
+            state = self.correct(state, 1e-3 * V, rho, mach)
+            state = self.advance(state, (1e-3 * V, rho, mach), (V, rho, mach))
+        if not rigid.size:
+            return state
+        first = self.correct(self._rigid_start(rigid, V, rho, mach), V, rho, mach)
+        order = np.argsort(np.concatenate([rigid, elastic]))
+        both = _stack_states([first, state])
+        return RootState(*(getattr(both, f)[order] for f in ("p", "u", "w", "converged", "outside")))
+
+    def _rigid_start(self, rigid: np.ndarray, V: float, rho: float, mach: float) -> RootState:
+        """First guesses of the rigid-body roots: eigenvalues of the quasi-steady p-k system.
+
+        The first-order matrix of [M p^2 + C(0) p + K_t(0)] (Q^R and Q^I/k at k -> 0, held below
+        the smallest tabulated k) has 2 n eigenvalues. The 2 n_r whose eigenvectors lie most in the
+        rigid modes (mass-weighted share of the in-vacuo rigid coordinates) are the rigid branches:
+        every oscillatory pair gives one root (Im p > 0: the short period, ...), and the real
+        eigenvalues (the near-zero plunge / flight-path pair, or a pair already split) fill the
+        remaining rigid roots, smallest |p| first. Each branch is given to the rigid mode it
+        participates in most (assignment over the rigid modes), with its right and left vectors.
+        """
+        n, nr = self.system.n, rigid.size
+        C, Kt, _ = self.pencil(np.zeros(1), V, rho, mach)
+        Minv = np.linalg.inv(self.system.mass)
+        A = np.block([[np.zeros((n, n)), np.eye(n)], [-Minv @ Kt[0], -Minv @ C[0]]])
+        lam, Y, X = sla.eig(A, left=True, right=True)
+        U = X[:n].T                                   # right vectors of the quadratic, (2n, n)
+        W = (Minv.T @ Y[n:]).T                        # left: w^H = y_2^H M^-1
+        c = np.abs(U @ (self.system.mass @ self.phi)) ** 2   # in-vacuo modal coordinates
+        share = c[:, rigid].sum(axis=1) / np.maximum(c.sum(axis=1), 1e-300)
+        branch = np.argsort(-share, kind="stable")[:2 * nr]
+        real = np.abs(lam.imag) <= 1e-9 * np.maximum(np.abs(lam), self.scale)
+        osc = [j for j in branch if not real[j] and lam[j].imag > 0]
+        reals = sorted((j for j in branch if real[j]), key=lambda j: abs(lam[j]))
+        pick = (osc + reals)[:nr]
+        if len(pick) < nr:  # an unpaired oscillatory eigenvalue: take its conjugate's partner
+            pick += [j for j in branch if j not in pick][:nr - len(pick)]
+        pick = np.array(pick)
+        rows, cols = linear_sum_assignment(-c[np.ix_(pick, rigid)])
+        pick = pick[rows[np.argsort(cols)]]
+        p = np.where(lam[pick].imag < 0, lam[pick].conj(), lam[pick])
+        flip = lam[pick].imag < 0
+        u, w = unit_rows(U[pick]), unit_rows(W[pick])
+        u[flip], w[flip] = u[flip].conj(), w[flip].conj()
+        return RootState(p.astype(complex), u, w, np.ones(nr, dtype=bool), np.zeros(nr, dtype=bool))
 
     def advance(self, state: RootState, frm: tuple, to: tuple, depth: int = 0) -> RootState:
         """Continue all roots from flight point ``frm`` to ``to`` (V, rho, M), bisecting bad steps.
@@ -409,6 +475,18 @@ class PKSolver:
             g = np.where(real, p.real * 2 * self.b / (np.asarray(V) * LN2),
                          2.0 * p.real / np.where(real, 1.0, p.imag))
         return g
+
+
+def _subset(state: RootState, idx: np.ndarray) -> RootState:
+    """The roots ``idx`` of a state (new arrays)."""
+    return RootState(state.p[idx], state.u[idx], state.w[idx], state.converged[idx],
+                     state.outside[idx])
+
+
+def _stack_states(states: list[RootState]) -> RootState:
+    """Roots of several states side by side (new arrays; slopes dropped)."""
+    return RootState(*(np.concatenate([getattr(s, f) for s in states])
+                       for f in ("p", "u", "w", "converged", "outside")))
 
 
 def _aligned(u: np.ndarray, ref: np.ndarray) -> np.ndarray:
