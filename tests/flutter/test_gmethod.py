@@ -1,0 +1,205 @@
+"""Chen's g-method (flutter.gmethod) against analytic, exact-pencil and Nastran references."""
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pytest
+from pyNastran.bdf.bdf import read_bdf
+
+from flutter.gmethod import GProblem, g_solve
+from flutter.kmethod import k_solve
+from flutter.pk import pk_solve
+from flutter.system import ModalSystem
+from flutter_nastran import DATA, bah_qhh_dataset, f06_flutter_summaries, f06_modes_used, first_crossing
+from structures.common.errors import InputError
+from test_pk_typical_section import A, B, RHO, gaf, section
+
+F06 = DATA / "bah_plane" / "bah_plane.f06"
+
+
+# ----------------------------------------------------------------------------- typical section
+@pytest.fixture(scope="module")
+def section_sweep():
+    V = np.linspace(0.05, 3.2, 64)
+    return V, g_solve(section(), gaf, V, density=RHO, mach=0.0, refc=2 * B)
+
+
+def _flutter(ds):
+    i = int(np.flatnonzero(ds.crossing_kind.values == "flutter")[0])
+    return float(ds.crossing_velocity[i]), float(ds.crossing_frequency[i]), i
+
+
+def test_section_flutter_equals_pk_k_and_theodorsen(section_sweep):
+    """At g = 0 the g-method is exact: its flutter point is p-k's and the k-method's (tolerances of
+    tests/flutter/test_pk_typical_section.py) and Hodges & Pierce's U/(b w_theta) ~ 2.17-2.18 at
+    w/w_theta ~ 0.65."""
+    V, ds = section_sweep
+    assert ds.attrs["method"] == "G"
+    Vg, fg, i = _flutter(ds)
+    assert bool(ds.crossing_converged[i])
+    pk = pk_solve(section(), gaf, V, density=RHO, mach=0.0, refc=2 * B)
+    Vp, fp, _ = _flutter(pk)
+    assert abs(Vg / Vp - 1) < 1e-3 and abs(fg / fp - 1) < 1e-3
+    kd = k_solve(section(), gaf, np.linspace(0.05, 1.5, 3000), density=RHO, mach=0.0, refc=2 * B)
+    j = int(np.argmin(np.abs(kd.crossing_velocity.values - Vg)))
+    assert abs(float(kd.crossing_velocity[j]) / Vg - 1) < 2e-3
+    assert abs(float(kd.crossing_frequency[j]) / fg - 1) < 2e-3
+    assert 2.17 * 0.98 <= Vg <= 2.18 * 1.02
+    assert abs(2 * np.pi * fg / 0.65 - 1) < 0.03
+
+
+def test_section_density_sweep_crosses_at_the_velocity_sweep_density(section_sweep):
+    """A PKNL-like density sweep at the flutter speed found at rho = 1 crosses at rho = 1."""
+    _, ds = section_sweep
+    Vg, fg, _ = _flutter(ds)
+    rho = np.linspace(0.6, 1.6, 11)
+    dd = g_solve(section(), gaf, Vg, density=rho, mach=0.0, refc=2 * B, sweep="density")
+    assert dd.attrs["sweep"] == "density" and dd.sizes["density"] == 11
+    rc = dd.crossing_density.values[dd.crossing_kind.values == "flutter"]
+    assert rc.size == 1 and abs(rc[0] - RHO) < 1e-3
+
+
+def test_unknown_option_and_sweep():
+    with pytest.raises(InputError, match=r"unknown options \['tol'\]"):
+        g_solve(section(), gaf, [1.0], density=RHO, mach=0.0, refc=2 * B, tol=1e-6)
+    with pytest.raises(InputError, match="unknown sweep"):
+        g_solve(section(), gaf, [1.0], density=RHO, mach=0.0, refc=2 * B, sweep="mach")
+
+
+# ----------------------------------------------------------------------------- quasi-steady GAFs
+def _exact_roots(M, K, Q0, Q1, Q2, b, rho, V):
+    """Eigenvalues p (Im p >= 0) of the exact pencil [(V/b)^2 (M - h Q2) p_bar^2 - (V/b)^2 h Q1
+    p_bar + K - q Q0], h = rho b^2 / 2, written as a companion matrix in p_bar."""
+    n = M.shape[0]
+    h, s = 0.5 * rho * b * b, b / V
+    A2, A1, A0 = M - h * Q2, -h * Q1, s * s * K - h * Q0
+    Ai = np.linalg.inv(A2)
+    lam = np.linalg.eigvals(np.block([[np.zeros((n, n)), np.eye(n)], [-Ai @ A0, -Ai @ A1]])) * V / b
+    return lam[lam.imag >= 0]
+
+
+@pytest.fixture(scope="module")
+def quasi_steady():
+    rng = np.random.default_rng(3)
+    M, K = np.diag([1.0, 2.0, 1.5]), np.diag([4.0, 25.0, 100.0])
+    return M, K, rng.normal(size=(3, 3)), rng.normal(size=(3, 3)), 0.5 * rng.normal(size=(3, 3))
+
+
+def _poly_gaf(Q0, Q1, Q2):
+    return lambda mach, k: Q0 + 1j * k[:, None, None] * Q1 + (1j * k[:, None, None]) ** 2 * Q2
+
+
+def test_quasi_steady_exact(quasi_steady):
+    """Q(p_bar) = Q0 + p_bar Q1 is linear in p_bar: the damping perturbation is exact, so every
+    g-method root (complex and real) is an eigenvalue of the exact pencil to 1e-6."""
+    M, K, Q0, Q1, _ = quasi_steady
+    b, rho = 0.5, 1.0
+    for V in (1.0, 3.0, 6.0):
+        p, *_ = GProblem(ModalSystem(M, K), _poly_gaf(Q0, Q1, 0 * Q1), refc=2 * b).roots(V, rho, 0.0)
+        ex = _exact_roots(M, K, Q0, Q1, 0 * Q1, b, rho, V)
+        assert p.size == ex.size
+        for x in p:
+            assert np.min(np.abs(ex - x)) <= 1e-6 * abs(x)
+    ds = g_solve(ModalSystem(M, K), _poly_gaf(Q0, Q1, 0 * Q1), [1.0, 3.0], density=rho, mach=0.0,
+                 refc=2 * b)
+    ex = _exact_roots(M, K, Q0, Q1, 0 * Q1, b, rho, 3.0)
+    for x in ds.eigenvalue.values[1]:
+        assert np.min(np.abs(ex - x)) <= 1e-6 * abs(x)
+
+
+def test_quasi_steady_second_order_error(quasi_steady):
+    """With Q2 != 0 the first-order expansion misses g^2 Q2 (g = p_bar - ik): the error is visible
+    and, for small Q2, proportional to Q2 (first-order eigenvalue perturbation of the dropped term).
+    Measured with Q2 as drawn (V = 3): relative errors 3e-2 and 6e-3 on the real roots, 5e-6 on
+    the oscillatory ones."""
+    M, K, Q0, Q1, Q2 = quasi_steady
+    b, rho, V = 0.5, 1.0, 3.0
+    errs = []
+    for scale in (1.0, 0.01, 0.005):
+        p, *_ = GProblem(ModalSystem(M, K), _poly_gaf(Q0, Q1, scale * Q2), refc=2 * b).roots(V, rho, 0.0)
+        ex = _exact_roots(M, K, Q0, Q1, scale * Q2, b, rho, V)
+        errs.append(np.array([np.min(np.abs(ex - x)) / abs(x) for x in np.sort_complex(p)]))
+    assert errs[0].max() > 1e-3
+    np.testing.assert_allclose(errs[1] / errs[2], 2.0, rtol=0.05)
+
+
+# ----------------------------------------------------------------------------- Nastran bah_plane
+@pytest.fixture(scope="module")
+def bah():
+    gaf_b = bah_qhh_dataset()
+    gm, gk, _ = f06_modes_used(F06)
+    bdf = read_bdf(str(DATA / "bah_plane" / "bah_plane.bdf"), debug=None)
+    fl = bdf.flutters[502]
+    rho = bdf.flfacts[fl.density].factors[0] * bdf.aero.rho_ref
+    mach = bdf.flfacts[fl.mach].factors[0]
+    V = np.asarray(bdf.flfacts[fl.reduced_freq_velocity].factors, dtype=float)
+    summaries = {s["point"]: s for s in f06_flutter_summaries(F06) if np.isclose(s["mach"], mach)}
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        ds = g_solve(ModalSystem(np.diag(gm), np.diag(gk)), gaf_b, V, density=rho, mach=mach)
+    return dict(ds=ds, V=V, summaries=summaries, caught=[str(w.message) for w in caught])
+
+
+def _short_period(ds):
+    """The rigid root (in-vacuo modes 1-2) that oscillates at the first speed."""
+    f0 = ds.frequency.isel(velocity=0).sel(root=[1, 2]).values
+    return int(np.argmax(f0)) + 1
+
+
+def test_bah_elastic_flutter_matches_f06(bah):
+    ref = [(r, first_crossing(s)) for r, s in bah["summaries"].items()]
+    ref = [(r, c) for r, c in ref if c is not None and c["frequency"] > 0]
+    assert len(ref) == 1
+    root_ref, c = ref[0]
+    ds = bah["ds"]
+    i = [j for j in range(ds.sizes["crossing"]) if ds.crossing_root.values[j] == root_ref][0]
+    assert ds.crossing_kind.values[i] == "flutter" and bool(ds.crossing_converged[i])
+    assert abs(float(ds.crossing_velocity[i]) / c["velocity"] - 1) < 0.005
+    assert abs(float(ds.crossing_frequency[i]) / c["frequency"] - 1) < 0.005
+
+
+def test_bah_roots_above_k_table_warn_and_flag(bah):
+    """Roots 9-10 need k > 10 (the table's end) at low speed: one warning each, not converged."""
+    assert any(m.startswith("g-method: root 10 needs k=2") for m in bah["caught"])
+    assert sum("root 9 needs" in m for m in bah["caught"]) == 1
+    assert not bool(bah["ds"].converged.sel(root=10).isel(velocity=0))
+    assert bool(bah["ds"].converged.sel(root=4).all())
+
+
+def test_bah_plunge_root_near_zero(bah):
+    """The other rigid root (plunge / flight path) stays near p = 0 next to the short period."""
+    ds = bah["ds"]
+    sp = _short_period(ds)
+    plunge = 3 - sp
+    low = ds.velocity.values <= 200.0
+    p_sp = np.abs(ds.eigenvalue.sel(root=sp).values[low])
+    p_pl = np.abs(ds.eigenvalue.sel(root=plunge).values[low])
+    assert np.all(p_pl < 0.01 * p_sp)
+
+
+@pytest.mark.xfail(strict=True, reason=(
+    "measured: g-method short period 0.080 Hz, g -2.67 at 30 m/s (Nastran 0.090 Hz, -2.29) and "
+    "0.360 Hz, g -2.93 at 146 m/s (Nastran 0.412, -2.45): 11-13 % in f, 17-20 % in g. The root "
+    "has |g| ~ k (p_bar ~ k(-1.3 + i)), farther from the axis than the branch point of the "
+    "aerodynamics at p_bar = 0, so the first-order expansion about ik is outside its radius of "
+    "convergence; linear interpolation gives 0.083 Hz, g -2.57."))
+def test_bah_short_period_matches_f06(bah):
+    """Short period within 5 % in frequency and 10 % in g of Nastran's PK point 2, 30-200 m/s."""
+    ds = bah["ds"]
+    rows = bah["summaries"][2]["rows"]
+    sel = (rows[:, 2] >= 30.0) & (rows[:, 2] <= 200.0)
+    ours = ds.sel(velocity=rows[sel, 2], method="nearest").sel(root=_short_period(ds))
+    np.testing.assert_allclose(ours.frequency.values, rows[sel, 4], rtol=0.05)
+    np.testing.assert_allclose(ours.damping.values, rows[sel, 3], rtol=0.10)
+
+
+@pytest.mark.xfail(strict=True, reason=(
+    "measured: near 378 m/s, where Nastran's short period turns into real roots, the g-method's "
+    "near-zero rigid root continues as a low-frequency root with g ~ +1 (0.03 Hz, not converged) "
+    "below the elastic flutter speed (394 m/s)."))
+def test_bah_no_unstable_root_below_flutter(bah):
+    ds = bah["ds"]
+    Vf = float(ds.crossing_velocity.values[ds.crossing_root.values == 4][0])
+    below = ds.damping.where(ds.velocity < Vf, drop=True)
+    assert float(below.max()) <= 1e-3
