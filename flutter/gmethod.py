@@ -57,7 +57,8 @@ import numpy as np
 import xarray as xr
 from threadpoolctl import threadpool_limits
 
-from flutter.crossings import G_TOL, Crossing, find_brackets, illinois, interpolate_zero
+from flutter.crossings import (G_TOL, Crossing, drift_roots, find_brackets, illinois,
+                               interpolate_zero, resolved_damping)
 from flutter.gafinterp import GafInterpolator
 from flutter.linalg import unit_rows
 from flutter.parallel import map_cases
@@ -68,7 +69,7 @@ from flutter.tracking import assign
 from structures.common.errors import InputError
 
 LN2 = np.log(2.0)
-OPTIONS = ("nk",)
+OPTIONS = ("nk", "rigid_hz")
 _BIG = 1e30  # eigenvalue of a placeholder candidate: never preferred by the assignment
 
 
@@ -86,10 +87,13 @@ class GProblem:
         Interpolation of Q^R and Q^I/k in k (module docstring: cubic gives continuous dQ/dk).
     nk : int
         Points of the k grid of the sweep (half geometric, half uniform, plus the table's k).
+    rigid_hz : float
+        In-vacuo modes below this frequency [Hz] are rigid-body modes: their drift roots below the
+        GAF table's resolution give no crossings (flutter.crossings.drift_roots), as in p-k.
     """
 
     def __init__(self, system: ModalSystem, gaf, *, refc: float | None = None,
-                 interpolation: str = "cubic", nk: int = 120):
+                 interpolation: str = "cubic", nk: int = 120, rigid_hz: float = 0.05):
         if refc is None:
             if "refc" not in getattr(gaf, "attrs", {}):
                 raise InputError("g-method: the GAFs carry no 'refc' attribute. Fix: pass refc= "
@@ -99,7 +103,10 @@ class GProblem:
             raise InputError(f"g-method: refc={refc} must be > 0. Fix: use the AERO card's REFC.")
         if not (isinstance(nk, (int, np.integer)) and nk >= 8):
             raise InputError(f"g-method: nk = {nk!r}. Fix: give a whole number >= 8 (default 120).")
+        if not rigid_hz >= 0:
+            raise InputError(f"g-method: rigid_hz = {rigid_hz} must be >= 0. Fix: e.g. 0.05.")
         self.system, self.gaf, self.interpolation, self.nk = system, gaf, interpolation, int(nk)
+        self.rigid_hz = float(rigid_hz)
         self.b = 0.5 * float(refc)
         self._interp: dict[float, GafInterpolator] = {}
         self.omega0, self.phi = system.in_vacuo()
@@ -255,7 +262,7 @@ class GProblem:
         else:
             t, good = illinois(fun, fa, fb, xtol=1e-9)
         k, lam, u = cache[t] if t in cache else cache[min(cache, key=lambda s: abs(s - t))]
-        good = good and abs(lam.imag - k) <= 1e-8 * max(abs(lam), 1e-3 * k, 1e-12)
+        good = good and abs(lam.imag - k) <= max(1e-8 * abs(lam), 1e-10)
         return complex(lam.real, k), u, good
 
     def _beyond(self, lam, u, V, rho, mach):
@@ -278,6 +285,9 @@ class GProblem:
 
 def _match(p_ref, u_ref, p, u, ok, out):
     """Exactly len(p_ref) roots out of the candidates (assignment; placeholders if too few)."""
+    keep = ok | out                  # a sign change at a jump of the interpolant is no root
+    if keep.sum() >= p_ref.size:
+        p, u, ok, out = p[keep], u[keep], ok[keep], out[keep]
     n, m = p_ref.size, p.size
     if m < n:
         p = np.concatenate([p, np.full(n - m, _BIG + 0j)])
@@ -371,7 +381,8 @@ def g_solve(system: ModalSystem, gaf, velocity, *, density, mach, sweep: str = "
     g_tol : float
         Neutral-damping band for crossings.
     **options
-        ``nk``: points of the k grid (default 120).
+        ``nk``: points of the k grid (default 120); ``rigid_hz``: rigid-body mode threshold [Hz]
+        (default 0.05).
 
     Returns
     -------
@@ -433,7 +444,9 @@ def _case_dataset(prob: GProblem, V, rho, M, *, sweep, interpolation, refine, g_
     _warn_outside(prob, p, outside, V, M)
     g = prob.damping(p, V[:, None])
     crossings, vectors = [], []
-    for r, i in find_brackets(g, g_tol):
+    k_min = np.array([prob.interpolator(m).k_min for m in M])
+    drift = drift_roots(p, V, prob.b, k_min, prob.omega0 < 2 * np.pi * prob.rigid_hz)
+    for r, i in find_brackets(resolved_damping(g, drift), g_tol):
         if refine:
             t, pr, ur, ok = _refine_crossing(prob, pts, p, u, r, i, g[i, r], g[i + 1, r])
         else:
