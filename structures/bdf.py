@@ -23,7 +23,8 @@ SUPPORTED_CARDS = frozenset({
     "GRID", "CORD1R", "CORD1C", "CORD1S", "CORD2R", "CORD2C", "CORD2S",
     "CBAR", "CBEAM", "PBAR", "PBARL", "PBEAM", "PBEAML", "CROD", "PROD", "CELAS1", "CELAS2",
     "PELAS", "CBUSH", "PBUSH", "CONM2", "CMASS2", "RBE2", "RBAR", "RBE3", "CQUAD4", "CTRIA3",
-    "PSHELL", "MAT1", "MAT2", "MAT8", "SPC", "SPC1", "SPCADD", "SUPORT", "EIGRL", "EIGR", "PARAM",
+    "PSHELL", "MAT1", "MAT2", "MAT8", "SPC", "SPC1", "SPCADD", "SUPORT", "SUPORT1", "EIGRL", "EIGR",
+    "PARAM",
 })
 
 #: Cards read elsewhere (aerodynamics, flutter, output control) and ignored by the structures;
@@ -428,6 +429,36 @@ def _spc(model, filename: str, spc_id) -> tuple:
     return tuple(out)
 
 
+def _suport(model, grids, filename: str) -> tuple:
+    """(grid, component mask) of the r-set: every SUPORT card and the SUPORT1 set the case
+    control selects (``SUPORT1 = id``; Nastran ignores unselected SUPORT1 sets)."""
+    cards = [("SUPORT", card) for card in model.suport]
+    sid = _case_id(model, "SUPORT1")
+    if sid is not None:
+        if sid not in model.suport1:
+            raise MissingReferenceError(card_message(
+                f"SUPORT1 set {sid} is selected but not defined (defined: "
+                f"{sorted(model.suport1)}).", card="SUPORT1", card_id=sid, filename=filename,
+                fix="define the set or correct the case control's SUPORT1 = selection."))
+        cards.append(("SUPORT1", model.suport1[sid]))
+    out = []
+    for name, card in cards:
+        for gid, comps in zip(card.nodes, card.Cs):
+            grids.index([gid], card=name, card_id=gid, filename=filename)
+            try:
+                mask = _comp_mask(comps)
+            except InputError:
+                raise InputError(card_message(
+                    f"grid {gid} has invalid components {comps!r}.", card=name, card_id=gid,
+                    filename=filename, fix="give components as digits 1-6 (e.g. 35).")) from None
+            if mask == 0:
+                raise InputError(card_message(
+                    f"grid {gid} has no components.", card=name, card_id=gid, filename=filename,
+                    fix="give the supported components as digits 1-6 (e.g. 35)."))
+            out.append((int(gid), mask))
+    return tuple(out)
+
+
 def read_model(path, *, spc_id: int | None = None, parsed=None) -> FEModel:
     """Read a Nastran bulk-data deck into a validated :class:`FEModel`.
 
@@ -464,8 +495,7 @@ def read_model(path, *, spc_id: int | None = None, parsed=None) -> FEModel:
         method = next(iter(model.methods.values()))
     if method is not None:
         nd = getattr(method, "nd", None)
-    suport = tuple((g, _comp_mask(c)) for card in model.suport for g, c in zip(card.nodes,
-                                                                                  card.Cs))
+    suport = _suport(model, grids, filename)
     fe = FEModel(filename=filename, grids=grids, elements=_elements(model, filename),
                  properties=_properties(model, filename), materials=_materials(model),
                  masses=_conm2(model, grids, filename), rigid=_rigid(model, filename),

@@ -12,6 +12,10 @@ below the elastic eigenvalues that the factorisation loses them (rigid-body mode
 ones at kHz), the solve is repeated at sigma = -lambda_min / 10 (lambda_min the lowest elastic
 eigenvalue found); modes that stay inaccurate are named in a warning.
 
+Rigid-body modes are exact (:func:`rigid_body_modes`): the geometric rigid-body motions the
+constraints (or the SUPORT r-set) leave free and that carry no strain energy, M-orthonormal, at
+frequency 0.0, with the elastic modes M-orthogonalised against them (:func:`exact_rigid_modes`).
+
 Mechanisms are reported, not hidden: a direction with neither stiffness nor mass makes the shifted
 matrix singular, and a zero-frequency mode that is not a rigid-body motion of the structure is a
 mechanism; both raise :class:`SolverError` naming the grids that move most.
@@ -28,7 +32,7 @@ import xarray as xr
 from threadpoolctl import ThreadpoolController
 
 from structures.assembly import AssembledSystem, assemble
-from structures.common.errors import SolverError, card_message
+from structures.common.errors import InputError, SolverError, card_message
 from structures.frames import rigid_offset
 from structures.model import FEModel
 from structures.modes import modes_dataset
@@ -42,6 +46,13 @@ DENSE_LIMIT = 600
 RESIDUAL_TOL = 1e-10
 #: Eigenvalues above this fraction of the largest one found are elastic for the residual check.
 ELASTIC_RATIO = 1e-6
+#: Largest backward error ||K phi|| / || |K| |phi| || of a rigid-body mode. Measured: ~1e-16 for
+#: the rigid motions of the free-free beam, cylinder and bah_plane; a motion restrained by a
+#: spring is rigid to first order only and shows its spring force (1e-6 and more).
+RIGID_TOL = 1e-10
+#: Rigid-body motions by basic axis (translations 1-3, rotations 4-6; Nastran aircraft axes:
+#: x along the fuselage, y spanwise, z up).
+RIGID_MOTIONS = ("surge", "sway", "plunge", "roll", "pitch", "yaw")
 
 
 def solve_eigen(k: sp.spmatrix, m: sp.spmatrix, nmodes: int, *, shift: float = DEFAULT_SHIFT,
@@ -166,6 +177,166 @@ def rigid_body_basis(model: FEModel, system: AssembledSystem) -> np.ndarray:
     return system.rotation.T @ d_basic
 
 
+def _null_rows(a: np.ndarray, tol: float) -> np.ndarray:
+    """(6, nf) orthonormal basis of the null space of ``a`` (., 6)."""
+    if a.shape[0] == 0:
+        return np.eye(6)
+    _, sv, vt = np.linalg.svd(a)
+    return vt[np.sum(sv > tol * max(sv.max(), 1e-300)):].T
+
+
+def _echelon_names(q: np.ndarray) -> tuple[np.ndarray, list[int]]:
+    """Reduced row echelon form of the motions ``q`` (6, nr) with the rotations as leading
+    columns: each column then starts with its own motion (a rotation, about a point the
+    constraints fix, or a pure translation). Returns (6, nr) columns and their motion index."""
+    order = [3, 4, 5, 0, 1, 2]
+    b = q.T[:, order].copy()
+    pivots, row = [], 0
+    for col in range(6):
+        if row == b.shape[0]:
+            break
+        r = row + int(np.argmax(np.abs(b[row:, col])))
+        if abs(b[r, col]) <= 1e-8 * np.abs(b).max():
+            continue
+        b[[row, r]] = b[[r, row]]
+        b[row] /= b[row, col]
+        others = np.arange(b.shape[0]) != row
+        b[others] -= np.outer(b[others, col], b[row])
+        pivots.append(order[col])
+        row += 1
+    out = np.empty_like(b)
+    out[:, order] = b
+    return out[:row].T, pivots
+
+
+def _m_orthonormal(m, v: np.ndarray, against: np.ndarray | None = None) -> np.ndarray:
+    """Gram-Schmidt of the columns of ``v`` in the M inner product (twice, for round-off), after
+    removing their M-projection on the M-orthonormal columns ``against``."""
+    v = np.array(v, dtype=float)
+    for _ in range(2):
+        if against is not None and against.shape[1]:
+            v -= against @ (against.T @ (m @ v))
+        for j in range(v.shape[1]):
+            w = v[:, j]
+            if j:
+                w = w - v[:, :j] @ (v[:, :j].T @ (m @ w))
+            v[:, j] = w / np.sqrt(w @ (m @ w))
+    return v
+
+
+def rigid_body_modes(model: FEModel, system: AssembledSystem) -> tuple[np.ndarray, list[str]]:
+    """Exact rigid-body modes of a free or partly free model, from the geometry.
+
+    The candidates are the six rigid-body motions the constraints allow: those that the reduction
+    to the a-set keeps, u_g = T u_a on every g-set DOF but the automatic SPCs (SPC, GRID PS and
+    rigid elements restrict them; a free-free model keeps all six). Of these, the rigid-body modes
+    are the motions with no strain energy: the eigenvectors of the candidates' (K_r, M_r) whose
+    backward error ||K phi|| / || |K| |phi| || is at most :data:`RIGID_TOL` (measured ~1e-16 for
+    a rigid motion; a soft spring to ground leaves 1e-6 or more). A mechanism is not a rigid-body
+    motion and is not among them (:func:`compute_modes` reports it).
+
+    With SUPORT / SUPORT1 (the r-set), the modes are the rigid motions of unit displacement of
+    each r-set DOF, as Nastran's rigid-body modes (MSC Dynamic Analysis Guide, "Rigid-body
+    modes": D_rigid from the geometry); the r-set must be statically determinate: as many DOFs as
+    rigid-body modes, and determining them.
+
+    Each mode is named by its motion in the basic axes (:data:`RIGID_MOTIONS`; x along the
+    fuselage, y spanwise, z up): the translations first, then the rotations, Gram-Schmidt in the
+    M inner product in that order, so the rotations turn about the centre of gravity in the free
+    directions, and Phi_r^T M Phi_r = I.
+
+    Parameters
+    ----------
+    model : FEModel
+    system : AssembledSystem
+
+    Returns
+    -------
+    phi : (na, nr) a-set rigid-body modes, M-orthonormal.
+    names : list of str, (nr,) motion of each mode.
+    """
+    rb = np.asarray(rigid_body_basis(model, system))
+    span = np.ptp(model.grids.xyz, axis=0).max() or 1.0
+    rb = rb * np.r_[np.ones(3), np.full(3, 1.0 / span)]   # rotations scaled to the model's size
+    ra = rb[system.a_dofs]
+    keep = np.ones(rb.shape[0], dtype=bool)
+    keep[system.autospc] = False
+    free = _null_rows((rb - system.T @ ra)[keep], 1e-9)
+    v = ra @ free
+    if v.shape[1] == 0:
+        return np.zeros((ra.shape[0], 0)), []
+    v = _m_orthonormal(system.M, v)
+    w, z = np.linalg.eigh(v.T @ (system.K @ v))
+    q = free @ z[:, _backward_error(system.K, v @ z) <= RIGID_TOL]
+    if model.suport:
+        return _suport_modes(model, system, rb, q)
+    q, motion = _echelon_names(q)
+    order = np.argsort(motion, kind="stable")
+    phi = _m_orthonormal(system.M, ra @ q[:, order])
+    return phi, [RIGID_MOTIONS[motion[i]] for i in order]
+
+
+def _suport_modes(model, system, rb, q):
+    """Rigid-body modes of unit r-set displacements (SUPORT / SUPORT1), see rigid_body_modes."""
+    index = model.grids.index([g for g, _ in model.suport], card="SUPORT",
+                              filename=model.filename)
+    r_dofs = np.array([6 * g + c for g, (_, mask) in zip(index, model.suport) for c in range(6)
+                       if mask >> c & 1])
+    r_dofs = r_dofs[np.argsort(r_dofs % 6, kind="stable")]   # translations first
+    ids = model.grids.ids[r_dofs // 6]
+    on_a = np.isin(r_dofs, system.a_dofs)
+    if not on_a.all():
+        bad = int(np.flatnonzero(~on_a)[0])
+        raise InputError(card_message(
+            f"grid {ids[bad]} component {r_dofs[bad] % 6 + 1} is a SUPORT DOF but is constrained "
+            "(SPC, GRID PS, rigid element dependent or no stiffness).", card="SUPORT",
+            card_id=int(ids[bad]), filename=model.filename,
+            fix="support only DOFs that are free; remove it from SUPORT or from the SPC set."))
+    d_r = rb[r_dofs] @ q
+    if d_r.shape[0] != q.shape[1] or np.linalg.matrix_rank(d_r, tol=1e-8 * max(
+            np.abs(d_r).max(initial=0.0), 1e-300)) < q.shape[1]:
+        raise InputError(card_message(
+            f"the SUPORT DOFs {[(int(g), int(c) + 1) for g, c in zip(ids, r_dofs % 6)]} do not "
+            f"determine the model's {q.shape[1]} rigid-body motions (they must be as many, and "
+            "statically determinate).", card="SUPORT", card_id=int(ids[0]),
+            filename=model.filename,
+            fix=f"give {q.shape[1]} SUPORT components that fix every rigid-body motion, e.g. "
+                "a grid near the CG with the free components."))
+    phi = _m_orthonormal(system.M, rb[system.a_dofs] @ (q @ np.linalg.inv(d_r)))
+    return phi, [RIGID_MOTIONS[c] for c in r_dofs % 6]
+
+
+def _backward_error(k, v: np.ndarray) -> np.ndarray:
+    """(nv,) ||K v|| / || |K| |v| || of the columns of ``v`` (eigen_residuals at lambda = 0)."""
+    return eigen_residuals(k, k, np.zeros(v.shape[1]), v)
+
+
+def exact_rigid_modes(m, lam: np.ndarray, phi: np.ndarray,
+                      phi_r: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Replace the lowest eigenpairs by the exact rigid-body modes.
+
+    Parameters
+    ----------
+    m : sparse (na, na) mass.
+    lam : (n,) eigenvalues, ascending; the lowest nr (by min-max, <= the largest Rayleigh quotient
+        of the rigid motions, zero) are the rigid-body ones.
+    phi : (na, n) mass-normalised eigenvectors.
+    phi_r : (na, nr) M-orthonormal rigid-body modes (:func:`rigid_body_modes`).
+
+    Returns
+    -------
+    lam : (n,) with lam[:nr] = 0 exactly, the elastic eigenvalues unchanged.
+    phi : (na, n) rigid modes first, then the elastic ones M-orthogonalised against them and each
+        other (Gram-Schmidt in the M inner product) and re-normalised: Phi^T M Phi = I.
+    """
+    nr = min(phi_r.shape[1], len(lam))
+    if nr == 0:
+        return lam, phi
+    elastic = _m_orthonormal(m, phi[:, nr:], against=phi_r[:, :nr])
+    return (np.concatenate([np.zeros(nr), lam[nr:]]),
+            np.concatenate([phi_r[:, :nr], elastic], axis=1))
+
+
 def _check_mechanisms(model, system, lam, phi, scale):
     zero = np.abs(lam) <= 1e-12 * scale
     if not np.any(zero):
@@ -203,7 +374,10 @@ def compute_modes(model: FEModel, nmodes: int | None = None, *, mass: str = "dec
     Returns
     -------
     xarray.Dataset with ``frequency(mode)`` [Hz], ``shape(mode, dof)`` (basic frame),
-    ``generalized_mass(mode)`` and the dof coordinates; ``attrs['nmodes_requested']``.
+    ``generalized_mass(mode)`` and the dof coordinates; the exact rigid-body modes
+    (:func:`rigid_body_modes`, frequency 0.0) first, named by coordinate ``rigid_motion(mode)``
+    ("plunge", "pitch", ...; "" for elastic modes), with attrs ``rigid_modes`` (their number)
+    and ``rigid_residual`` (their largest ||K phi|| / || |K| |phi| ||, <= RIGID_TOL).
     """
     if system is None:
         system = assemble(model, mass)
@@ -215,8 +389,16 @@ def compute_modes(model: FEModel, nmodes: int | None = None, *, mass: str = "dec
     ratio = dk[dm > 0] / dm[dm > 0]
     scale = float(np.median(ratio)) if ratio.size else 1.0
     _check_mechanisms(model, system, lam, phi, scale)
+    phi_r, motions = rigid_body_modes(model, system)
+    lam, phi = exact_rigid_modes(system.M, lam, phi, phi_r)
     freq = np.sqrt(np.clip(lam, 0.0, None)) / (2.0 * np.pi)
     shapes = (system.rotation @ (system.T @ phi)).T
-    return modes_dataset(freq, shapes, model.grids.ids, model.grids.xyz, source="our solver",
-                         deck=model.filename, units=model.units,
-                         extra_attrs={"mass_formulation": mass, "eigenvalue_shift": shift})
+    residual = float(_backward_error(system.K, phi_r).max(initial=0.0))
+    ds = modes_dataset(freq, shapes, model.grids.ids, model.grids.xyz, source="our solver",
+                       deck=model.filename, units=model.units,
+                       extra_attrs={"mass_formulation": mass, "eigenvalue_shift": shift,
+                                    "rigid_modes": len(motions[:len(lam)]),
+                                    "rigid_residual": residual})
+    names = (motions + [""] * len(lam))[:len(lam)]
+    return ds.assign_coords(rigid_motion=("mode", np.array(names, dtype=str), {
+        "long_name": "rigid-body motion of the mode (basic axes), '' for elastic modes"}))

@@ -1,0 +1,158 @@
+"""Exact rigid-body modes (structures.modal.rigid_body_modes) and the SUPORT / SUPORT1 r-set.
+
+References: the rigid-body motions of a uniform free-free beam (plunge amplitude 1/sqrt(rho A L),
+pitch 1/sqrt(rho A L^3 / 12) about the mid-point, rotary inertia 1.2e-4 of that), the eigenvalues of
+the same (K, M) before the rigid modes are made exact, and Nastran's bah_plane F06 (free in plunge
+and pitch by SPC1 1246 at grid 1).
+"""
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from structures.assembly import assemble
+from structures.bdf import read_model
+from structures.common.errors import InputError, MissingReferenceError
+from structures.massprops import mass_properties
+from structures.modal import RIGID_TOL, compute_modes, rigid_body_modes, solve_eigen
+from structures.nastran_results import read_f06_eigenvalues
+from tests.structures.beam_decks import AREA, LENGTH, RHO, beam_deck
+
+DATA = Path(__file__).resolve().parents[1] / "data"
+BAH = DATA / "bah_plane"
+
+
+def _orthonormality(ds, system):
+    """Phi^T M Phi with the g-set basic mass of the assembled system (translations, rotations)."""
+    shapes = ds["shape"].values
+    return shapes @ (system.m_basic @ shapes.T)
+
+
+@pytest.mark.parametrize("deck, nmodes", [("beam", 12), ("cylinder", 14)])
+def test_free_free_models_have_six_exact_rigid_modes(tmp_path, deck, nmodes):
+    """Free-free CBEAM beam and CQUAD4 cylinder: 6 modes at 0.0 Hz, Phi^T M Phi = I to 1e-12
+    (rigid-elastic blocks zero), the elastic frequencies those of the plain eigen-solve to 1e-9."""
+    path = (beam_deck(tmp_path / "beam.bdf", support="free", element="CBEAM") if deck == "beam"
+            else DATA / "dakota_cylinder" / "modal.bdf")
+    model = read_model(path)
+    system = assemble(model, warn=False)
+    ds = compute_modes(model, nmodes, system=system)
+    lam, _ = solve_eigen(system.K, system.M, nmodes, groups=system.a_dofs // 6)
+    freq = ds["frequency"].values
+    assert np.all(freq[:6] == 0.0)
+    assert list(ds["rigid_motion"].values[:6]) == ["surge", "sway", "plunge", "roll", "pitch",
+                                                   "yaw"]
+    assert ds.attrs["rigid_modes"] == 6 and ds.attrs["rigid_residual"] <= RIGID_TOL
+    gram = _orthonormality(ds, system)
+    assert np.abs(gram - np.eye(nmodes)).max() < 1e-12
+    assert np.abs(gram[:6, 6:]).max() < 1e-12
+    np.testing.assert_allclose(freq[6:], np.sqrt(lam[6:]) / (2 * np.pi), rtol=1e-9)
+
+
+def test_free_free_beam_rigid_shapes_are_analytic(tmp_path):
+    """Plunge: u_z = 1 / sqrt(m) everywhere; pitch about the mid-point (the CG): theta_y =
+    1 / sqrt(m L^2 / 12) (rotary inertia rho I L adds 1.2e-4), u_z = -theta_y (x - L/2)."""
+    model = read_model(beam_deck(tmp_path / "beam.bdf", support="free", element="CBEAM"))
+    ds = compute_modes(model, 8)
+    mass = RHO * AREA * LENGTH
+    plunge = ds["shape"].sel(mode=3).values.reshape(-1, 6)
+    sign = np.sign(plunge[0, 2])
+    np.testing.assert_allclose(sign * plunge[:, 2], 1 / np.sqrt(mass), rtol=1e-12)
+    assert np.abs(plunge[:, [0, 1, 3, 4, 5]]).max() < 1e-12 / np.sqrt(mass)
+    pitch = ds["shape"].sel(mode=5).values.reshape(-1, 6)
+    theta = pitch[:, 4] * np.sign(pitch[0, 4])
+    np.testing.assert_allclose(theta, 1 / np.sqrt(mass * LENGTH ** 2 / 12), rtol=2e-4)
+    x = model.grids.xyz[:, 0]
+    np.testing.assert_allclose(pitch[:, 2], -pitch[:, 4] * (x - LENGTH / 2),
+                               atol=1e-12 * np.abs(pitch[:, 2]).max())
+
+
+def test_bah_plane_two_rigid_modes_pure_plunge_and_pitch_about_the_cg():
+    """SPC1 1246 at grid 1 leaves plunge and pitch: mode 1 a uniform u_z, mode 2 a uniform
+    theta_y turning about the CG's x (M-orthogonal to plunge), elastic modes as Nastran's F06."""
+    model = read_model(BAH / "bah_plane.bdf")
+    ds = compute_modes(model)
+    assert list(ds["rigid_motion"].values[:3]) == ["plunge", "pitch", ""]
+    assert np.all(ds["frequency"].values[:2] == 0.0)
+    plunge = ds["shape"].sel(mode=1).values.reshape(-1, 6)
+    pitch = ds["shape"].sel(mode=2).values.reshape(-1, 6)
+    props = mass_properties(model)
+    np.testing.assert_allclose(np.abs(plunge[:, 2]), 1 / np.sqrt(props.mass), rtol=1e-12)
+    assert np.abs(plunge[:, [0, 1, 3, 4, 5]]).max() < 1e-14
+    assert np.ptp(pitch[:, 4]) < 1e-12 * np.abs(pitch[:, 4]).max()
+    assert np.abs(pitch[:, [1, 3, 5]]).max() < 1e-14
+    x, z = model.grids.xyz[:, 0], model.grids.xyz[:, 2]
+    # u = theta x r about (x_cg, z of grid 1, whose x the SPC fixes): u_x = theta (z - z_1).
+    np.testing.assert_allclose(pitch[:, 2], -pitch[:, 4] * (x - props.cg[0]),
+                               atol=1e-10 * np.abs(pitch[:, 2]).max())
+    np.testing.assert_allclose(pitch[:, 0], pitch[:, 4] * (z - z[model.grids.index([1])[0]]),
+                               atol=1e-10 * np.abs(pitch[:, 2]).max())
+    ref = read_f06_eigenvalues(BAH / "bah_plane.f06").frequency.values[:8]
+    np.testing.assert_allclose(ds["frequency"].values[2:], ref[2:], rtol=2e-6)
+
+
+def test_spring_supported_plate_has_no_rigid_mode():
+    """The two-mode flutter plate on pitch and plunge springs: its motions carry strain energy."""
+    model = read_model(DATA / "two_mode_flutter" / "0012_flutter.bdf")
+    phi, names = rigid_body_modes(model, assemble(model, warn=False))
+    assert phi.shape[1] == 0 and names == []
+    assert compute_modes(model).attrs["rigid_modes"] == 0
+
+
+def _bah_variant(tmp_path, case: str = "", bulk: str = "") -> Path:
+    """bah_plane.bdf with extra case-control and bulk lines (its INCLUDEs copied beside it)."""
+    for inc in BAH.glob("*.inc"):
+        shutil.copy(inc, tmp_path / inc.name)
+    text = (BAH / "bah_plane.bdf").read_text()
+    text = text.replace("SPC = 101\n", f"SPC = 101\n{case}\n").replace(
+        "SPC1,101,1246,1\n", f"SPC1,101,1246,1\n{bulk}\n")
+    path = tmp_path / "bah_suport.bdf"
+    path.write_text(text)
+    return path
+
+
+def _span_equal(a, b, m):
+    """Same column space: b's M-projection on a (M-orthonormal) is b."""
+    return np.abs(a @ (a.T @ (m @ b)) - b).max() < 1e-10 * np.abs(b).max()
+
+
+@pytest.mark.parametrize("case, bulk", [("", "SUPORT,1,35"), ("SUPORT1 = 7", "SUPORT1,7,1,53"),
+                                        ("SUPORT1 = 7", "SUPORT,1,3\nSUPORT1,7,1,5")])
+def test_suport_and_suport1_give_the_geometric_rigid_modes(tmp_path, case, bulk):
+    """The r-set (grid 1, components 3 and 5) spans the same two rigid modes as the SPC-free
+    directions; the modes are M-orthonormal, plunge first."""
+    model = read_model(_bah_variant(tmp_path, case, bulk))
+    assert sorted(model.suport) == [(1, 0b10100)] or sorted(model.suport) == [(1, 0b100),
+                                                                              (1, 0b10000)]
+    system = assemble(model, warn=False)
+    phi, names = rigid_body_modes(model, system)
+    plain = read_model(BAH / "bah_plane.bdf")
+    ref, _ = rigid_body_modes(plain, assemble(plain, warn=False))
+    assert names == ["plunge", "pitch"]
+    assert np.abs(phi.T @ (system.M @ phi) - np.eye(2)).max() < 1e-12
+    assert _span_equal(ref, phi, system.M)
+
+
+def test_unselected_suport1_is_ignored(tmp_path):
+    """Nastran uses a SUPORT1 set only when the case control selects it."""
+    assert read_model(_bah_variant(tmp_path, "", "SUPORT1,7,1,35")).suport == ()
+
+
+@pytest.mark.parametrize("case, bulk, error, words", [
+    ("SUPORT1 = 8", "SUPORT1,7,1,35", MissingReferenceError, ["SUPORT1 8", "not defined"]),
+    ("", "SUPORT,999,35", MissingReferenceError, ["SUPORT 999", "GRID 999"]),
+    ("", "SUPORT,1,3", InputError, ["SUPORT 1", "do not determine", "2 rigid-body"]),
+    ("", "SUPORT,1,135", InputError, ["SUPORT 1", "component 1", "constrained"]),
+])
+def test_bad_suport_names_file_card_grid_and_fix(tmp_path, case, bulk, error, words):
+    path = _bah_variant(tmp_path, case, bulk)
+    with pytest.raises(error) as info:
+        model = read_model(path)
+        rigid_body_modes(model, assemble(model, warn=False))
+    text = str(info.value)
+    assert str(path) in text and "Fix:" in text
+    for word in words:
+        assert word in text
