@@ -6,7 +6,10 @@ import warnings
 import numpy as np
 import pytest
 from pyNastran.bdf.bdf import read_bdf
+from scipy.optimize import fsolve
+from scipy.special import kv
 
+from aero.strip import section_gaf
 from flutter.gmethod import GProblem, g_solve
 from flutter.kmethod import k_solve
 from flutter.pk import pk_solve
@@ -65,6 +68,51 @@ def test_unknown_option_and_sweep():
         g_solve(section(), gaf, [1.0], density=RHO, mach=0.0, refc=2 * B, tol=1e-6)
     with pytest.raises(InputError, match="unknown sweep"):
         g_solve(section(), gaf, [1.0], density=RHO, mach=0.0, refc=2 * B, sweep="mach")
+
+
+def _theodorsen_laplace(s, a, b):
+    """Theodorsen's section GAF at complex p_bar = s (independent of aero.strip): BAH eqs.
+    5-311/5-312 with ik -> s and C(k) -> C(s) = K1(s) / (K0(s) + K1(s)) (R. T. Jones' generalized
+    Theodorsen function; C(ik) = H1 / (H1 + i H0)); F = q Q u, u = [h, alpha], F = [-L, M]."""
+    C = kv(1, s) / (kv(0, s) + kv(1, s))
+    pi = np.pi
+    L_h = pi * s * s + 2 * pi * C * s
+    L_a = b * (pi * s - pi * a * s * s + 2 * pi * C * (1 + (0.5 - a) * s))
+    M_h = b * (pi * a * s * s + 2 * pi * (a + 0.5) * C * s)
+    M_a = b * b * (-pi * (0.5 - a) * s - pi * (0.125 + a * a) * s * s
+                   + 2 * pi * (a + 0.5) * C * (1 + (0.5 - a) * s))
+    return np.array([[-2 * L_h, -2 * L_a], [2 * M_h, 2 * M_a]])
+
+
+def test_free_section_damped_root_second_order():
+    """A free (unsprung) Theodorsen section has a heavily damped oscillatory rigid-body root. Against
+    the exact root of det[M p_bar^2 - (rho b^2/2) Q(p_bar)] = 0 with the generalized Theodorsen
+    function, the g-method's error is of second order in the damping: relative error in p below
+    0.1 (Re p / Im p)^2 and falling at least 2.5x per doubling of the mass ratio. Measured: 3.6e-2,
+    8.7e-3, 2.3e-3, 8.4e-4 at mu = 20, 40, 80, 160 (g = -1.58 ... -0.40); p-k's Q^R + p_bar Q^I/k
+    gives g -2.10 for the exact -1.58 at mu = 20 (the g-method -1.70)."""
+    assert np.abs(_theodorsen_laplace(0.3j, A, B) - section_gaf(0.3, A, B)).max() < 1e-12
+    errs = []
+    for mu in (20.0, 40.0, 80.0, 160.0):
+        m = mu * np.pi * RHO * B * B
+        M = np.array([[m, -0.5 * m * B], [-0.5 * m * B, 0.4 * m * B * B]])
+        p, *_ = GProblem(ModalSystem(M, np.zeros((2, 2))), gaf, refc=2 * B).roots(1.0, RHO, 0.0)
+        x = p[p.imag > 1e-3]
+        assert x.size == 1
+        x = x[0] * B / 1.0
+
+        def det(y):
+            d = np.linalg.det(M * (y[0] + 1j * y[1]) ** 2
+                              - 0.5 * RHO * B * B * _theodorsen_laplace(y[0] + 1j * y[1], A, B)) / m ** 2
+            return [d.real, d.imag]
+
+        y = fsolve(det, [x.real, x.imag], xtol=1e-12)
+        exact = y[0] + 1j * y[1]
+        assert abs(exact.imag - x.imag) < 0.5 * exact.imag   # the same root
+        err = abs(x - exact) / abs(exact)
+        assert err < 0.1 * (exact.real / exact.imag) ** 2
+        errs.append(err)
+    assert np.all(np.array(errs[:-1]) / np.array(errs[1:]) > 2.5)
 
 
 # ----------------------------------------------------------------------------- quasi-steady GAFs
