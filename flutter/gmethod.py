@@ -44,6 +44,15 @@ a candidate and is picked up when a root needs it; the near-zero plunge / flight
 free-free aircraft is either one complex root with tiny k or real roots, whichever continues the
 root. Missing candidates (never seen in the tests) repeat the previous point, flagged.
 
+Divergence: a real root through p = 0 is a zero of det(K - q Q^R(0)), whatever the damping terms,
+so besides the sign changes of the tracked roots' g, the dynamic pressures q_D of
+(K - q_D Q^R(0)) u = 0 passed between two points are divergence crossings, given to the root whose
+eigenvector correlates best with u. This matters because the real root that diverges need not be
+the continuation of any modal root: on the Theodorsen typical section the g-method's pitch root
+stays oscillatory and heavily damped past the divergence speed, as the exact root with the
+generalized Theodorsen function does (U = 2.5 b w_theta: exact p = -0.445 + 0.517i, g-method
+-0.505 + 0.488i), while p-k's turns real; the real root crossing zero at U_D is an extra root.
+
 Interpolation: with ``interpolation="linear"`` dQ/dk is piecewise constant in k, so Q' and the
 eigenvalues jump at the tabulated k values; a root that falls on such a jump has no exact solution
 (Im g jumps over zero) and is reported at the table k, flagged not converged when the jump is
@@ -54,6 +63,7 @@ from __future__ import annotations
 import warnings
 
 import numpy as np
+import scipy.linalg as sla
 import xarray as xr
 from threadpoolctl import threadpool_limits
 
@@ -337,6 +347,46 @@ def _warn_outside(prob: GProblem, p, outside, V, mach) -> None:
                 "marked not converged. Fix: extend the MKAERO1 k list.", RuntimeWarning, stacklevel=3)
 
 
+def _static_divergence(prob: GProblem, pts, U, crossings) -> list[tuple[Crossing, np.ndarray]]:
+    """Divergence crossings: dynamic pressures q_D of (K - q_D Q^R(0)) u = 0 passed between two
+    points (BAH sec. 8-1, static divergence; the zero of the real root at k = 0), each given to
+    the root whose eigenvector correlates best with u and skipped where a tracked root's own
+    divergence crossing is already in that interval."""
+    out = []
+    seen = {c.index for c in crossings if c.kind == "divergence"}
+    for i in range(len(pts) - 1):
+        (V0, r0, M0), (V1, r1, M1) = pts[i], pts[i + 1]
+        q0, q1 = 0.5 * r0 * V0 * V0, 0.5 * r1 * V1 * V1
+        if i in seen or not q1 > q0:
+            continue
+
+        def modes(mach):
+            QR0 = prob.interpolator(mach).with_slopes(np.zeros(1), slopes=False)[0][0]
+            lam, X = sla.eig(prob.system.stiffness, QR0)
+            ok = np.isfinite(lam) & (np.abs(lam.imag) <= 1e-9 * np.abs(lam))
+            return lam.real[ok], X[:, ok].T
+
+        for qd, ud in zip(*modes(M0)):
+            if not q0 < qd <= q1:
+                continue
+            t = (qd - q0) / (q1 - q0)
+            for _ in range(20 if M1 != M0 else 0):   # Mach along the line: q_D(M(t)) = q(t)
+                lam, X = modes(M0 + t * (M1 - M0))
+                j = int(np.argmin(np.abs(lam - qd)))
+                qd, ud = lam[j], X[j]
+                t_new = float(np.clip((qd - q0) / (q1 - q0), 0.0, 1.0))
+                if abs(t_new - t) < 1e-10:
+                    break
+                t = t_new
+            ud = ud / np.linalg.norm(ud)
+            r = int(np.argmax(np.abs(U[i].conj() @ ud)))
+            Vc, rc, Mc = (a + t * (b - a) for a, b in zip(pts[i], pts[i + 1]))
+            out.append((Crossing(root=r + 1, index=i, t=float(t), velocity=float(Vc),
+                                 density=float(rc), mach=float(Mc), frequency=0.0,
+                                 kind="divergence", converged=True, refined=True), ud))
+    return out
+
+
 def _refine_crossing(prob: GProblem, pts, P, U, r, i, g0, g1):
     """Zero of root r's damping between points i and i+1 by Illinois root-finding on the flight
     point (each evaluation a full reduced-frequency sweep; root r picked by assignment of all
@@ -462,6 +512,11 @@ def _case_dataset(prob: GProblem, V, rho, M, *, sweep, interpolation, refine, g_
                                   kind="divergence" if real else "flutter",
                                   converged=bool(ok and conv[i, r] and conv[i + 1, r]),
                                   refined=refine))
+    for c, ud in _static_divergence(prob, pts, u, crossings):
+        crossings.append(c)
+        vectors.append(ud)
+    order = sorted(range(len(crossings)), key=lambda j: (crossings[j].index, crossings[j].root))
+    crossings, vectors = [crossings[j] for j in order], [vectors[j] for j in order]
     system = prob.system
     ds = vg_dataset(p, u, g, conv, V, rho, M, b=prob.b, modes=system.modes, sweep=sweep,
                     method="G", attrs={"interpolation": interpolation, "g_tol": g_tol,

@@ -52,6 +52,16 @@ def test_section_flutter_equals_pk_k_and_theodorsen(section_sweep):
     assert abs(2 * np.pi * fg / 0.65 - 1) < 0.03
 
 
+def test_section_divergence_analytic(section_sweep):
+    """Divergence U_D / (b w_theta) = sqrt(mu r^2 / (1 + 2a)) = 2.828 (H&P eq. 5.44), frequency 0."""
+    _, ds = section_sweep
+    dv = ds.crossing_kind.values == "divergence"
+    assert dv.sum() == 1
+    U_D = np.sqrt(20.0 * 0.24 / (1 + 2 * A))
+    assert abs(float(ds.crossing_velocity[dv][0]) / U_D - 1) < 1e-3
+    assert float(ds.crossing_frequency[dv][0]) == 0.0
+
+
 def test_section_density_sweep_crosses_at_the_velocity_sweep_density(section_sweep):
     """A PKNL-like density sweep at the flutter speed found at rho = 1 crosses at rho = 1."""
     _, ds = section_sweep
