@@ -178,11 +178,11 @@ def rigid_body_basis(model: FEModel, system: AssembledSystem) -> np.ndarray:
 
 
 def _null_rows(a: np.ndarray, tol: float) -> np.ndarray:
-    """(6, nf) orthonormal basis of the null space of ``a`` (., 6)."""
+    """(6, nf) orthonormal basis of the null space of ``a`` (., 6): singular values <= ``tol``."""
     if a.shape[0] == 0:
         return np.eye(6)
     _, sv, vt = np.linalg.svd(a)
-    return vt[np.sum(sv > tol * max(sv.max(), 1e-300)):].T
+    return vt[np.sum(sv > tol):].T
 
 
 def _echelon_names(q: np.ndarray) -> tuple[np.ndarray, list[int]]:
@@ -261,7 +261,7 @@ def rigid_body_modes(model: FEModel, system: AssembledSystem) -> tuple[np.ndarra
     ra = rb[system.a_dofs]
     keep = np.ones(rb.shape[0], dtype=bool)
     keep[system.autospc] = False
-    free = _null_rows((rb - system.T @ ra)[keep], 1e-9)
+    free = _null_rows((rb - system.T @ ra)[keep], 1e-9)   # rb's entries are O(1)
     v = ra @ free
     if v.shape[1] == 0:
         return np.zeros((ra.shape[0], 0)), []
