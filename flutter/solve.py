@@ -17,8 +17,9 @@ from dataclasses import dataclass, field
 import numpy as np
 import xarray as xr
 
+from flutter.gmethod import g_solve_many
 from flutter.kmethod import k_solve
-from flutter.pk import pk_solve, pk_solve_many
+from flutter.pk import pk_solve_many
 from flutter.results import label_units
 from flutter.system import ModalSystem, StructuralDamping
 from structures.common.errors import InputError, UnsupportedCardError, card_message
@@ -26,6 +27,13 @@ from structures.common.errors import InputError, UnsupportedCardError, card_mess
 #: Nastran FLUTTER method -> our solver ("pk": velocity sweeps, "pknl": one density sweep,
 #: "k": reduced-frequency sweeps).
 METHODS = {"PK": "pk", "PKNL": "pknl", "K": "k", "KE": "k"}
+
+#: How the flight points of a PK / PKNL request are solved, and the method name its results carry:
+#: "pk" the p-k method (flutter.pk; name PK / PKNL as the card), "g" Chen's g-method
+#: (flutter.gmethod, name G), "p" the p-method on a rational fit of the GAFs (flutter.pmethod,
+#: name P-RFA). Which is the default for free-free aircraft, and why: README, "Flutter methods".
+SOLVERS = {"pk": pk_solve_many, "g": g_solve_many}
+SOLVER_NAMES = {"g": "G"}
 
 
 @dataclass(frozen=True)
@@ -51,6 +59,9 @@ class FlutterRequest:
         Where the request came from (e.g. the deck's file name), named in error messages.
     name : str
         Label of its sweeps (default "FLUTTER <sid>"), e.g. "Mach 0.160 matched line".
+    solver : {"pk", "g", "p"}
+        How a PK / PKNL request's flight points are solved (:data:`SOLVERS`); K / KE requests are
+        always solved by the k-method.
     """
 
     sid: int
@@ -62,10 +73,20 @@ class FlutterRequest:
     damping: StructuralDamping = field(default_factory=StructuralDamping)
     source: str = ""
     name: str = ""
+    solver: str = "pk"
 
     def __post_init__(self):
         if not self.name:
             object.__setattr__(self, "name", f"FLUTTER {self.sid}")
+        if self.solver not in SOLVERS:
+            raise InputError(card_message(
+                f"flutter solver {self.solver!r} is not known.", card="FLUTTER", card_id=self.sid,
+                filename=self.source or None, fix=f"use one of {sorted(SOLVERS)}."))
+        if self.solver != "pk" and self.method not in ("PK", "PKNL"):
+            raise InputError(card_message(
+                f"solver {self.solver!r} solves PK / PKNL flight points; this request is "
+                f"{self.method}.", card="FLUTTER", card_id=self.sid, filename=self.source or None,
+                fix="use solver 'pk' for K / KE requests (the k-method), or make the card PK."))
         if self.method not in METHODS:
             raise UnsupportedCardError(card_message(
                 f"flutter method {self.method!r} is not supported.", card="FLUTTER",
@@ -137,14 +158,15 @@ def solve_request(system: ModalSystem, gaf: xr.Dataset,
         V = np.unique(req.values)
         points = [(rho, m) for rho in req.density for m in req.mach]
         # the sweeps are independent: one per core (flutter.parallel)
-        results = pk_solve_many(system, gaf, [(V, rho, m) for rho, m in points],
-                                workers=min(len(points), _cores()))
+        results = SOLVERS[req.solver](system, gaf, [(V, rho, m) for rho, m in points],
+                                      workers=min(len(points), _cores()))
         for (rho, m), ds in zip(points, results):
             out.append(({"mach": m, "density": rho, "configuration": name}, ds))
     elif METHODS[req.method] == "pknl":
         rho, mach, V = (np.asarray(x) for x in (req.density, req.mach, req.values))
         order = np.argsort(rho, kind="stable")
-        ds = pk_solve(system, gaf, V[order], density=rho[order], mach=mach[order], sweep="density")
+        ds = SOLVERS[req.solver](system, gaf, [(V[order], rho[order], mach[order])],
+                                 sweep="density")[0]
         out.append(({"mach": float(mach[0]), "configuration": name}, ds))
     else:
         for rho in req.density:
@@ -184,7 +206,7 @@ def solve_flutter(modes: xr.Dataset, gaf: xr.Dataset, requests, units: str | Non
         system = modal_system(modes, req.damping)
         for lab, ds in solve_request(system, gaf, req):
             ds = label_units(ds, units)
-            ds.attrs.update(method=req.method, rhoref=req.rhoref,
+            ds.attrs.update(method=SOLVER_NAMES.get(req.solver, req.method), rhoref=req.rhoref,
                             configuration=lab["configuration"])
             results.append((lab, ds))
     return results

@@ -18,6 +18,8 @@ Example (``data/bah_wing/case.toml``)::
     kernel = "quartic"       # doublet-lattice kernel integration: quartic or parabolic
     flutter_ids = [502]      # FLUTTER cards to run (default: the case control's FMETHOD)
     structural_damping = 0.01   # optional: g on every mode, replaces the decks' SDAMP table
+    solver = "pk"            # how PK/PKNL flight points are solved: "pk" (p-k), "g" (g-method),
+                             # "p" (p-method on a rational fit); solvers = { 502 = "g" } per FLUTTER id
     envelope = { mach = [0.2, 0.6], velocity = [300.0, 320.0] }  # optional: V_D per Mach, model units
 
     [flutter.matched]        # optional: matched-point flutter instead of the decks' FLUTTER cards
@@ -57,6 +59,7 @@ from pathlib import Path
 from types import MappingProxyType
 from typing import Mapping
 
+from flutter.solve import SOLVERS
 from flutter.summary import Envelope
 from structures.acceptance import MIL_STD_1540C, NASA_STD_5002, AcceptanceCriteria
 from structures.assembly import MASS_OPTIONS
@@ -101,7 +104,7 @@ CASE_KEYS = {"name": "str", "units": "str", "configurations": "table list", "flu
 CONFIGURATION_KEYS = {"name": "str", "deck": "str", "nmodes": "int", "mass": "str", "gvt": "str",
                       "measured_mass": "table or str"}
 FLUTTER_KEYS = {"kernel": "str", "flutter_ids": "int list", "structural_damping": "float",
-                "envelope": "table", "matched": "table"}
+                "envelope": "table", "matched": "table", "solver": "str", "solvers": "table"}
 ENVELOPE_KEYS = {"mach": "float list", "velocity": "float list"}
 MATCHED_KEYS = {"mach": "float list", "altitude": "float list", "altitude_units": "str",
                 "points": "int", "method": "str"}
@@ -242,7 +245,9 @@ class FlutterSettings:
     matched points of ``matched`` (:class:`MatchedSettings`) instead.
 
     ``structural_damping`` (g, e.g. 0.01) replaces the decks' SDAMP tables when given;
-    ``envelope`` is the flight envelope whose 1.15 x speed the flutter boundary is held against.
+    ``envelope`` is the flight envelope whose 1.15 x speed the flutter boundary is held against;
+    ``solver`` solves every PK / PKNL request and the matched points (flutter.solve.SOLVERS), and
+    ``solvers`` (FLUTTER id -> solver, stored as sorted pairs) overrides it per FLUTTER card.
     """
 
     kernel: str = "quartic"
@@ -250,11 +255,26 @@ class FlutterSettings:
     structural_damping: float | None = None
     envelope: Envelope | None = None
     matched: MatchedSettings | None = None
+    solver: str = "pk"
+    solvers: tuple = ()
 
     def __post_init__(self):
         if self.kernel not in KERNELS:
             raise InputError(f"kernel = {self.kernel!r}; valid: {', '.join(KERNELS)}.")
         object.__setattr__(self, "flutter_ids", tuple(int(i) for i in self.flutter_ids))
+        pairs = self.solvers.items() if isinstance(self.solvers, dict) else self.solvers
+        try:
+            pairs = tuple(sorted((int(k), str(v)) for k, v in pairs))
+        except (TypeError, ValueError):
+            raise InputError(f"solvers = {self.solvers!r}: give FLUTTER ids and solver names, e.g. "
+                             "solvers = { 502 = \"g\" }.") from None
+        object.__setattr__(self, "solvers", pairs)
+        for name in (self.solver,) + tuple(v for _, v in pairs):
+            if name not in SOLVERS:
+                raise InputError(f"solver = {name!r}; valid: {', '.join(sorted(SOLVERS))}.")
+        if self.matched is not None and self.solvers:
+            raise InputError("solvers (per FLUTTER id) and [flutter.matched] were both given. Fix: "
+                             "the matched points are solved by solver = ...; remove solvers.")
         if self.matched is not None and self.flutter_ids:
             raise InputError(f"flutter_ids = {list(self.flutter_ids)} and [flutter.matched] both "
                              "choose the flight points. Fix: remove flutter_ids to run the matched "

@@ -22,6 +22,7 @@ from aero.gaf import generalized_aero_forces, grid_aero_forces, project_gaf
 from aero.model import read_aero_model
 from flutter.participation import crossing_participation
 from flutter.results import summary_entries, write_flutter
+from flutter.rigid_roots import label_results
 from flutter.solve import METHODS, solve_flutter
 from pipeline.case import Case, Configuration, FlutterSettings, MatchedSettings
 from pipeline.flight_points import label_lines, matched_requests
@@ -161,10 +162,12 @@ def deck_grid_gaf(deck, *, kernel: str = "quartic", flutter_ids=None,
 
 
 def _requests(bdf, deck: str, flutter_ids, structural_damping: float | None,
-              matched: MatchedSettings | None, units: str | None) -> list:
-    """The deck's FLUTTER requests, or the matched lines of ``matched`` in their place."""
+              matched: MatchedSettings | None, units: str | None, solver: str = "pk",
+              solvers=()) -> list:
+    """The deck's FLUTTER requests, or the matched lines of ``matched`` in their place, each with
+    its solver."""
     if matched is None:
-        return read_flutter_requests(bdf, deck, flutter_ids, structural_damping)
+        return read_flutter_requests(bdf, deck, flutter_ids, structural_damping, solver, solvers)
     if flutter_ids:
         raise InputError(f"FLUTTER ids {list(flutter_ids)} (--flutter-id) and the case's "
                          "[flutter.matched] both choose the flight points. Fix: drop the FLUTTER "
@@ -172,7 +175,7 @@ def _requests(bdf, deck: str, flutter_ids, structural_damping: float | None,
                          "[flutter.matched].")
     rhoref = float(bdf.aero.rho_ref) if bdf.aero is not None else 1.0
     return matched_requests(matched, units, deck_damping(bdf, deck, structural_damping),
-                            rhoref=rhoref, source=deck)
+                            rhoref=rhoref, source=deck, solver=solver)
 
 
 def flutter_participation(results, modes: xr.Dataset, *, rigid_hz: float = 0.05,
@@ -200,9 +203,11 @@ def flutter_participation(results, modes: xr.Dataset, *, rigid_hz: float = 0.05,
         ``density``, ``velocity``, ``frequency`` [Hz], ``root`` and ``flutter_mode`` (1, 2, ... in
         order of speed within its sweep), on ``mode`` the coordinates ``rigid`` and
         ``fe_frequency`` [Hz]; attrs ``configuration``, ``units``, ``rigid_hz``. Flutter crossings
-        only (no divergence); ``flutter_point`` has length 0 when there is none. Sweeps of matched
-        points (:func:`pipeline.flight_points.label_lines`) add ``altitude`` [m], ``ktas`` and
-        ``keas`` [kn] on ``flutter_point`` (NaN for points of other sweeps).
+        only (classical and body-freedom, no divergence); ``flutter_point`` has length 0 when
+        there is none; ``rigid_motion(mode)`` names the rigid-body modes ("plunge", "pitch",
+        "" for elastic ones and modes without names). Sweeps of matched points
+        (:func:`pipeline.flight_points.label_lines`) add ``altitude`` [m], ``ktas`` and ``keas``
+        [kn] on ``flutter_point`` (NaN for points of other sweeps).
     """
     mass = np.diag(np.asarray(modes["generalized_mass"].values, dtype=float))
     fe_frequency = np.asarray(modes["frequency"].values, dtype=float)
@@ -213,7 +218,7 @@ def flutter_participation(results, modes: xr.Dataset, *, rigid_hz: float = 0.05,
               if any(f"crossing_{name}" in ds for _, ds in results)}
     rows, shares, labels_at = [], [], []
     for case, (_, ds) in enumerate(results):
-        part = crossing_participation(ds, mass, omega, rigid_hz, kinds=("flutter",))
+        part = crossing_participation(ds, mass, omega, rigid_hz)
         for f in range(part.sizes["flutter_mode"]):
             i = int(np.flatnonzero((ds.crossing_root.values == int(part.root[f])) &
                                    (ds.crossing_velocity.values == float(part.velocity[f])))[0])
@@ -245,6 +250,8 @@ def flutter_participation(results, modes: xr.Dataset, *, rigid_hz: float = 0.05,
                              {"long_name": "n-th flutter crossing of its sweep, by speed"}),
             "mode": ("mode", np.asarray(modes["mode"].values, dtype=int)),
             "rigid": ("mode", fe_frequency < rigid_hz),
+            "rigid_motion": ("mode", modes["rigid_motion"].values.astype(str)
+                             if "rigid_motion" in modes.coords else np.full(nmode, "")),
             "fe_frequency": ("mode", fe_frequency, {"units": "Hz",
                                                     "long_name": "in-vacuo frequency"}),
         },
@@ -260,7 +267,8 @@ def flutter_chain(deck: str | os.PathLike, modes: xr.Dataset, *, kernel: str = "
                   out_dir: str | os.PathLike | None = None,
                   configuration: str | None = None, progress=None,
                   matched: MatchedSettings | None = None,
-                  grid_gaf: xr.Dataset | None = None) -> dict:
+                  grid_gaf: xr.Dataset | None = None, solver: str = "pk",
+                  solvers=()) -> dict:
     """GAFs, flutter and participation of a deck's FLUTTER requests on ``modes``.
 
     Parameters
@@ -298,6 +306,10 @@ def flutter_chain(deck: str | os.PathLike, modes: xr.Dataset, *, kernel: str = "
         The deck's grid GAFs (:func:`deck_grid_gaf`, :func:`aero.gaf.grid_aero_forces`) at the Mach
         numbers and reduced frequencies these requests need: Q_hh is then projected on the modes
         and no doublet-lattice matrix is computed.
+    solver : {"pk", "g", "p"}
+        Solver of the PK / PKNL requests and matched points (:data:`flutter.solve.SOLVERS`).
+    solvers : sequence of (int, str)
+        Per FLUTTER id overrides of ``solver``.
 
     Returns
     -------
@@ -313,7 +325,8 @@ def flutter_chain(deck: str | os.PathLike, modes: xr.Dataset, *, kernel: str = "
         units = system_of(modes.attrs)
     elif modes.attrs.get("units") != units:
         modes = modes.assign_attrs(units=units)  # modes.nc and the GAFs' labels name the system
-    requests = _requests(bdf, str(deck), flutter_ids, structural_damping, matched, units)
+    requests = _requests(bdf, str(deck), flutter_ids, structural_damping, matched, units,
+                         solver, solvers)
     aero = read_aero_model(bdf)
     machs, ks = _gaf_points(aero, requests, matched)
     if grid_gaf is None:
@@ -325,6 +338,7 @@ def flutter_chain(deck: str | os.PathLike, modes: xr.Dataset, *, kernel: str = "
     results = solve_flutter(modes, gaf, requests, units, progress=progress)
     if matched is not None:
         results = label_lines(results, matched, units)
+    results = label_results(results, modes, rigid_hz)
     sweeps, labels = [ds for _, ds in results], [lab for lab, _ in results]
     participation = flutter_participation(results, modes, rigid_hz=rigid_hz, units=units,
                                           configuration=configuration or deck.stem)
@@ -366,7 +380,7 @@ def case_flutter(case: Case, config: Configuration, modes: xr.Dataset,
                          structural_damping=settings.structural_damping,
                          rigid_hz=case.selection.rigid_hz, units=case.units, out_dir=out_dir,
                          configuration=config.name, progress=progress, matched=settings.matched,
-                         grid_gaf=grid_gaf)
+                         grid_gaf=grid_gaf, solver=settings.solver, solvers=settings.solvers)
 
 
 def case_aero_signature(case: Case, config: Configuration) -> str:
@@ -433,4 +447,4 @@ def check_flutter_requests(case: Case, flutter_ids=None) -> None:
     for config in case.configurations:
         _requests(read_pynastran(config.deck), str(config.deck),
                   _flutter_ids(settings, flutter_ids), settings.structural_damping,
-                  settings.matched, case.units)
+                  settings.matched, case.units, settings.solver, settings.solvers)

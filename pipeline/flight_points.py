@@ -50,7 +50,7 @@ def line_altitudes(matched) -> np.ndarray:
 
 
 def matched_requests(matched, units: str, damping: StructuralDamping, *, rhoref: float = 1.0,
-                     source: str = "") -> list[FlutterRequest]:
+                     source: str = "", solver: str = "pk") -> list[FlutterRequest]:
     """One PKNL request per Mach number of ``[flutter.matched]``.
 
     Parameters
@@ -64,6 +64,8 @@ def matched_requests(matched, units: str, damping: StructuralDamping, *, rhoref:
         The deck's AERO RHOREF (model units), the reference of the printed density ratios.
     source : str
         The deck's file name, for messages.
+    solver : {"pk", "g", "p"}
+        Solver of the matched points (:data:`flutter.solve.SOLVERS`).
 
     Returns
     -------
@@ -83,7 +85,7 @@ def matched_requests(matched, units: str, damping: StructuralDamping, *, rhoref:
         rho, V = line_points(h, mach, model)
         out.append(FlutterRequest(sid=sid, method="PKNL", density=tuple(rho),
                                   mach=(mach,) * h.size, values=tuple(V), rhoref=rhoref,
-                                  damping=damping, source=source,
+                                  damping=damping, source=source, solver=solver,
                                   name=f"Mach {mach:.3f} matched line"))
     return out
 

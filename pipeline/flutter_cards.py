@@ -101,7 +101,8 @@ def _selection(bdf, flutter_ids) -> list[tuple[int, int | None]]:
 
 
 def read_flutter_requests(bdf, filename: str = "", flutter_ids=None,
-                          structural_damping: float | None = None) -> list[FlutterRequest]:
+                          structural_damping: float | None = None, solver: str = "pk",
+                          solvers=()) -> list[FlutterRequest]:
     """The deck's flutter requests: the FLUTTER cards selected by FMETHOD (all if none is selected).
 
     Parameters
@@ -115,6 +116,11 @@ def read_flutter_requests(bdf, filename: str = "", flutter_ids=None,
     structural_damping : float, optional
         A g value (e.g. 0.01 from the case's ``[flutter]``): constant modal viscous damping g on
         every mode, replacing the deck's SDAMP / TABDMP1 selection.
+    solver : {"pk", "g", "p"}
+        Solver of the PK / PKNL cards (:data:`flutter.solve.SOLVERS`); K / KE cards keep the
+        k-method.
+    solvers : sequence of (int, str) or dict
+        Per FLUTTER id overrides of ``solver``.
 
     Returns
     -------
@@ -133,8 +139,15 @@ def read_flutter_requests(bdf, filename: str = "", flutter_ids=None,
                                       filename=filename,
                                       fix="add FLUTTER/FLFACT cards and FMETHOD."))
     rhoref = float(bdf.aero.rho_ref) if bdf.aero is not None else 1.0
+    selected = _selection(bdf, flutter_ids)
+    extra = sorted(set(dict(solvers)) - {sid for sid, _ in selected})
+    if extra:
+        raise InputError(card_message(
+            f"[flutter] solvers names FLUTTER {extra}, which are not run (run: "
+            f"{[sid for sid, _ in selected]}).", card="FLUTTER", card_id=extra[0],
+            filename=filename, fix="name only FLUTTER ids that are run, or add them to flutter_ids."))
     out = []
-    for sid, sdamp in _selection(bdf, flutter_ids):
+    for sid, sdamp in selected:
         if sid not in bdf.flutters:
             who = "FMETHOD" if flutter_ids is None else "[flutter] flutter_ids (or --flutter-id)"
             raise InputError(card_message(f"{who} names FLUTTER {sid}, which is not defined; "
@@ -152,8 +165,11 @@ def read_flutter_requests(bdf, filename: str = "", flutter_ids=None,
                                               filename=filename, fix="add the FLFACT card."))
             lists.append(np.asarray(bdf.flfacts[fid].factors, dtype=float))
         dens, mach, vals = lists
+        chosen = dict(solvers).get(sid, solver)
+        if fl.method not in ("PK", "PKNL") and sid not in dict(solvers):
+            chosen = "pk"  # a case-wide solver applies to the PK / PKNL cards only
         out.append(FlutterRequest(
-            sid=sid, method=fl.method, density=tuple(dens * rhoref), mach=tuple(mach),
+            solver=chosen, sid=sid, method=fl.method, density=tuple(dens * rhoref), mach=tuple(mach),
             values=tuple(np.abs(vals)), rhoref=rhoref,
             damping=_damping(bdf, None if sdamp is None else int(sdamp), structural_damping,
                              filename),

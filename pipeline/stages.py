@@ -34,6 +34,7 @@ from functools import partial
 
 import numpy as np
 
+from flutter.results import is_flutter
 from pipeline.graph import Stage, StageContext
 from structures.common.files import read_dataset, write_dataset, write_json, write_text
 from structures.common.nastran import deck_files
@@ -101,7 +102,7 @@ def _flutter(ctx: StageContext, case, config, n: int, aero: str, progress=None) 
     grid = read_dataset(ctx.run_dir / f"stage0/aero/{aero}/grid_gaf.nc")
     result = case_flutter(case, _deck(ctx, config, n), modes, out_dir=out, progress=progress,
                           grid_gaf=grid)
-    flutter = [c for c in result["summary"] if c["kind"] == "flutter"]
+    flutter = [c for c in result["summary"] if is_flutter(c["kind"])]
     if not flutter:
         return "no flutter crossing"
     low = min(flutter, key=lambda c: c["velocity"])
@@ -208,7 +209,8 @@ def _flutter_settings(case) -> dict:
     f = case.flutter
     return {"kernel": f.kernel, "flutter_ids": list(f.flutter_ids),
             "structural_damping": f.structural_damping, "rigid_hz": case.selection.rigid_hz,
-            "units": case.units, "matched": None if f.matched is None else repr(f.matched)}
+            "units": case.units, "matched": None if f.matched is None else repr(f.matched),
+            "solver": f.solver, "solvers": [list(p) for p in f.solvers]}
 
 
 def _tuning_settings(case) -> dict:

@@ -13,6 +13,7 @@ import warnings
 import numpy as np
 import pytest
 
+from flutter.solve import SOLVERS
 from flutter.system import StructuralDamping
 from pipeline.case import read_case
 from pipeline.chain import (case_flutter, configuration_modes, deck_modes, flutter_chain,
@@ -216,3 +217,40 @@ def test_pipeline_flutter_deck_agrees_with_the_library(tmp_path, capsys, plain):
     np.testing.assert_allclose(part.participation.values,
                                lib["participation"].participation.values, rtol=1e-9, atol=1e-9)
     assert part.attrs["units"] == "model units" and part.attrs["configuration"] == "bah_plane"
+
+
+@pytest.mark.filterwarnings("ignore::UserWarning", "ignore::RuntimeWarning")
+def test_case_solver_runs_the_g_method(tmp_path, capsys, plain):
+    """``[flutter] solver = "g"``: the FLUTTER 502 points are solved by the g-method (method "G" in
+    summary.json and flutter.nc), and its elastic flutter point is Nastran's (394.0 m/s, 3.18 Hz,
+    F06) and p-k's within 1 % (both exact at g = 0); per-id ``solvers`` does the same."""
+    base = (f'name = "chain"\nunits = "si"\n[[configurations]]\nname = "baseline"\n'
+            f'deck = "{DECK.as_posix()}"\nnmodes = 10\n[flutter]\nflutter_ids = [502]\n')
+    for i, extra in enumerate(('solver = "g"\n', 'solvers = { 502 = "g" }\n')):
+        case_file = tmp_path / f"case{i}.toml"
+        case_file.write_text(base + extra)
+        assert main(["flutter", str(case_file), "--out", str(tmp_path / f"fl{i}")]) == 0
+        capsys.readouterr()
+        summary = json.loads((tmp_path / f"fl{i}" / "baseline" / "summary.json").read_text())
+        flutter = [c for c in summary if c["kind"] == "flutter"]
+        assert {c["method"] for c in summary} == {"G"}
+        assert flutter[0]["velocity"] == pytest.approx(394.0, rel=0.02)
+        assert flutter[0]["frequency"] == pytest.approx(3.18, rel=0.02)
+        assert flutter[0]["velocity"] == pytest.approx(_flutter(plain[1])[0]["velocity"], rel=0.01)
+        ds = read_dataset(tmp_path / f"fl{i}" / "baseline" / "flutter.nc")
+        assert ds["method"].values.tolist() == ["G"]
+
+
+@pytest.mark.parametrize("extra, message", [
+    ('solver = "q"\n', f"solver = 'q'; valid: {', '.join(sorted(SOLVERS))}."),
+    ('solvers = { 501 = "g" }\n', "names FLUTTER [501], which are not run"),
+])
+def test_case_solver_errors(tmp_path, capsys, extra, message):
+    """An unknown solver names the valid ones; a per-id solver for a FLUTTER card that is not run
+    names the card and the ones that are."""
+    case_file = tmp_path / "case.toml"
+    case_file.write_text(f'name = "chain"\nunits = "si"\n[[configurations]]\nname = "baseline"\n'
+                         f'deck = "{DECK.as_posix()}"\nnmodes = 10\n[flutter]\n'
+                         f'flutter_ids = [502]\n{extra}')
+    assert main(["flutter", str(case_file), "--out", str(tmp_path / "fl")]) != 0
+    assert message in capsys.readouterr().err

@@ -73,6 +73,8 @@ def _changes(case) -> dict:
         "structural_damping": replace(case, flutter=replace(f, structural_damping=0.02)),
         "rigid_hz": replace(case, selection=replace(s, rigid_hz=s.rigid_hz * 2)),
         "units": replace(case, units=_other(("si", "english_in"), case.units)),
+        "solver": replace(case, flutter=replace(f, solver=_other(("pk", "g"), f.solver))),
+        "solvers": replace(case, flutter=replace(f, solvers={502: "g"})),
     }
     return {
         "stage0/modes/baseline": {"nmodes": _config(case, nmodes=12),
