@@ -30,6 +30,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "flutter"
 
 from aero.strip import strip_gaf  # noqa: E402
 from flutter.pk import pk_solve, pk_solve_many  # noqa: E402
+from flutter.results import is_flutter  # noqa: E402
 from flutter.system import ModalSystem, StructuralDamping  # noqa: E402
 
 L, CHORD, NSTRIP = 8.0, 1.5, 40
@@ -96,7 +97,7 @@ def plain_crossings(M, K, gaf, ds, rho, mach):
     q_of_k = plain.make_q(g1.k.values, g1.Q.values)
     out = []
     for c in range(ds.sizes["crossing"]):
-        if ds.crossing_kind.values[c] != "flutter":
+        if not is_flutter(ds.crossing_kind.values[c]):
             continue
         r = int(ds.crossing_root[c]) - 1
         V = ds.velocity.values

@@ -15,6 +15,7 @@ import xarray as xr
 
 from flutter.atmosphere import Units, atmosphere, flight_labels
 from flutter.pk import pk_solve
+from flutter.results import is_flutter
 from flutter.system import ModalSystem
 from structures.common.errors import InputError, SolverError
 
@@ -150,7 +151,7 @@ def matched_flutter(system: ModalSystem, gaf, velocity, *, altitude_m: float, ma
         ds = velocity_sweep_at_altitude(system, gaf, velocity, altitude_m=altitude_m, mach=mach,
                                         units=units, **options)
         fl = [i for i in range(ds.sizes.get("crossing", 0))
-              if ds.crossing_kind.values[i] == "flutter"
+              if is_flutter(ds.crossing_kind.values[i])
               and (root is None or int(ds.crossing_root[i]) == root)]
         if not fl:
             raise SolverError(f"matched_flutter: no flutter crossing at altitude {altitude_m} m, "

@@ -14,7 +14,9 @@ without RHOREF). The unit system (``unit_system`` attribute, see
 tables (K / KE) list the points in increasing k as Nastran's FLFACT order usually is, each root at
 its own velocity, and skip the k values where the root has no solution (rigid roots); their
 COMPLEX EIGENVALUE is Nastran's K-method one, i V / sqrt(1 + i g) (checked against pt145.f06),
-not the p-k form p = omega (g/2 + i) stored in the Dataset.
+not the p-k form p = omega (g/2 + i) stored in the Dataset. A root the sweep names
+(``root_label``, :func:`flutter.rigid_roots.label_rigid_roots`) gets the line ``ROOT = SHORT
+PERIOD`` (or ``PLUNGE``, ...) under its POINT line, where Nastran leaves a blank one.
 
 Formatting only: the numbers come from :func:`flutter.pk.pk_solve` / :func:`flutter.kmethod.k_solve`.
 """
@@ -86,7 +88,10 @@ def format_table(ds: xr.Dataset, root: int, *, title: str = "", case: int = 1) -
     """
     method = str(ds.attrs.get("method", "PK"))
     labels = unit_labels(ds.attrs.get("unit_system"))
-    rows, order = _rows(ds, list(ds["root"].values).index(root))
+    index = list(ds["root"].values).index(root)
+    rows, order = _rows(ds, index)
+    name = str(ds["root_label"].values[index]) if "root_label" in ds.coords else ""
+    named = f"       ROOT = {name.upper()}" if name else ""
     config = str(ds.attrs.get("configuration", "AEROSG2D")) or "AEROSG2D"
     lines = [f"1    {title}".rstrip(),
              f"0     {method} METHOD{'':<60}CASE {case}",
@@ -94,7 +99,7 @@ def format_table(ds: xr.Dataset, root: int, *, title: str = "", case: int = 1) -
              f"{'':25}CONFIGURATION = {config}     UNITS = {labels.system} (VELOCITY {labels.velocity},"
              f" DENSITY {labels.density}, FREQUENCY {labels.frequency})"]
     if ds.attrs.get("sweep") == "density":
-        lines += [f"       POINT = {root:4d}     METHOD = {method}", "", "", _HEAD_PKNL]
+        lines += [f"       POINT = {root:4d}     METHOD = {method}", named, "", _HEAD_PKNL]
         lines += ["".join([f"{row[0]:9.4f}", f"{row[1]:18.5E}"] + [f"{x:14.5E}" for x in row[2:]])
                   for row in rows[order]]
     else:
@@ -102,7 +107,7 @@ def format_table(ds: xr.Dataset, root: int, *, title: str = "", case: int = 1) -
         rho = float(np.atleast_1d(ds["density"].values)[0])
         ratio = rho / float(ds.attrs.get("rhoref", 1.0))
         lines += [f"       POINT = {root:4d}     MACH NUMBER = {mach:7.4f}     DENSITY RATIO = "
-                  f"{ratio:11.4E}     METHOD = {method:<4}", "", "", _HEAD]
+                  f"{ratio:11.4E}     METHOD = {method:<4}", named, "", _HEAD]
         lines += ["".join([f"{row[0]:14.4f}", f"{row[1]:20.7E}"] + [f"{x:18.7E}" for x in row[2:]])
                   for row in rows[order]]
     return "\n".join(lines) + "\n"

@@ -17,6 +17,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
+from flutter.results import FLUTTER_KINDS
 from structures.common.errors import InputError
 
 
@@ -50,7 +51,7 @@ def participation_factors(u: np.ndarray, mass: np.ndarray) -> np.ndarray:
 
 
 def crossing_participation(ds: xr.Dataset, mass: np.ndarray, omega: np.ndarray,
-                           rigid_hz: float = 0.05, kinds: tuple = ("flutter",)) -> xr.Dataset:
+                           rigid_hz: float = 0.05, kinds: tuple = FLUTTER_KINDS) -> xr.Dataset:
     """Participation of every mode in each flutter crossing of one sweep.
 
     Parameters
@@ -64,7 +65,7 @@ def crossing_participation(ds: xr.Dataset, mass: np.ndarray, omega: np.ndarray,
     rigid_hz : float
         Modes below this frequency (Hz) are rigid-body modes.
     kinds : tuple of str
-        Crossing kinds to include.
+        Crossing kinds to include (default both flutter kinds, :data:`flutter.results.FLUTTER_KINDS`).
 
     Returns
     -------

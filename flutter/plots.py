@@ -9,12 +9,15 @@ import numpy as np
 import xarray as xr
 from matplotlib.figure import Figure
 
+from flutter.results import is_flutter
 from flutter.summary import MARGIN_FACTOR, Envelope
 from structures.units import MODEL_UNITS
 
 
 def plot_vg(ds: xr.Dataset, *, roots=None, title: str | None = None, g_limits=(-0.3, 0.2)):
-    """V-g and V-f curves of a sweep, one line per tracked root, crossings marked.
+    """V-g and V-f curves of a sweep, one line per tracked root, crossings marked; the legend names
+    the rigid-body roots ("root 2 (short period)") when the sweep has ``root_label(root)``
+    (:func:`flutter.rigid_roots.label_rigid_roots`).
 
     Parameters
     ----------
@@ -34,10 +37,14 @@ def plot_vg(ds: xr.Dataset, *, roots=None, title: str | None = None, g_limits=(-
     dim = "velocity" if sweep == "k" else sweep
     fig = Figure(figsize=(7, 7))
     ax_g, ax_f = fig.subplots(2, 1, sharex=True)
+    names = (dict(zip(ds.root.values.tolist(), ds["root_label"].values.astype(str)))
+             if "root_label" in ds.coords else {})
     for r in (ds.root.values if roots is None else roots):
         one = ds.sel(root=r)
         x = np.broadcast_to(one[dim].values, one.damping.shape)
-        line, = ax_g.plot(x, one.damping.values, label=f"root {int(r)}")
+        name = names.get(int(r), "")
+        line, = ax_g.plot(x, one.damping.values,
+                          label=f"root {int(r)}" + (f" ({name})" if name else ""))
         ax_f.plot(x, one.frequency.values, color=line.get_color())
         bad = ~one.converged.values
         if bad.any():
@@ -80,7 +87,7 @@ def plot_flutter_boundary(points: list[dict], envelope: Envelope | None = None, 
     for (kind, typ, root), pts in sorted(groups.items(), key=lambda kv: str(kv[0])):
         pts = sorted(pts, key=lambda p: p["mach"])
         ax.plot([p["mach"] for p in pts], [p["velocity"] for p in pts],
-                "s--" if kind == "flutter" else "d:", label=f"{typ} (root {root})")
+                "s--" if is_flutter(kind) else "d:", label=f"{typ} (root {root})")
     if envelope is not None:
         m = np.asarray(envelope.mach)
         ax.plot(m, envelope.velocity, "k-", label="envelope")

@@ -33,7 +33,15 @@ from flutter.crossings import Crossing
 from structures.common.files import write_dataset, write_json, write_text
 from structures.units import unit_labels
 
-KINDS = ("flutter", "divergence")
+#: Crossing kinds that are flutter points (a root's damping crossing zero at a non-zero
+#: frequency): classical and body-freedom flutter (flutter.summary.crossing_kinds).
+FLUTTER_KINDS = ("flutter", "body_freedom_flutter")
+KINDS = FLUTTER_KINDS + ("divergence",)
+
+
+def is_flutter(kind: str) -> bool:
+    """True for a flutter crossing of any kind (:data:`FLUTTER_KINDS`), False for divergence."""
+    return str(kind) in FLUTTER_KINDS
 
 
 def normalise_eigenvectors(u: np.ndarray) -> np.ndarray:
@@ -180,9 +188,12 @@ def attach_crossings(ds: xr.Dataset, crossings: list[Crossing],
 def crossings_of(ds: xr.Dataset) -> list[dict]:
     """The crossings stored in a sweep Dataset as summary.json entries.
 
-    Each entry: ``mach``, ``density``, ``velocity``, ``frequency`` [Hz], ``root``, ``kind``,
-    ``converged``, ``method`` and ``units`` (:func:`units_entry` of the Dataset's ``unit_system``
-    attribute, set by :func:`label_units`; "model units" when absent); matched points
+    Each entry: ``mach``, ``density``, ``velocity``, ``frequency`` [Hz], ``root``, ``kind``
+    (``flutter``, ``body_freedom_flutter`` or ``divergence``: :data:`KINDS`), ``converged``,
+    ``method``, ``root_label`` (when the sweep names its root, e.g. "short period":
+    :func:`flutter.rigid_roots.label_rigid_roots`) and ``units`` (:func:`units_entry` of the
+    Dataset's ``unit_system`` attribute, set by :func:`label_units`; "model units" when absent);
+    matched points
     (:func:`flutter.matched.label_crossings`) add ``altitude`` [m], ``ktas`` and ``keas`` [kn],
     their units in ``units`` too.
     """
@@ -191,14 +202,18 @@ def crossings_of(ds: xr.Dataset) -> list[dict]:
     units = units_entry(ds.attrs.get("unit_system"))
     flight = [name for name in ("altitude", "ktas", "keas") if f"crossing_{name}" in ds]
     units.update({name: ds[f"crossing_{name}"].attrs["units"] for name in flight})
+    labels = (dict(zip(ds["root"].values.tolist(), ds["root_label"].values.astype(str)))
+              if "root_label" in ds.coords else {})
     out = []
     for i in range(ds.sizes.get("crossing", 0)):
+        root_label = labels.get(int(ds.crossing_root[i]), "")
         out.append({"mach": float(ds.crossing_mach[i]), "density": float(ds.crossing_density[i]),
                     "velocity": float(ds.crossing_velocity[i]),
                     "frequency": float(ds.crossing_frequency[i]),
                     "root": int(ds.crossing_root[i]), "kind": str(ds.crossing_kind.values[i]),
                     "converged": bool(ds.crossing_converged[i]),
                     "method": str(ds.attrs.get("method", "")), "units": dict(units),
+                    **({"root_label": root_label} if root_label else {}),
                     **{name: float(ds[f"crossing_{name}"][i]) for name in flight}})
     return out
 
@@ -246,7 +261,9 @@ def stack_cases(sweeps: list[xr.Dataset], labels: list[dict]) -> xr.Dataset:
         flight velocity for p-k, V = omega b / k for the k method, whose points are its k values
         (one k for all roots of a point, each root at its own V). ``velocity_value``,
         ``density_value``, ``mach_value`` (case, velocity) hold the flight point (``velocity_value``
-        NaN for the k method); ``method`` (case) names the method of each case.
+        NaN for the k method); ``method`` (case) names the method of each case; coordinate
+        ``root_label(root)`` ("short period", "plunge", ...: :func:`flutter.rigid_roots.root_labels`)
+        when the sweeps carry it.
     """
     npts = max(s.sizes[s.attrs["sweep"]] for s in sweeps)
     nc = len(sweeps)
@@ -294,8 +311,22 @@ def stack_cases(sweeps: list[xr.Dataset], labels: list[dict]) -> xr.Dataset:
             else:
                 arr = np.array([np.nan if v is None else float(v) for v in vals], dtype=float)
             ds = ds.assign_coords({f"case_{key}": ("case", arr)})
+    if any("root_label" in s.coords for s in sweeps):
+        ds = ds.assign_coords(root_label=("root", _root_labels(sweeps), {
+            "long_name": "flight-mechanics name of rigid-body roots ('' elastic; cases that "
+                         "disagree joined by ' / ')"}))
     systems = {s.attrs.get("unit_system") for s in sweeps}
     return label_units(ds, systems.pop() if len(systems) == 1 else None)
+
+
+def _root_labels(sweeps: list[xr.Dataset]) -> np.ndarray:
+    """(nroot,) str: each root's ``root_label`` over the cases (distinct ones joined by ' / ')."""
+    per_case = [s["root_label"].values.astype(str) for s in sweeps if "root_label" in s.coords]
+    out = []
+    for r in range(sweeps[0].sizes["root"]):
+        names = list(dict.fromkeys(str(lab[r]) for lab in per_case if lab[r]))
+        out.append(" / ".join(names))
+    return np.array(out, dtype=str)
 
 
 def write_flutter(out_dir: str | os.PathLike, sweeps: list[xr.Dataset], labels: list[dict], *,

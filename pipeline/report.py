@@ -25,7 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
-from flutter.summary import classify
+from flutter.summary import BFF_SHARE, classify
 from pipeline.report_figures import (boundary_figure, figure_data_uri, png_data_uri, vg_overlay)
 from pipeline.report_tables import (correlation_section, design_change_section, fmt,
                                     mass_section, modes_section, note, selection_roles,
@@ -133,7 +133,8 @@ def mechanisms(folder: Path, config: str) -> list[tuple]:
     list of tuple
         ``(case, root, flutter_mode, velocity, mechanism)`` per flutter point of
         ``<config>/flutter/participation.nc`` ([] without one): :func:`flutter.summary.classify`
-        ("body-freedom" when the rigid-body modes take >= 30 % of the root's participation, else
+        ("body-freedom: R-F" when the rigid-body modes take >= BFF_SHARE of the root's
+        participation, R and F its largest rigid and flexible modes, else
         the two most participating flexible modes), each mode named by its paired GVT test mode
         (``<config>/correlation.nc`` ``test_name`` / ``paired_fe_mode``; "mode n" when unpaired).
     """
@@ -207,8 +208,9 @@ def _flutter_change_section(run_dir: Path, case, stages: list[Path], labels: Uni
     return (head + "<p>The n-th flutter crossing (by speed) of each sweep at stage k against the "
             "n-th at stage 0; change = 100 (stage k - stage 0) / stage 0, signed (positive: "
             "faster / higher). \u2013: no such crossing at that stage (no change is given). "
-            "Mechanism: body-freedom when the rigid-body modes take >= 30 % of the root's "
-            "participation, else its two most participating flexible modes, named by their "
+            f"Mechanism: body-freedom (its largest rigid-body and flexible modes) when the "
+            f"rigid-body modes take >= {BFF_SHARE:g} % of the root's participation, else its two "
+            "most participating flexible modes, named by their "
             "paired GVT test modes (\"mode n\": unpaired). KEAS (matched-point flutter): the "
             "equivalent airspeed, which changes where the true airspeed M a(h) of a matched "
             "line does not (constant speed of sound, 11-20 km).</p>"

@@ -299,11 +299,14 @@ def select_modes(participation: dict[str, xr.Dataset], *, primary: float = 0.9,
     role = np.full(shape, "", dtype="<U9")
     test = np.zeros(shape, dtype=int)
     fe_f = np.full(shape, np.nan)
+    motion = np.full(shape, "", dtype="<U12")
     search, n_crit, P_rows, prim_tot, sec_tot = [], [], [], [], []
     for c, (name, ds) in enumerate(participation.items()):
         col = np.searchsorted(modes, ds["mode"].values)
         roles, rule = _select_one(ds, primary, secondary, flutter_modes)
         role[c, col], fe_f[c, col] = roles, ds["fe_frequency"].values
+        if "rigid_motion" in ds.coords:
+            motion[c, col] = ds["rigid_motion"].values.astype(str)
         for fe_mode, test_mode in pairing.get(name, {}).items():
             if int(fe_mode) not in ds["mode"].values:
                 raise InputError(card_message(
@@ -328,6 +331,8 @@ def select_modes(participation: dict[str, xr.Dataset], *, primary: float = 0.9,
         {"role": (("configuration", "mode"), role, {"values": "rigid | primary | secondary | ''"}),
          "test_mode": (("configuration", "mode"), test, {"description": "paired GVT mode, 0: none"}),
          "fe_frequency": (("configuration", "mode"), fe_f, {"units": "Hz"}),
+         "rigid_motion": (("configuration", "mode"), motion,
+                          {"description": "rigid-body motion (plunge, pitch, ...), '' if none"}),
          "participation": (("flutter_point", "mode"), np.concatenate(P_rows), pct),
          "primary_total": ("flutter_point", np.concatenate(prim_tot), pct),
          "secondary_total": ("flutter_point", np.concatenate(sec_tot), pct),
@@ -377,8 +382,9 @@ def selection_table(selection: xr.Dataset) -> str:
 
     One block per configuration: modes as rows (FE mode, in-vacuo frequency [Hz], paired GVT mode,
     role), one column per critical root (Mach x flutter mode, with its speed and frequency); rigid
-    and primary modes first, then "Total" (rigid + primary), the secondary modes, "Total" (rigid +
-    primary + secondary) and the remaining modes.
+    and primary modes first (the rigid-body modes named by their motion, "1 plunge, 2 pitch", when
+    the participation has ``rigid_motion``), then "Total" (rigid + primary), the secondary modes,
+    "Total" (rigid + primary + secondary) and the remaining modes.
 
     Parameters
     ----------
@@ -415,6 +421,10 @@ def selection_table(selection: xr.Dataset) -> str:
                 f"{'f [Hz]':>33s}" + "".join(f"{float(f):11.4g}" for f in sub["frequency"].values),
                 f"{'mode':>5s} {'f_FE [Hz]':>10s} {'GVT':>5s}  {'role':<9s}"]
         rows += _mode_rows(selection["mode"].values, cfg, sub, "rigid")
+        motions = cfg["rigid_motion"].values if "rigid_motion" in cfg else ()
+        named = [f"{int(m)} {n}" for m, n in zip(selection["mode"].values, motions) if str(n)]
+        if named:
+            rows.append(f"{'':5s} rigid-body modes: {', '.join(named)}")
         rows += _mode_rows(selection["mode"].values, cfg, sub, "primary")
         rows.append(f"{'Total (rigid + primary)':<33s}"
                     + "".join(f"{v:11.1f}" for v in sub["primary_total"].values))

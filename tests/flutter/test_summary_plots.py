@@ -12,7 +12,7 @@ import xarray as xr
 from aero.strip import section_gaf
 from flutter.plots import plot_flutter_boundary, plot_mode_snapshot, plot_vg
 from flutter.pk import pk_solve
-from flutter.summary import Envelope, flutter_summary
+from flutter.summary import BFF_SHARE, Envelope, flutter_summary
 from flutter.system import ModalSystem
 from flutter_nastran import DATA
 from structures.common.errors import InputError
@@ -47,15 +47,18 @@ def test_summary_type_and_margin(sweep):
 
 
 def test_body_freedom_type(sweep):
-    """Declaring mode 1 rigid: its share of the flutter mode (>= 30%) makes it body-freedom."""
+    """Declaring mode 1 rigid: its share of the flutter mode (>= BFF_SHARE) makes the crossing
+    body-freedom flutter, its type naming the rigid and the flexible mode."""
     from flutter.participation import crossing_participation
 
     sys_ = section()
     omega = np.array([0.0, 1.0])  # mode 1 declared rigid
     share = float(crossing_participation(sweep, sys_.mass, omega).rigid_total[0])
+    assert share >= BFF_SHARE
     out = flutter_summary(sweep, sys_.mass, omega)
-    assert out[0]["type"] == ("body-freedom" if share >= 30.0 else "mode 2")
-    assert flutter_summary(sweep, sys_.mass, omega)[0]["type"] != "divergence"
+    assert out[0]["kind"] == "body_freedom_flutter"
+    assert out[0]["type"] == "body-freedom: rigid mode 1-mode 2"
+    assert out[1]["kind"] == out[1]["type"] == "divergence"
 
 
 def test_envelope_validation():

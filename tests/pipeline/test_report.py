@@ -128,7 +128,7 @@ def test_mechanism_body_freedom_and_unpaired_modes(run, tmp_path):
     corr["paired_fe_mode"][:] = [2, 3, 2]                  # FE mode 4 unpaired
     write_dataset(corr, folder / "EFEW" / "correlation.nc")
     names = [m[-1] for m in mechanisms(folder, "EFEW")]
-    assert names == ["body-freedom", "mode 4-SW1T", "mode 4-SW1T"]
+    assert names == ["body-freedom: rigid mode 1-SW2B", "mode 4-SW1T", "mode 4-SW1T"]
     assert mechanisms(folder, "FFFW") == []               # no participation.nc: nothing to name
 
 
