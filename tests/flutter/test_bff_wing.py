@@ -190,11 +190,12 @@ def _params(key) -> md.BFFParameters:
 
 
 def _short_period_hz(out: dict, velocity: float) -> float:
-    """Short-period frequency (Hz) of the g-method (exact damping off g = 0) at one speed: the
-    oscillatory one of the two rigid-body roots."""
-    ds = g_solve(modal_system(out["modes"], StructuralDamping()), out["gaf"], [velocity],
+    """Short-period frequency (Hz) of the g-method (exact damping off g = 0) at ``velocity``,
+    tracked from 4 m/s: the oscillatory one of the two rigid-body roots."""
+    V = np.arange(4.0, velocity + 1.0, 2.0)
+    ds = g_solve(modal_system(out["modes"], StructuralDamping()), out["gaf"], V,
                  density=md.RHOREF, mach=md.MACH)
-    f = ds.frequency.values[0, :2]
+    f = ds.frequency.values[-1, :2]
     assert np.count_nonzero(f > 0.2) == 1, f
     return float(f.max())
 
@@ -202,8 +203,9 @@ def _short_period_hz(out: dict, velocity: float) -> float:
 def test_short_period_scales_as_flight_mechanics(variants):
     """At 20 m/s (half the SBFF speed) the short period of every variant against the quasi-steady
     omega_sp ~ sqrt(static margin / I_yy) (module docstring), as ratios to the baseline's, within
-    10 %. Measured (g-method): 1.07 Hz at the baseline; ratios within 1 % (inertia) and 6 % (CG)
-    of the estimate (the neutral point of the DLM lies a little aft of the quarter MAC)."""
+    10 %. Measured (g-method): 1.07 Hz at the baseline (0.51 Hz at 10 m/s); ratios within 0.7 %
+    (inertia) and 8 % (CG) of the estimate (the vortex lattice puts the neutral point at 0.29 MAC,
+    a little aft of the quarter-MAC estimate)."""
     base = (1.5, 0.70)
     f0 = _short_period_hz(variants[base], 20.0)
     assert 0.8 < f0 < 1.3
@@ -251,26 +253,31 @@ def _sbff_of(ds, modes) -> float:
     return sbff({"participation": flutter_participation([({}, ds)], modes)})[0]
 
 
-def test_g_method_and_pk_agree_on_the_sbff(baseline):
-    """Both are exact at g = 0: SBFF speeds within 1 % (measured 40.42 vs 40.42 m/s, 3e-5)."""
+@pytest.fixture(scope="module")
+def g_baseline(baseline):
+    """The g-method on the baseline's modes and GAFs over the deck's FLUTTER velocities."""
     system = modal_system(baseline["modes"], StructuralDamping())
-    V = np.asarray(md.VELOCITIES)
-    g = g_solve(system, baseline["gaf"], V, density=md.RHOREF, mach=md.MACH)
-    assert g.attrs["method"] == "G"
-    assert _sbff_of(g, baseline["modes"]) == pytest.approx(sbff(baseline)[0], rel=0.01)
+    return g_solve(system, baseline["gaf"], np.asarray(md.VELOCITIES), density=md.RHOREF,
+                   mach=md.MACH)
 
 
-def test_g_and_p_methods_agree_on_the_sbff(baseline):
-    """The issue's must-show: g-method and p-method (rational fit of aero.rfa over k <= 0.6, which
-    covers the SBFF's k ~ 0.13 and the wing flutter's ~ 0.21; fit error ~ 1e-5) SBFF speeds
-    within 1 %. Measured: 40.423 m/s both (p-k 40.424), 2.559 Hz."""
+def test_g_method_and_pk_agree_on_the_sbff(baseline, g_baseline):
+    """Both are exact at g = 0: SBFF speeds within 1 % (measured 40.423 vs 40.424 m/s)."""
+    assert g_baseline.attrs["method"] == "G"
+    assert _sbff_of(g_baseline, baseline["modes"]) == pytest.approx(sbff(baseline)[0], rel=0.01)
+
+
+def test_g_and_p_methods_agree_on_the_sbff(baseline, g_baseline):
+    """The issue's must-show: g-method and p-method SBFF speeds within 1 %. The p-method's rational
+    fit (aero.rfa) has four real lags (Roger form, no complex pairs: 0.4 s instead of 29 s) over
+    k <= 0.6, which covers the SBFF's k ~ 0.13 and the wing flutter's ~ 0.21; its fit error must
+    be under the issue's 2 % (measured 0.11 %). Measured SBFF: 40.445 m/s (p-method), 40.423 m/s
+    (g-method), 40.424 m/s (p-k); with three complex pairs as well, 40.423 m/s."""
     pmethod = pytest.importorskip("flutter.pmethod")
     fit_rfa = pytest.importorskip("aero.rfa").fit_rfa
     system = modal_system(baseline["modes"], StructuralDamping())
-    V = np.asarray(md.VELOCITIES)
-    g = g_solve(system, baseline["gaf"], V, density=md.RHOREF, mach=md.MACH)
-    p = pmethod.p_solve(system, baseline["gaf"], V, density=md.RHOREF, mach=md.MACH,
-                        fit=fit_rfa, fit_options={"k_max": 0.6})
-    assert p.attrs["method"] == "P-RFA"
-    assert _sbff_of(p, baseline["modes"]) == pytest.approx(_sbff_of(g, baseline["modes"]),
-                                                           rel=0.01)
+    p = pmethod.p_solve(system, baseline["gaf"], np.asarray(md.VELOCITIES), density=md.RHOREF,
+                        mach=md.MACH, fit=fit_rfa, fit_options={"k_max": 0.6, "npair": 0})
+    assert p.attrs["method"] == "P-RFA" and p.attrs["rfa_fit_error"] < 0.02
+    assert _sbff_of(p, baseline["modes"]) == pytest.approx(
+        _sbff_of(g_baseline, baseline["modes"]), rel=0.01)
