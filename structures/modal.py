@@ -46,9 +46,10 @@ DENSE_LIMIT = 600
 RESIDUAL_TOL = 1e-10
 #: Eigenvalues above this fraction of the largest one found are elastic for the residual check.
 ELASTIC_RATIO = 1e-6
-#: Largest backward error ||K phi|| / || |K| |phi| || of a rigid-body mode. Measured: ~1e-16 for
-#: the rigid motions of the free-free beam, cylinder and bah_plane; a motion restrained by a
-#: spring is rigid to first order only and shows its spring force (1e-6 and more).
+#: Largest backward error ||K phi|| / || |K| |phi| || of a rigid-body mode. Measured: 7e-17 (the
+#: free-free beam, the cylinder, the X-56A-class aircraft) to 3e-15 (bah_plane); a motion held by
+#: springs shows their force relative to the structure's (1.0 for the two-mode plate on springs,
+#: k_spring / k_structure in general).
 RIGID_TOL = 1e-10
 #: Rigid-body motions by basic axis (translations 1-3, rotations 4-6; Nastran aircraft axes:
 #: x along the fuselage, y spanwise, z up).
@@ -231,14 +232,15 @@ def rigid_body_modes(model: FEModel, system: AssembledSystem) -> tuple[np.ndarra
     to the a-set keeps, u_g = T u_a on every g-set DOF but the automatic SPCs (SPC, GRID PS and
     rigid elements restrict them; a free-free model keeps all six). Of these, the rigid-body modes
     are the motions with no strain energy: the eigenvectors of the candidates' (K_r, M_r) whose
-    backward error ||K phi|| / || |K| |phi| || is at most :data:`RIGID_TOL` (measured ~1e-16 for
-    a rigid motion; a soft spring to ground leaves 1e-6 or more). A mechanism is not a rigid-body
-    motion and is not among them (:func:`compute_modes` reports it).
+    backward error ||K phi|| / || |K| |phi| || is at most :data:`RIGID_TOL` (round-off for a
+    rigid motion; a spring to ground leaves k_spring / k_structure). A mechanism is not a
+    rigid-body motion and is not among them (:func:`compute_modes` reports it as before).
 
     With SUPORT / SUPORT1 (the r-set), the modes are the rigid motions of unit displacement of
     each r-set DOF, as Nastran's rigid-body modes (MSC Dynamic Analysis Guide, "Rigid-body
     modes": D_rigid from the geometry); the r-set must be statically determinate: as many DOFs as
-    rigid-body modes, and determining them.
+    rigid-body modes, and determining them. Their names are the r-set components' (a SUPORT
+    component 5 is "pitch"; components are in the grid's displacement frame).
 
     Each mode is named by its motion in the basic axes (:data:`RIGID_MOTIONS`; x along the
     fuselage, y spanwise, z up): the translations first, then the rotations, Gram-Schmidt in the
@@ -266,7 +268,7 @@ def rigid_body_modes(model: FEModel, system: AssembledSystem) -> tuple[np.ndarra
     if v.shape[1] == 0:
         return np.zeros((ra.shape[0], 0)), []
     v = _m_orthonormal(system.M, v)
-    w, z = np.linalg.eigh(v.T @ (system.K @ v))
+    _, z = np.linalg.eigh(v.T @ (system.K @ v))
     q = free @ z[:, _backward_error(system.K, v @ z) <= RIGID_TOL]
     if model.suport:
         return _suport_modes(model, system, rb, q)
