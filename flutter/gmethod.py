@@ -103,7 +103,7 @@ class GProblem:
     """
 
     def __init__(self, system: ModalSystem, gaf, *, refc: float | None = None,
-                 interpolation: str = "cubic", nk: int = 120, rigid_hz: float = 0.05):
+                 interpolation: str = "cubic", nk: int = 60, rigid_hz: float = 0.05):
         if refc is None:
             if "refc" not in getattr(gaf, "attrs", {}):
                 raise InputError("g-method: the GAFs carry no 'refc' attribute. Fix: pass refc= "
@@ -112,7 +112,7 @@ class GProblem:
         if not refc > 0:
             raise InputError(f"g-method: refc={refc} must be > 0. Fix: use the AERO card's REFC.")
         if not (isinstance(nk, (int, np.integer)) and nk >= 8):
-            raise InputError(f"g-method: nk = {nk!r}. Fix: give a whole number >= 8 (default 120).")
+            raise InputError(f"g-method: nk = {nk!r}. Fix: give a whole number >= 8 (default 60).")
         if not rigid_hz >= 0:
             raise InputError(f"g-method: rigid_hz = {rigid_hz} must be >= 0. Fix: e.g. 0.05.")
         self.system, self.gaf, self.interpolation, self.nk = system, gaf, interpolation, int(nk)
@@ -140,7 +140,7 @@ class GProblem:
         return self._interp[key]
 
     # ----------------------------------------------------------------------------- kernels
-    def eig(self, k: np.ndarray, V: float, rho: float, mach: float):
+    def eig(self, k: np.ndarray, V: float, rho: float, mach: float, vectors: bool = True):
         """Eigenvalues p_bar and right vectors of the g-method equation at reduced frequencies k.
 
         Parameters
@@ -149,12 +149,14 @@ class GProblem:
             Reduced frequencies k = omega b / V (>= 0).
         V, rho, mach : float
             Flight point.
+        vectors : bool
+            Compute the eigenvectors (else ``U`` is None; eigenvalues only are about twice as fast).
 
         Returns
         -------
         lam : ndarray, shape (nk, 2n) complex
             p_bar = p b / V (exactly real at k = 0 where the matrices are real).
-        U : ndarray, shape (nk, 2n, n) complex
+        U : ndarray, shape (nk, 2n, n) complex, or None
             Right vectors u (unit 2-norm) of each eigenvalue.
         outside : ndarray of bool, shape (nk,)
             k above the tabulated GAF range.
@@ -178,6 +180,11 @@ class GProblem:
         A[:, :n, n:] = np.eye(n)
         A[:, n:, :n] = -self._Minv @ A0
         A[:, n:, n:] = -self._Minv @ A1
+        if not vectors:
+            lam = np.linalg.eigvals(A).astype(complex)
+            if np.any(k == 0):
+                lam[k == 0] = np.linalg.eigvals(A[k == 0].real)
+            return lam, None, outside
         lam = np.empty((k.size, 2 * n), dtype=complex)
         X = np.empty((k.size, 2 * n, 2 * n), dtype=complex)
         zero = k == 0
@@ -199,7 +206,7 @@ class GProblem:
         else:
             top, extra = max(2.0 * float(self.omega0.max()) * self.b / V, 1.0), np.zeros(0)
             for _ in range(12):
-                lam, _, _ = self.eig(np.array([top]), V, rho, mach)
+                lam, _, _ = self.eig(np.array([top]), V, rho, mach, vectors=False)
                 if np.all(lam.imag <= top):
                     break
                 top *= 2.0
@@ -250,11 +257,11 @@ class GProblem:
         return (pbar * V / self.b, unit_rows(np.concatenate(us)), np.concatenate(ok),
                 np.concatenate(outs))
 
-    def _pick(self, k: float, target: complex, V, rho, mach):
-        """The eigenvalue at k nearest ``target``, its vector and out-of-table flag."""
-        lam, U, out = self.eig(np.array([k]), V, rho, mach)
+    def _pick(self, k: float, target: complex, V, rho, mach, vectors: bool = True):
+        """The eigenvalue at k nearest ``target`` and its vector (None without ``vectors``)."""
+        lam, U, _ = self.eig(np.array([k]), V, rho, mach, vectors)
         j = int(np.argmin(np.abs(lam[0] - target)))
-        return lam[0, j], U[0, j], bool(out[0])
+        return lam[0, j], (U[0, j] if vectors else None)
 
     def _refine(self, ka, kb, la, lb, fa, fb, V, rho, mach):
         """Zero of Im p_bar(k) - k on one branch between two grid points (Illinois on k)."""
@@ -262,8 +269,8 @@ class GProblem:
 
         def fun(t):
             k = ka + t * (kb - ka)
-            lam, u, _ = self._pick(k, la + t * (lb - la), V, rho, mach)
-            cache[t] = (k, lam, u)
+            lam, _ = self._pick(k, la + t * (lb - la), V, rho, mach, vectors=False)
+            cache[t] = (k, lam)
             return float(lam.imag - k)
 
         if fa > 0:                               # illinois wants fun(0) < 0 < fun(1)
@@ -271,7 +278,8 @@ class GProblem:
             t = 1 - t
         else:
             t, good = illinois(fun, fa, fb, xtol=1e-9)
-        k, lam, u = cache[t] if t in cache else cache[min(cache, key=lambda s: abs(s - t))]
+        k, lam = cache[t] if t in cache else cache[min(cache, key=lambda s: abs(s - t))]
+        lam, u = self._pick(k, lam, V, rho, mach)
         good = good and abs(lam.imag - k) <= max(1e-8 * abs(lam), 1e-10)
         return complex(lam.real, k), u, good
 
@@ -279,7 +287,7 @@ class GProblem:
         """A root above the GAF table: k = Im p_bar by substitution (Q held, so one or two steps)."""
         for _ in range(20):
             k = float(lam.imag)
-            lam, u, _ = self._pick(k, lam, V, rho, mach)
+            lam, u = self._pick(k, lam, V, rho, mach)
             if abs(lam.imag - k) <= 1e-10 * max(abs(lam), 1e-12):
                 break
         return complex(lam.real, float(lam.imag)), u
@@ -431,7 +439,7 @@ def g_solve(system: ModalSystem, gaf, velocity, *, density, mach, sweep: str = "
     g_tol : float
         Neutral-damping band for crossings.
     **options
-        ``nk``: points of the k grid (default 120); ``rigid_hz``: rigid-body mode threshold [Hz]
+        ``nk``: points of the k grid (default 60); ``rigid_hz``: rigid-body mode threshold [Hz]
         (default 0.05).
 
     Returns
