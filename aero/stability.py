@@ -32,8 +32,10 @@ How each derivative is computed (the boxes' motion is rigid, no splines involved
   the doublet lattice (:func:`aero.dlm.dlm_aic`) to a harmonic alpha without pitch-rate normalwash
   (the lag of the wake, and of the downwash at a tail), at a small k (default 1e-4).
 
-Forces are those of the modelled boxes: with AERO SYMXZ = +1 (half model) they are the half
-aircraft's, and S defaults to the half's planform area, to go with the half model's mass.
+:func:`flexible_derivatives` adds the elastic modes in quasi-static equilibrium (derivatives of the
+elastic aircraft at a dynamic pressure). Forces are those of the modelled boxes: with AERO
+SYMXZ = +1 (half model) they are the half aircraft's, and S defaults to the half's planform area,
+to go with the half model's mass.
 """
 from __future__ import annotations
 
@@ -42,11 +44,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from aero.dlm import dlm_aic
+from aero.gaf import modal_box_motion
 from aero.vlm import check_mach, steady_aic
 from structures.common.errors import InputError, card_message
 
-__all__ = ["StabilityDerivatives", "longitudinal_inertia", "rigid_box_motion",
-           "stability_derivatives"]
+__all__ = ["StabilityDerivatives", "flexible_derivatives", "longitudinal_inertia",
+           "quasi_steady_forces", "rigid_box_motion", "stability_derivatives"]
 
 DERIVATIVES = ("cl_alpha", "cm_alpha", "cl_q", "cm_q", "cl_alphadot", "cm_alphadot")
 #: Reduced frequency at which the alpha-dot derivatives are taken (k = omega b / V): the remainder
@@ -75,6 +78,8 @@ class StabilityDerivatives:
         AERO SYMXZ of the model: +1 means forces (and S) of the modelled half.
     k_alphadot : float
         Reduced frequency k = omega b / V, b = c / 2, of the alpha-dot derivatives.
+    dynamic_pressure : float
+        0 for the rigid aircraft; the dynamic pressure of :func:`flexible_derivatives`.
     """
 
     cl_alpha: float
@@ -89,6 +94,7 @@ class StabilityDerivatives:
     mach: float
     symxz: int = 0
     k_alphadot: float = K_ALPHADOT
+    dynamic_pressure: float = 0.0
 
     def __post_init__(self):
         values = [getattr(self, n) for n in DERIVATIVES]
@@ -146,10 +152,74 @@ def rigid_box_motion(mesh, reference_point) -> tuple[np.ndarray, np.ndarray, np.
     return normal_displacement(np.asarray(mesh.collocation)), slope, normal_displacement(load)
 
 
+def quasi_steady_forces(aero_model, mach: float, h_colloc: np.ndarray, slope: np.ndarray,
+                        h_load: np.ndarray, *, k: float = K_ALPHADOT,
+                        method: str = "quartic") -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Low-k expansion Q(ik) = Q0 + i k (Q1_rate + Q1_lag) + O(k^2 ln k) of box-motion forces.
+
+    Q is the generalized force of :mod:`aero.gaf` (G_kg^T S_kj Delta Cp per unit dynamic pressure),
+    with the normalwash w/V = dh/dx + i (k/b) h split into its two parts: Q0 and Q1_lag from the
+    slope (steady vortex lattice; out-of-phase doublet-lattice response at a small k, divided by
+    k), Q1_rate from the displacement rate h / b (steady vortex lattice).
+
+    Parameters
+    ----------
+    aero_model : aero.model.AeroModel
+    mach : float
+    h_colloc, slope, h_load : ndarray, shape (nbox, n)
+        Box motions (:func:`rigid_box_motion`, :func:`aero.gaf.modal_box_motion`).
+    k : float
+        Small reduced frequency k = omega b / V, b = REFC / 2, of Q1_lag.
+    method : {"quartic", "parabolic"}
+
+    Returns
+    -------
+    q0, q1_rate, q1_lag : ndarray, shape (n, n)
+        Force on motion i per unit motion j.
+    """
+    mach = check_mach(mach)
+    if not 0.0 < k <= 0.01:
+        raise InputError(card_message(f"k_alphadot={k} is not a small positive reduced "
+                                      "frequency.", fix="use 0 < k_alphadot <= 0.01 (default "
+                                                        f"{K_ALPHADOT})."))
+    mesh = aero_model.mesh
+    b = float(aero_model.refc) / 2.0
+    work = h_load * np.asarray(mesh.area, dtype=float)[:, None]   # G_kg^T S_kj (aero.gaf)
+    n = slope.shape[1]
+    steady = steady_aic(mesh, mach, symxz=aero_model.symxz)
+    forces = work.T @ np.linalg.solve(steady, np.concatenate([slope, h_colloc / b], axis=1))
+    unsteady = dlm_aic(mesh, mach, [k], refc=aero_model.refc, method=method,
+                       symxz=aero_model.symxz)[0]
+    # out-of-phase part of the response to the slope alone: the wake's lag (Etkin & Reid ch. 5)
+    lag = (work.T @ np.linalg.solve(unsteady, slope.astype(complex))).imag / k
+    return forces[:, :n], forces[:, n:], lag
+
+
+def _derivatives(q0, q1_rate, q1_lag, s, aero_model, mach, reference_point, k,
+                 dynamic_pressure=0.0) -> StabilityDerivatives:
+    """Derivatives from the plunge / pitch block (rows lift, moment; column pitch)."""
+    scale = np.array([s, s * aero_model.refc])
+    (cl_a, cm_a), (cl_q, cm_q), (cl_ad, cm_ad) = (m[:2, 1] / scale for m in (q0, q1_rate, q1_lag))
+    return StabilityDerivatives(cl_alpha=cl_a, cm_alpha=cm_a, cl_q=cl_q, cm_q=cm_q,
+                                cl_alphadot=cl_ad, cm_alphadot=cm_ad, reference_area=s,
+                                reference_chord=float(aero_model.refc),
+                                reference_point=np.asarray(reference_point, dtype=float),
+                                mach=float(mach), symxz=int(aero_model.symxz), k_alphadot=k,
+                                dynamic_pressure=float(dynamic_pressure))
+
+
+def _reference(aero_model, reference_point, reference_area):
+    mesh = aero_model.mesh
+    s = float(np.sum(np.asarray(mesh.area) * np.abs(np.asarray(mesh.normal)[:, 2]))) \
+        if reference_area is None else float(reference_area)
+    ref = aero_model.aero_frame.from_basic(np.asarray(reference_point, dtype=float))
+    return s, rigid_box_motion(mesh, ref)
+
+
 def stability_derivatives(aero_model, mach: float, reference_point, *,
                           reference_area: float | None = None, k_alphadot: float = K_ALPHADOT,
                           method: str = "quartic") -> StabilityDerivatives:
-    """Longitudinal stability derivatives of an aerodynamic model (module docstring).
+    """Longitudinal stability derivatives of the rigid aircraft (module docstring).
 
     Parameters
     ----------
@@ -171,37 +241,78 @@ def stability_derivatives(aero_model, mach: float, reference_point, *,
     -------
     StabilityDerivatives
     """
-    mach = check_mach(mach)
-    if not 0.0 < k_alphadot <= 0.01:
-        raise InputError(card_message(f"k_alphadot={k_alphadot} is not a small positive reduced "
-                                      "frequency.", fix="use 0 < k_alphadot <= 0.01 (default "
-                                                        f"{K_ALPHADOT})."))
-    mesh = aero_model.mesh
-    c = float(aero_model.refc)
-    b = c / 2.0
-    area = np.asarray(mesh.area, dtype=float)
-    s = float(np.sum(area * np.abs(np.asarray(mesh.normal)[:, 2]))) if reference_area is None \
-        else float(reference_area)
-    ref_aero = aero_model.aero_frame.from_basic(np.asarray(reference_point, dtype=float))
-    h_colloc, slope, h_load = rigid_box_motion(mesh, ref_aero)
-    work = h_load * area[:, None]          # G_kg^T S_kj of the rigid modes (aero.gaf)
-    w_alpha = slope[:, 1]                  # unit alpha: w/V = dh/dx
-    w_rate = h_colloc[:, 1] / b            # unit q_hat: w/V = -(x - x_ref) n_z / b
-    steady = steady_aic(mesh, mach, symxz=aero_model.symxz)
-    f_alpha, f_rate = (work.T @ np.linalg.solve(steady, np.column_stack([w_alpha, w_rate]))).T
-    unsteady = dlm_aic(mesh, mach, [k_alphadot], refc=c, method=method,
-                       symxz=aero_model.symxz)[0]
-    # out-of-phase part of the harmonic-alpha response: i k C_alphadot (Etkin & Reid ch. 5)
-    f_lag = (work.T @ np.linalg.solve(unsteady, w_alpha.astype(complex))).imag / k_alphadot
-    scale = np.array([s, s * c])
-    cl_a, cm_a = f_alpha / scale
-    cl_q, cm_q = f_rate / scale
-    cl_ad, cm_ad = f_lag / scale
-    return StabilityDerivatives(cl_alpha=cl_a, cm_alpha=cm_a, cl_q=cl_q, cm_q=cm_q,
-                                cl_alphadot=cl_ad, cm_alphadot=cm_ad, reference_area=s,
-                                reference_chord=c, reference_point=np.asarray(reference_point,
-                                                                              dtype=float),
-                                mach=mach, symxz=int(aero_model.symxz), k_alphadot=k_alphadot)
+    s, motion = _reference(aero_model, reference_point, reference_area)
+    q0, q1_rate, q1_lag = quasi_steady_forces(aero_model, mach, *motion, k=k_alphadot,
+                                              method=method)
+    return _derivatives(q0, q1_rate, q1_lag, s, aero_model, mach, reference_point, k_alphadot)
+
+
+def flexible_derivatives(aero_model, modes_ds, mach: float, reference_point, dynamic_pressure, *,
+                         rigid_hz: float = 0.05, reference_area: float | None = None,
+                         k_alphadot: float = K_ALPHADOT,
+                         method: str = "quartic") -> list[StabilityDerivatives]:
+    """Stability derivatives of the elastic aircraft, its elastic modes in quasi-static equilibrium.
+
+    The elastic modes e (in-vacuo frequency >= ``rigid_hz``) follow the rigid motion r (plunge,
+    pitch) quasi-statically, K_e u_e = q (Q_er u_r + Q_ee u_e), and are eliminated (the
+    "quasi-steady flexible vehicle" of Rodden & Love, J. Aircraft 22(9), 1985; Waszak & Schmidt,
+    J. Aircraft 25(6), 1988, with the elastic inertia dropped)::
+
+        A0 = Q0_rr + q Q0_re K^-1 Q0_er,                       K = K_e - q Q0_ee
+        A1 = Q1_rr + q (Q1_re K^-1 Q0_er + Q0_re K^-1 Q1_er) + q^2 Q0_re K^-1 Q1_ee K^-1 Q0_er
+
+    (A1 the first-order term of (K_e - q Q_ee(p))^-1 in p; the rate and lag parts of Q1 kept
+    apart, :func:`quasi_steady_forces`). The derivatives follow from A0, A1 as in
+    :func:`stability_derivatives`, which they equal at q = 0.
+
+    Parameters
+    ----------
+    aero_model : aero.model.AeroModel
+    modes_ds : xarray.Dataset
+        The structure's modes (DESIGN.md section 6) on the deck of ``aero_model``; with SYMXZ = +1
+        its symmetric modes. Rigid-body modes (below ``rigid_hz``) are not used: plunge and pitch
+        are the exact rigid motions about ``reference_point``.
+    mach, reference_point, reference_area, k_alphadot, method
+        As :func:`stability_derivatives`.
+    dynamic_pressure : array_like, shape (nq,)
+        q = rho V^2 / 2, consistent units.
+    rigid_hz : float
+        In-vacuo frequency below which a mode is rigid (the contract's 0.05 Hz).
+
+    Returns
+    -------
+    list of StabilityDerivatives
+        One per dynamic pressure (its ``dynamic_pressure`` field set).
+    """
+    qd = np.atleast_1d(np.asarray(dynamic_pressure, dtype=float))
+    if qd.ndim != 1 or not np.all(np.isfinite(qd)) or np.any(qd < 0):
+        raise InputError(card_message(f"dynamic pressures {qd.tolist()} must be >= 0 and finite.",
+                                      fix="give q = rho V^2 / 2 per speed."))
+    freq = np.asarray(modes_ds["frequency"].values, dtype=float)
+    elastic = freq >= rigid_hz
+    if not elastic.any():
+        raise InputError(card_message(
+            f"no mode at or above rigid_hz = {rigid_hz} Hz in the modes Dataset "
+            f"({modes_ds.attrs.get('source', '?')}).", fix="compute elastic modes too, or use "
+                                                           "stability_derivatives."))
+    s, rigid = _reference(aero_model, reference_point, reference_area)
+    modal = modal_box_motion(aero_model, modes_ds.isel(mode=np.flatnonzero(elastic)))
+    motion = [np.concatenate([r, e], axis=1) for r, e in zip(rigid, modal)]
+    q0, q1_rate, q1_lag = quasi_steady_forces(aero_model, mach, *motion, k=k_alphadot,
+                                              method=method)
+    k_e = np.diag((2.0 * np.pi * freq[elastic]) ** 2
+                  * np.asarray(modes_ds["generalized_mass"].values, dtype=float)[elastic])
+    r, e = slice(0, 2), slice(2, None)
+    out = []
+    for q in qd:
+        flex = np.linalg.solve(k_e - q * q0[e, e], np.concatenate([q0[e, r], np.eye(k_e.shape[0])],
+                                                                   axis=1))
+        kinv_er, kinv = flex[:, :2], flex[:, 2:]      # K^-1 Q0_er, K^-1
+        a0 = q0[r, r] + q * q0[r, e] @ kinv_er
+        a1 = [q1[r, r] + q * (q1[r, e] @ kinv_er + q0[r, e] @ kinv @ q1[e, r])
+              + q * q * q0[r, e] @ kinv @ q1[e, e] @ kinv_er for q1 in (q1_rate, q1_lag)]
+        out.append(_derivatives(a0, *a1, s, aero_model, mach, reference_point, k_alphadot, q))
+    return out
 
 
 def longitudinal_inertia(mass_props, aero_model) -> tuple[float, float]:

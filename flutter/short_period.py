@@ -127,10 +127,10 @@ def short_period(derivs, mass: float, iyy: float, rho: float, velocity, *,
         g = np.where(oscillating, 2.0 * p.real / np.where(oscillating, p.imag, 1.0),
                      p.real * float(d.reference_chord) / (v[:, None] * np.log(2.0)))
     b = float(d.reference_chord) / 2.0
+    dims = ("velocity", "root")
     ds = xr.Dataset(
-        {"eigenvalue": (("velocity", "root"), p), "frequency": (("velocity", "root"),
-                                                                p.imag / (2.0 * np.pi)),
-         "damping": (("velocity", "root"), g), "k": (("velocity", "root"), p.imag * b / v[:, None])},
+        {"eigenvalue": (dims, p), "frequency": (dims, p.imag / (2.0 * np.pi)),
+         "damping": (dims, g), "k": (dims, p.imag * b / v[:, None])},
         coords={"velocity": v, "root": np.arange(1, 5), "root_label": ("root", list(ROOT_LABELS))},
         attrs={"method": "stability derivatives", "alphadot": alphadot, "refc": float(
             d.reference_chord), "density": float(rho), "mass": float(mass), "iyy": float(iyy),

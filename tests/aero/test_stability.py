@@ -12,7 +12,7 @@ import pytest
 
 from aero.model import BASIC, AeroModel, read_aero_model
 from aero.panels import BoxMesh
-from aero.stability import longitudinal_inertia, stability_derivatives
+from aero.stability import flexible_derivatives, longitudinal_inertia, stability_derivatives
 from aero.vlm import steady_aic
 from aero_decks import BAH, DATA
 from flutter.short_period import short_period
@@ -167,14 +167,12 @@ def nastran_point_2(vmax: float = 200.0):
     return v[keep], column(table, "frequency")[keep], column(table, "damping")[keep]
 
 
-def test_bah_short_period_against_nastran_at_low_dynamic_pressure(bah):
-    """Nastran's PK point 2 at the F06 speeds 30-117 m/s (q <= 8.4 kPa): the derivatives' short
-    period with the alpha-dot terms on the pitch rate -- the quasi-steady truncation the modal
-    methods share -- within the issue's 5 % in frequency and 10 % in g. Measured -0.5..+2.9 % in f
-    and -4.7..-8.5 % in g; above 117 m/s the wing's flexibility, absent from a rigid aircraft,
-    takes Nastran's short period down in frequency (with our modes, the quasi-steady p-method on
-    the rigid modes alone gives 0.435 Hz at 146 m/s, with two wing modes 0.404 Hz; Nastran 0.412).
-    """
+def test_bah_rigid_short_period_against_nastran_at_low_dynamic_pressure(bah):
+    """Nastran's PK point 2 at the F06 speeds 30-117 m/s (q <= 8.4 kPa): the rigid aircraft's
+    short period with the alpha-dot terms on the pitch rate -- the quasi-steady truncation the
+    modal methods share -- within the issue's 5 % in frequency and 10 % in g. Measured
+    -0.5..+2.9 % in f and -4.7..-8.5 % in g; above 117 m/s the wing's flexibility, absent from a
+    rigid aircraft, takes Nastran's short period down in frequency (next test)."""
     am, props, d = bah
     v, f, g = nastran_point_2(117.0)
     assert v.size == 7
@@ -184,20 +182,82 @@ def test_bah_short_period_against_nastran_at_low_dynamic_pressure(bah):
     np.testing.assert_allclose(ds["damping"].values[:, 0], g, rtol=0.10)
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "rigid-aircraft derivatives do not reach the issue's 5 % / 10 % at 30-200 m/s: with the "
-    "alpha-dot terms on alpha' (flight mechanics) f is 14.7 % low and g 10.1 % high at 30 m/s "
-    "(the extra Z_alpha M_alphadot / V = p_bar^2 term of the plunge column; the short period is "
-    "near critical damping, zeta 0.75, so f_damped is sensitive to it); with them on q only, f is "
-    "+11 % and g -16 % at 189 m/s (wing flexibility). See the report of issue 13."))
-@pytest.mark.parametrize("alphadot", ["alpha", "pitch_rate"])
-def test_bah_short_period_against_nastran_30_to_200(bah, alphadot):
-    am, props, d = bah
+@pytest.fixture(scope="module")
+def bah_flexible(bah):
+    """Our 8 modes of bah_plane (2 rigid, 6 elastic) and the flexible derivatives at q = 0 and at
+    every F06 speed of FLUTTER 502 up to 200 m/s."""
+    from structures.bdf import read_model
+    from structures.modal import compute_modes
+
+    am, props, _ = bah
+    modes = compute_modes(read_model(BAH), 8)
     v, f, g = nastran_point_2(200.0)
+    derivs = flexible_derivatives(am, modes, MACH_502, props.cg,
+                                  np.concatenate([[0.0], 0.5 * RHO_502 * v ** 2]))
+    return modes, derivs, (v, f, g)
+
+
+def flexible_short_period(bah, derivs, v, alphadot):
+    am, props, _ = bah
     mass, iyy = longitudinal_inertia(props, am)
-    ds = short_period(d, mass, iyy, RHO_502, v, alphadot=alphadot)
-    np.testing.assert_allclose(ds["frequency"].values[:, 0], f, rtol=0.05)
-    np.testing.assert_allclose(ds["damping"].values[:, 0], g, rtol=0.10)
+    return [short_period(d, mass, iyy, RHO_502, [vel], alphadot=alphadot).isel(velocity=0,
+                                                                                 root=0)
+            for d, vel in zip(derivs, v)]
+
+
+def test_bah_flexible_short_period_against_nastran_30_to_200(bah, bah_flexible):
+    """The issue's check: Nastran's PK point 2 at every F06 speed in 30-200 m/s (12 speeds),
+    within 5 % in frequency and 10 % in g, by the elastic aircraft's derivatives (six wing modes in
+    quasi-static equilibrium) with the alpha-dot terms on the pitch rate. Measured -0.59..-0.75 %
+    in f and -4.3..-4.5 % in g. At q = 0 the flexible derivatives are the rigid ones."""
+    _, derivs, (v, f, g) = bah_flexible
+    rigid = bah[2]
+    for name in ("cl_alpha", "cm_alpha", "cl_q", "cm_q", "cl_alphadot", "cm_alphadot"):
+        assert getattr(derivs[0], name) == pytest.approx(getattr(rigid, name), rel=1e-10)
+    assert v.size == 12 and v.min() == 30.0
+    roots = flexible_short_period(bah, derivs[1:], v, "pitch_rate")
+    np.testing.assert_allclose([r["frequency"].item() for r in roots], f, rtol=0.05)
+    np.testing.assert_allclose([r["damping"].item() for r in roots], g, rtol=0.10)
+
+
+def test_bah_flexible_derivatives_against_the_modal_p_method(bah, bah_flexible):
+    """Independent path for the elastic part: the quasi-steady p-method on all 8 modes through the
+    splines (aero.gaf), the elastic modes with their inertia, at 146 m/s: the flexible-derivative
+    short period within 2 % in f and g (the quasi-static elastic modes neglect
+    (f_sp / f_1)^2 = (0.41 / 2.45)^2 = 2.8 % of their response; measured 0.3 %)."""
+    from aero.gaf import generalized_aero_forces
+
+    am, _, _ = bah
+    modes, derivs, (v, _, _) = bah_flexible
+    i = int(np.argmin(np.abs(v - 146.0)))
+    q = generalized_aero_forces(am, modes, [MACH_502], [0.0, 1e-4])["Q"].values[0]
+    q0, q1 = q[0].real, q[1].imag / 1e-4
+    qd, b, n = 0.5 * RHO_502 * v[i] ** 2, am.refc / 2.0, q0.shape[0]
+    stiffness = np.diag((2 * np.pi * modes["frequency"].values) ** 2)
+    companion = np.block([[np.zeros((n, n)), np.eye(n)],
+                          [-(stiffness - qd * q0), qd * b / v[i] * q1]])
+    p = np.linalg.eigvals(companion)
+    p = p[(p.imag > 0) & (np.abs(p) < 2 * np.pi * 1.0)]        # below the first wing mode
+    assert p.size == 1
+    ours = flexible_short_period(bah, [derivs[1 + i]], [v[i]], "pitch_rate")[0]
+    assert ours["frequency"].item() == pytest.approx(p[0].imag / (2 * np.pi), rel=0.02)
+    assert ours["damping"].item() == pytest.approx(2 * p[0].real / p[0].imag, rel=0.02)
+
+
+@pytest.mark.xfail(strict=True, reason=(
+    "the flight-mechanics alpha-dot (on alpha' = q - h''/V) does not reach the issue's 5 % / 10 % "
+    "against Nastran's PK: f is 14.7 % low and g 10.1 % high at 30 m/s (rigid), -15..-24 % and "
+    "+11..+25 % (flexible): the extra Z_alpha M_alphadot / V = the p_bar^2 term of the plunge "
+    "column, which Nastran's p-k (Q at k = Im p_bar) and the quasi-steady p-method leave out; "
+    "the short period is near critical damping (zeta 0.75), so its damped frequency is sensitive. "
+    "See the report of issue 13."))
+@pytest.mark.parametrize("flexible", [False, True])
+def test_bah_flight_mechanics_alphadot_against_nastran_30_to_200(bah, bah_flexible, flexible):
+    am, props, d = bah
+    _, derivs, (v, f, g) = bah_flexible
+    roots = flexible_short_period(bah, derivs[1:] if flexible else [d] * v.size, v, "alpha")
+    np.testing.assert_allclose([r["frequency"].item() for r in roots], f, rtol=0.05)
+    np.testing.assert_allclose([r["damping"].item() for r in roots], g, rtol=0.10)
 
 
 def test_bad_input(bah):
@@ -206,3 +266,12 @@ def test_bad_input(bah):
         stability_derivatives(am, 0.2, props.cg, k_alphadot=0.5)
     with pytest.raises(InputError, match=r"Mach number 1\.1"):
         stability_derivatives(am, 1.1, props.cg)
+
+
+def test_flexible_derivatives_bad_input(bah, bah_flexible):
+    am, props, _ = bah
+    modes = bah_flexible[0]
+    with pytest.raises(InputError, match=r"dynamic pressures \[-1\.0\]"):
+        flexible_derivatives(am, modes, 0.2, props.cg, [-1.0])
+    with pytest.raises(InputError, match=r"no mode at or above rigid_hz"):
+        flexible_derivatives(am, modes.isel(mode=[0, 1]), 0.2, props.cg, [100.0])
