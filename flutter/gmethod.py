@@ -3,7 +3,8 @@
 P. C. Chen, "Damping Perturbation Method for Flutter Solution: The g-Method", AIAA J. 38(9), 2000,
 1519-1524. With the nondimensional Laplace variable p_bar = p b / V = g + i k (b = refc / 2,
 k = omega b / V; g here is Chen's real part of p_bar, the reported damping is 2 Re p / Im p), the
-GAFs off the imaginary axis are expanded to first order about p_bar = i k (Chen eq. 9):
+GAFs off the imaginary axis are expanded to first order about p_bar = i k (Chen's damping
+perturbation; the paper was not at hand, so no equation numbers are given here):
 
     Q(p_bar) ~ Q(ik) + g Q'(ik),   Q'(ik) = dQ / d(ik) = -i dQ/dk,
 
@@ -15,15 +16,15 @@ body-freedom roots. With Q^R and D = Q^I / k interpolated in k (flutter.gafinter
     Q'(ik)       = D + k dD/dk - i dQ^R/dk,
     Q - ik Q'    = Q^R - k dQ^R/dk - i k^2 dD/dk,
 
-and the flutter equation (Chen eq. 12, scaled by (b/V)^2, q = rho V^2 / 2)
+and the g-method flutter equation (Chen 2000, written in p_bar and scaled by (b/V)^2, q = rho V^2/2)
 
     [ M p_bar^2 + ((b/V) B - (rho b^2 / 2) Q') p_bar
       + (b/V)^2 K (1 + i g_s) - (rho b^2 / 2)(Q - ik Q') ] u = 0
 
 is, for each k, a quadratic eigenproblem in p_bar with complex matrices (no conjugate pairs). A
-root is a k where an eigenvalue has Im p_bar = k (Chen eq. 14, Im g = 0).
+root is a k where an eigenvalue has Im p_bar = k (Chen's root condition Im g = 0).
 
-Reduced-frequency sweep (Chen sec. "Reduced-Frequency-Sweep Technique"): at each flight point the
+Chen's reduced-frequency sweep (RFS): at each flight point the
 2 n eigenvalues are computed on a grid of k (one stacked ``np.linalg.eig``), followed as branches
 across k by eigenvector correlation and continuity (flutter.tracking.assign), and every sign change
 of Im p_bar_j(k) - k is refined by Illinois root-finding on k (flutter.crossings.illinois) to
@@ -54,9 +55,12 @@ generalized Theodorsen function does (U = 2.5 b w_theta: exact p = -0.445 + 0.51
 -0.505 + 0.488i), while p-k's turns real; the real root crossing zero at U_D is an extra root.
 
 Interpolation: with ``interpolation="linear"`` dQ/dk is piecewise constant in k, so Q' and the
-eigenvalues jump at the tabulated k values; a root that falls on such a jump has no exact solution
-(Im g jumps over zero) and is reported at the table k, flagged not converged when the jump is
-larger than the tolerance. The g-method therefore defaults to ``"cubic"`` (continuous slopes).
+eigenvalues jump at the tabulated k values (with ``"cubic"`` only at the smallest tabulated k, where
+the spline meets the even continuation below the table); a sign change of Im g at such a jump is no
+root. It is refined to the jump and flagged not converged, and used only when a root has no other
+candidate (bah_plane, cubic: such a jump at k_min = 0.001 gave a spurious g = +1.02 root at 378 m/s
+before they were set aside). The g-method defaults to ``"cubic"`` (continuous slopes inside the
+table); ``"linear"`` gives the same elastic flutter point on bah_plane within 0.15 %.
 """
 from __future__ import annotations
 
@@ -70,7 +74,7 @@ from threadpoolctl import threadpool_limits
 from flutter.crossings import (G_TOL, Crossing, drift_roots, find_brackets, illinois,
                                interpolate_zero, resolved_damping)
 from flutter.gafinterp import GafInterpolator
-from flutter.linalg import unit_rows
+from flutter.linalg import path_length, unit_rows
 from flutter.parallel import map_cases
 from flutter.pk import check_sweep
 from flutter.results import attach_crossings, vg_dataset
@@ -166,7 +170,7 @@ class GProblem:
         QR, D, dQR, dD, outside = self.interpolator(mach).with_slopes(k)
         kb = k[:, None, None]
         dQR = np.where(kb > 0, dQR, 0.0)     # Q^R is even in k: dQ^R/dk = 0 at k = 0
-        dQ = D + kb * dD - 1j * dQR          # Q'(ik) = -i dQ/dk (Chen eq. 9)
+        dQ = D + kb * dD - 1j * dQR          # Q'(ik) = -i dQ/dk (Chen 2000)
         Q0 = QR - kb * dQR - 1j * kb * kb * dD   # Q(ik) - ik Q'(ik)
         h = 0.5 * rho * self.b ** 2          # q (b/V)^2
         s = self.b / V
@@ -174,7 +178,7 @@ class GProblem:
         if self._hyst:                       # K (1 + i g_s(f)), f = k V / (2 pi b); none at k = 0
             gs = np.where(k > 0, self.system.structural.at(k / s / (2 * np.pi)), 0.0)
             Kc = Kc * (1 + 1j * gs)[:, None, None]
-        A0 = Kc - h * Q0                     # Chen eq. 12 scaled by (b/V)^2
+        A0 = Kc - h * Q0                     # g-method equation (Chen 2000) scaled by (b/V)^2
         A1 = s * self.B[None] - h * dQ
         A = np.zeros((k.size, 2 * n, 2 * n), dtype=complex)
         A[:, :n, n:] = np.eye(n)
@@ -318,21 +322,20 @@ def _match(p_ref, u_ref, p, u, ok, out):
 
 def _sweep(prob: GProblem, pts: list[tuple]):
     """Roots at every flight point, exactly n per point, tracked from the in-vacuo modes."""
-    n = prob.system.n
     p_ref = 1j * prob.omega0.astype(complex)
     u_ref = (prob.system.mass @ prob.phi).T.astype(complex)   # in-vacuo modal participation
     P, Uv, C, O = [], [], [], []
     for i, pt in enumerate(pts):
         p, u, ok, out = prob.roots(*pt)
         if i >= 2:                       # extrapolated eigenvalues along the sweep
-            s = [np.asarray(x, dtype=float) for x in pts[i - 2:i + 1]]
-            h0, h1 = np.linalg.norm(s[1] - s[0]), np.linalg.norm(s[2] - s[1])
+            h0, h1 = path_length(pts[i - 2], pts[i - 1]), path_length(pts[i - 1], pts[i])
             p_ref = P[-1] + (P[-1] - P[-2]) * (h1 / h0 if h0 > 0 else 0.0)
         elif i == 1:
             p_ref = P[-1]
         p, u, ok, out, missing = _match(p_ref, u_ref, p, u, ok, out)
-        if missing.any():
-            p[missing], u[missing] = P[-1][missing], Uv[-1][missing]
+        if missing.any():                # repeat the previous point (the in-vacuo mode at the first)
+            p[missing] = P[-1][missing] if P else p_ref[missing]
+            u[missing] = Uv[-1][missing] if P else unit_rows(u_ref[missing])
         P.append(p)
         Uv.append(u)
         C.append(ok & ~out & ~missing)
@@ -357,7 +360,7 @@ def _warn_outside(prob: GProblem, p, outside, V, mach) -> None:
 
 def _static_divergence(prob: GProblem, pts, U, crossings) -> list[tuple[Crossing, np.ndarray]]:
     """Divergence crossings: dynamic pressures q_D of (K - q_D Q^R(0)) u = 0 passed between two
-    points (BAH sec. 8-1, static divergence; the zero of the real root at k = 0), each given to
+    points (static divergence: the real root at k = 0 is zero where det(K - q Q^R(0)) = 0), each given to
     the root whose eigenvector correlates best with u and skipped where a tracked root's own
     divergence crossing is already in that interval."""
     out = []

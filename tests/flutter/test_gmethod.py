@@ -13,7 +13,7 @@ from aero.strip import section_gaf
 from flutter.gmethod import GProblem, g_solve, g_solve_many
 from flutter.kmethod import k_solve
 from flutter.pk import pk_solve
-from flutter.system import ModalSystem
+from flutter.system import ModalSystem, StructuralDamping
 from flutter_nastran import DATA, bah_qhh_dataset, f06_flutter_summaries, f06_modes_used, first_crossing
 from structures.common.errors import InputError
 from test_pk_typical_section import A, B, RHO, gaf, section
@@ -71,6 +71,26 @@ def test_section_density_sweep_crosses_at_the_velocity_sweep_density(section_swe
     assert dd.attrs["sweep"] == "density" and dd.sizes["density"] == 10
     rc = dd.crossing_density.values[dd.crossing_kind.values == "flutter"]
     assert rc.size == 1 and abs(rc[0] - RHO) < 1e-3
+
+
+@pytest.mark.parametrize("kind", ["hysteretic", "viscous"])
+def test_structural_damping_in_vacuo(kind):
+    """Vanishing air: hysteretic K (1 + i g_s) gives p = i w0 sqrt(1 + i g_s), so g = -g_s / a^2
+    and w = w0 a with a^2 = (1 + sqrt(1 + g_s^2)) / 2; modal viscous b = g_s w0 gives
+    p = w0 (-g_s/2 + i sqrt(1 - g_s^2/4))."""
+    gs = 0.03
+    sys_ = section(StructuralDamping(g=gs, kind=kind))
+    ds = g_solve(sys_, gaf, [1e-4, 2e-4], density=1e-9, mach=0.0, refc=2 * B)
+    omega, _ = sys_.in_vacuo()
+    if kind == "hysteretic":
+        a2 = (1 + np.sqrt(1 + gs ** 2)) / 2
+        w, g = omega * np.sqrt(a2), -gs / a2 * np.ones(2)
+    else:
+        c = np.sqrt(1 - gs ** 2 / 4)
+        w, g = omega * c, -gs / c * np.ones(2)
+    np.testing.assert_allclose(ds.frequency.isel(velocity=0).values * 2 * np.pi, w, rtol=1e-6)
+    np.testing.assert_allclose(ds.damping.isel(velocity=0).values, g, rtol=1e-6)
+    assert bool(ds.converged.all())
 
 
 def test_unknown_option_and_sweep():
