@@ -40,28 +40,43 @@ _DERIVATIVES = ("cl_alpha", "cm_alpha", "cl_q", "cm_q", "cl_alphadot", "cm_alpha
 
 
 def _inputs(derivs, mass, iyy, rho, velocity):
-    missing = [n for n in (*_DERIVATIVES, "reference_area", "reference_chord")
-               if not hasattr(derivs, n)]
-    if missing:
-        raise InputError(card_message(
-            f"short_period: the derivatives object lacks {missing}.",
-            fix="pass an aero.stability.StabilityDerivatives."))
+    """Velocities (nv,), the derivatives as arrays (nv,) -- one object for every speed or one per
+    speed -- and the reference area and chord."""
     v = np.atleast_1d(np.asarray(velocity, dtype=float))
     if v.ndim != 1 or v.size == 0 or not np.all(np.isfinite(v)) or np.any(v <= 0):
         raise InputError(card_message(f"short_period: velocities {v.tolist()} must be a non-empty "
                                       "1-D list of positive values.", fix="e.g. [30., 60.]."))
+    items = list(derivs) if isinstance(derivs, (list, tuple)) else [derivs] * v.size
+    if len(items) != v.size:
+        raise InputError(card_message(f"short_period: {len(items)} sets of derivatives for "
+                                      f"{v.size} velocities.", fix="give one set, or one per "
+                                                                   "velocity."))
+    for item in items:
+        missing = [n for n in (*_DERIVATIVES, "reference_area", "reference_chord")
+                   if not hasattr(item, n)]
+        if missing:
+            raise InputError(card_message(
+                f"short_period: the derivatives object lacks {missing}.",
+                fix="pass an aero.stability.StabilityDerivatives."))
+    refs = {(float(i.reference_area), float(i.reference_chord)) for i in items}
+    if len(refs) != 1:
+        raise InputError(card_message(f"short_period: the derivatives use different reference "
+                                      f"areas / chords {sorted(refs)}.", fix="compute them all "
+                                                                             "on one S and c."))
     for name, value in (("mass", mass), ("iyy", iyy), ("rho", rho)):
         if not 0 < float(value) < np.inf:
             raise InputError(card_message(f"short_period: {name}={value} must be positive and "
                                           "finite.", fix=f"give the aircraft's {name} in the "
                                                          "deck's consistent units."))
-    return v
+    values = {n: np.array([float(getattr(i, n)) for i in items]) for n in _DERIVATIVES}
+    area, chord = refs.pop()
+    return v, values, area, chord
 
 
-def _dimensional(derivs, rho, v):
+def _dimensional(area, chord, rho, v):
     """q_dyn S, q_dyn S c and c_hat per velocity (each shape (nv,))."""
-    qs = 0.5 * float(rho) * v * v * float(derivs.reference_area)
-    return qs, qs * float(derivs.reference_chord), float(derivs.reference_chord) / (2.0 * v)
+    qs = 0.5 * float(rho) * v * v * area
+    return qs, qs * chord, chord / (2.0 * v)
 
 
 def short_period(derivs, mass: float, iyy: float, rho: float, velocity, *,
@@ -70,8 +85,10 @@ def short_period(derivs, mass: float, iyy: float, rho: float, velocity, *,
 
     Parameters
     ----------
-    derivs : aero.stability.StabilityDerivatives
-        (or any object with its derivative and reference attributes), about the CG.
+    derivs : aero.stability.StabilityDerivatives, or a list of them, shape (nv,)
+        About the CG (any object with the derivative and reference attributes): one set for every
+        speed (rigid aircraft), or one per speed (``aero.stability.flexible_derivatives`` at each
+        speed's dynamic pressure), all on the same S and c.
     mass : float
         Aircraft mass (the half model's with SYMXZ = +1 derivatives), consistent units.
     iyy : float
@@ -96,24 +113,23 @@ def short_period(derivs, mass: float, iyy: float, rho: float, velocity, *,
     if alphadot not in ALPHADOT_MODELS:
         raise InputError(card_message(f"short_period: alphadot={alphadot!r} unknown.",
                                       fix=f"use one of {ALPHADOT_MODELS}."))
-    v = _inputs(derivs, mass, iyy, rho, velocity)
-    qs, qsc, c_hat = _dimensional(derivs, rho, v)
+    v, d, area, chord = _inputs(derivs, mass, iyy, rho, velocity)
+    qs, qsc, c_hat = _dimensional(area, chord, rho, v)
     on_alpha = 1.0 if alphadot == "alpha" else 0.0
-    d = derivs
     E = np.zeros((v.size, 2, 2))
     A = np.zeros((v.size, 2, 2))
     # E [alpha', q'] = A [alpha, q] (Etkin & Reid ch. 4, no gravity, no speed change)
-    E[:, 0, 0] = mass * v + on_alpha * qs * c_hat * d.cl_alphadot
-    E[:, 1, 0] = -on_alpha * qsc * c_hat * d.cm_alphadot
+    E[:, 0, 0] = mass * v + on_alpha * qs * c_hat * d["cl_alphadot"]
+    E[:, 1, 0] = -on_alpha * qsc * c_hat * d["cm_alphadot"]
     E[:, 1, 1] = iyy
-    A[:, 0, 0] = -qs * d.cl_alpha
-    A[:, 0, 1] = mass * v - qs * c_hat * (d.cl_q + (1.0 - on_alpha) * d.cl_alphadot)
-    A[:, 1, 0] = qsc * d.cm_alpha
-    A[:, 1, 1] = qsc * c_hat * (d.cm_q + (1.0 - on_alpha) * d.cm_alphadot)
+    A[:, 0, 0] = -qs * d["cl_alpha"]
+    A[:, 0, 1] = mass * v - qs * c_hat * (d["cl_q"] + (1.0 - on_alpha) * d["cl_alphadot"])
+    A[:, 1, 0] = qsc * d["cm_alpha"]
+    A[:, 1, 1] = qsc * c_hat * (d["cm_q"] + (1.0 - on_alpha) * d["cm_alphadot"])
     if np.any(E[:, 0, 0] <= 0):
         raise InputError(card_message(
             f"short_period: m V + q S c/(2V) C_L_alphadot <= 0 at V = "
-            f"{v[E[:, 0, 0] <= 0].tolist()} (C_L_alphadot = {d.cl_alphadot}).",
+            f"{v[E[:, 0, 0] <= 0].tolist()} (C_L_alphadot = {d['cl_alphadot'].tolist()}).",
             fix="check the derivatives and the mass units (the half model's mass with "
                 "half-model derivatives)."))
     sp = np.linalg.eigvals(np.linalg.solve(E, A))                      # (nv, 2)
@@ -125,16 +141,15 @@ def short_period(derivs, mass: float, iyy: float, rho: float, velocity, *,
     oscillating = p.imag > 0
     with np.errstate(divide="ignore", invalid="ignore"):
         g = np.where(oscillating, 2.0 * p.real / np.where(oscillating, p.imag, 1.0),
-                     p.real * float(d.reference_chord) / (v[:, None] * np.log(2.0)))
-    b = float(d.reference_chord) / 2.0
+                     p.real * chord / (v[:, None] * np.log(2.0)))
+    b = chord / 2.0
     dims = ("velocity", "root")
     ds = xr.Dataset(
         {"eigenvalue": (dims, p), "frequency": (dims, p.imag / (2.0 * np.pi)),
          "damping": (dims, g), "k": (dims, p.imag * b / v[:, None])},
         coords={"velocity": v, "root": np.arange(1, 5), "root_label": ("root", list(ROOT_LABELS))},
-        attrs={"method": "stability derivatives", "alphadot": alphadot, "refc": float(
-            d.reference_chord), "density": float(rho), "mass": float(mass), "iyy": float(iyy),
-               "mach": float(getattr(d, "mach", np.nan)),
+        attrs={"method": "stability derivatives", "alphadot": alphadot, "refc": chord,
+               "density": float(rho), "mass": float(mass), "iyy": float(iyy),
                "conventions": "p = omega (gamma + i), Im p >= 0; g = 2 Re p / Im p, real roots "
                               "g = p c / (V ln 2); k = omega b / V, b = refc / 2"})
     ds["eigenvalue"].attrs["units"] = "rad/s"
@@ -166,12 +181,12 @@ def short_period_approximation(derivs, mass: float, iyy: float, rho: float,
     zeta_sp : ndarray, shape (nv,)
         Damping ratio (g = 2 zeta for light damping).
     """
-    v = _inputs(derivs, mass, iyy, rho, velocity)
-    qs, qsc, c_hat = _dimensional(derivs, rho, v)
-    z_alpha = -qs * derivs.cl_alpha / mass
-    m_alpha = qsc * derivs.cm_alpha / iyy
-    m_q = qsc * derivs.cm_q * c_hat / iyy
-    m_alphadot = qsc * derivs.cm_alphadot * c_hat / iyy
+    v, d, area, chord = _inputs(derivs, mass, iyy, rho, velocity)
+    qs, qsc, c_hat = _dimensional(area, chord, rho, v)
+    z_alpha = -qs * d["cl_alpha"] / mass
+    m_alpha = qsc * d["cm_alpha"] / iyy
+    m_q = qsc * d["cm_q"] * c_hat / iyy
+    m_alphadot = qsc * d["cm_alphadot"] * c_hat / iyy
     omega2 = z_alpha * m_q / v - m_alpha
     omega = np.sqrt(np.where(omega2 > 0, omega2, np.nan))
     return omega, -(m_q + m_alphadot + z_alpha / v) / (2.0 * omega)

@@ -198,11 +198,10 @@ def bah_flexible(bah):
 
 
 def flexible_short_period(bah, derivs, v, alphadot):
+    """Short-period root (root 1) at each speed, one set of derivatives per speed."""
     am, props, _ = bah
     mass, iyy = longitudinal_inertia(props, am)
-    return [short_period(d, mass, iyy, RHO_502, [vel], alphadot=alphadot).isel(velocity=0,
-                                                                                 root=0)
-            for d, vel in zip(derivs, v)]
+    return short_period(list(derivs), mass, iyy, RHO_502, v, alphadot=alphadot).sel(root=1)
 
 
 def test_bah_flexible_short_period_against_nastran_30_to_200(bah, bah_flexible):
@@ -216,8 +215,8 @@ def test_bah_flexible_short_period_against_nastran_30_to_200(bah, bah_flexible):
         assert getattr(derivs[0], name) == pytest.approx(getattr(rigid, name), rel=1e-10)
     assert v.size == 12 and v.min() == 30.0
     roots = flexible_short_period(bah, derivs[1:], v, "pitch_rate")
-    np.testing.assert_allclose([r["frequency"].item() for r in roots], f, rtol=0.05)
-    np.testing.assert_allclose([r["damping"].item() for r in roots], g, rtol=0.10)
+    np.testing.assert_allclose(roots["frequency"].values, f, rtol=0.05)
+    np.testing.assert_allclose(roots["damping"].values, g, rtol=0.10)
 
 
 def test_bah_flexible_derivatives_against_the_modal_p_method(bah, bah_flexible):
@@ -239,7 +238,7 @@ def test_bah_flexible_derivatives_against_the_modal_p_method(bah, bah_flexible):
     p = np.linalg.eigvals(companion)
     p = p[(p.imag > 0) & (np.abs(p) < 2 * np.pi * 1.0)]        # below the first wing mode
     assert p.size == 1
-    ours = flexible_short_period(bah, [derivs[1 + i]], [v[i]], "pitch_rate")[0]
+    ours = flexible_short_period(bah, [derivs[1 + i]], [v[i]], "pitch_rate").isel(velocity=0)
     assert ours["frequency"].item() == pytest.approx(p[0].imag / (2 * np.pi), rel=0.02)
     assert ours["damping"].item() == pytest.approx(2 * p[0].real / p[0].imag, rel=0.02)
 
@@ -256,8 +255,8 @@ def test_bah_flight_mechanics_alphadot_against_nastran_30_to_200(bah, bah_flexib
     am, props, d = bah
     _, derivs, (v, f, g) = bah_flexible
     roots = flexible_short_period(bah, derivs[1:] if flexible else [d] * v.size, v, "alpha")
-    np.testing.assert_allclose([r["frequency"].item() for r in roots], f, rtol=0.05)
-    np.testing.assert_allclose([r["damping"].item() for r in roots], g, rtol=0.10)
+    np.testing.assert_allclose(roots["frequency"].values, f, rtol=0.05)
+    np.testing.assert_allclose(roots["damping"].values, g, rtol=0.10)
 
 
 def test_bad_input(bah):

@@ -107,6 +107,21 @@ def test_statically_unstable_aircraft_has_real_roots_with_nastran_g():
     assert np.isnan(omega[0])
 
 
+def test_one_set_of_derivatives_per_speed():
+    """A list of derivatives, one per speed, gives at each speed the root of that set alone."""
+    v = np.array([80.0, 150.0])
+    sets = [derivs(), derivs(cm_alpha=-1.5, cl_alpha=5.5)]
+    both = short_period(sets, MASS, IYY, RHO, v)
+    for i in range(2):
+        alone = short_period(sets[i], MASS, IYY, RHO, v[i:i + 1])
+        np.testing.assert_allclose(both["eigenvalue"].values[i], alone["eigenvalue"].values[0],
+                                   rtol=1e-13)
+    with pytest.raises(InputError, match=r"1 sets of derivatives for 2 velocities"):
+        short_period(sets[:1], MASS, IYY, RHO, v)
+    with pytest.raises(InputError, match=r"different reference areas"):
+        short_period([derivs(), derivs(reference_area=50.0)], MASS, IYY, RHO, v)
+
+
 def test_bad_input_is_rejected():
     with pytest.raises(InputError, match=r"alphadot='beta' unknown"):
         short_period(derivs(), MASS, IYY, RHO, [100.0], alphadot="beta")
