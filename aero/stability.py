@@ -27,7 +27,7 @@ How each derivative is computed (the boxes' motion is rigid, no splines involved
 * C_L_q, C_m_q: the steady vortex lattice with the normalwash of a steady pitch rate at alpha = 0,
   w / V = -n_z (x - x_ref) / b per unit q_hat (the i k h / b part of the harmonic pitch).
 * C_L_alphadot, C_m_alphadot: what is left of the k-derivative of the harmonic pitch forces
-  Q_pitch(ik) = Q0 + i k Q1 + O(k^2) once the quasi-steady pitch-rate part is taken out:
+  Q_pitch(ik) = Q0 + i k Q1 + O(k^2 ln k) once the quasi-steady pitch-rate part is taken out:
   Q1 = C_q + C_alphadot, and C_alphadot = Im F(D(k)^-1 w_alpha) / k, the out-of-phase response of
   the doublet lattice (:func:`aero.dlm.dlm_aic`) to a harmonic alpha without pitch-rate normalwash
   (the lag of the wake, and of the downwash at a tail), at a small k (default 1e-4).
