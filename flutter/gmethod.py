@@ -296,6 +296,42 @@ class GProblem:
                 break
         return complex(lam.real, float(lam.imag)), u
 
+    def root_near(self, V: float, rho: float, mach: float, p_guess: complex):
+        """The root nearest ``p_guess`` (rad/s) at one flight point, without a sweep.
+
+        A real guess (Im p = 0) takes the nearest real eigenvalue at k = 0; otherwise a secant
+        iteration on k solves Im p_bar(k) = k on the eigenvalue nearest the current estimate.
+
+        Returns
+        -------
+        (p, u, converged) or None
+            None where no such root is found (no real eigenvalue, k < 0, or no convergence).
+        """
+        s = self.b / V
+        target = complex(p_guess) * s
+        if target.imag == 0:
+            lam, U, out = self.eig(np.zeros(1), V, rho, mach)
+            real = np.flatnonzero(lam[0].imag == 0)
+            if real.size == 0:
+                return None
+            j = real[np.argmin(np.abs(lam[0, real] - target))]
+            return complex(lam[0, j].real / s, 0.0), U[0, j], True
+        k0, (lam0, _) = target.imag, self._pick(target.imag, target, V, rho, mach, vectors=False)
+        f0 = lam0.imag - k0
+        k1 = k0 + f0 if f0 != 0 else k0
+        for _ in range(30):
+            if k1 < 0:
+                return None
+            lam1, _ = self._pick(k1, lam0, V, rho, mach, vectors=False)
+            f1 = lam1.imag - k1
+            if abs(f1) <= max(1e-8 * abs(lam1), 1e-10):
+                lam, u = self._pick(k1, lam1, V, rho, mach)
+                return complex(lam.real, k1) / s, u, not bool(self.interpolator(mach)(
+                    np.array([k1]))[2][0])
+            k0, f0, lam0, k1 = k1, f1, lam1, (k1 - f1 * (k1 - k0) / (f1 - f0) if f1 != f0
+                                               else k1 + f1)
+        return None
+
     # ----------------------------------------------------------------------------- outputs
     def damping(self, p: np.ndarray, V) -> np.ndarray:
         """g = 2 Re p / Im p; Nastran's g = p cbar / (V ln 2) for real roots (Im p = 0)."""
@@ -400,8 +436,9 @@ def _static_divergence(prob: GProblem, pts, U, crossings) -> list[tuple[Crossing
 
 def _refine_crossing(prob: GProblem, pts, P, U, r, i, g0, g1):
     """Zero of root r's damping between points i and i+1 by Illinois root-finding on the flight
-    point (each evaluation a full reduced-frequency sweep; root r picked by assignment of all
-    roots to their linear interpolation between the two points)."""
+    point. Each evaluation solves root r alone from its linear interpolation between the two points
+    (:meth:`GProblem.root_near`); where that fails (e.g. the root turns real inside the bracket) a
+    full reduced-frequency sweep is matched to the interpolated roots instead."""
     cache = {}
 
     def point(t):
@@ -409,14 +446,22 @@ def _refine_crossing(prob: GProblem, pts, P, U, r, i, g0, g1):
 
     def fun(t):
         pt = point(t)
-        p, u, ok, out = prob.roots(*pt)
-        pr, ur, okr, outr, miss = _match(P[i] + t * (P[i + 1] - P[i]), U[i], p, u, ok, out)
-        cache[t] = (pr[r], ur[r], bool(okr[r] and not outr[r] and not miss[r]))
-        return float(prob.damping(pr[r], pt[0]))
+        guess = P[i] + t * (P[i + 1] - P[i])
+        near = prob.root_near(*pt, guess[r])
+        if near is not None:
+            cache[t] = near
+        else:
+            p, u, ok, out = prob.roots(*pt)
+            pr, ur, okr, outr, miss = _match(guess, U[i], p, u, ok, out)
+            cache[t] = (pr[r], ur[r], bool(okr[r] and not outr[r] and not miss[r]))
+        return float(prob.damping(cache[t][0], pt[0]))
 
     t, ok = illinois(fun, g0, g1)
-    pr, ur, good = cache[t] if t in cache else cache[min(cache, key=lambda s: abs(s - t))]
-    return t, pr, ur, ok and good
+    t = t if t in cache else min(cache, key=lambda s: abs(s - t))
+    pr, ur, good = cache[t]
+    # a root that changes branch inside the bracket gives a jump of g, not a zero
+    small = abs(float(prob.damping(pr, point(t)[0]))) <= 1e-3 * max(abs(g0), abs(g1))
+    return t, pr, ur, ok and good and small
 
 
 def g_solve(system: ModalSystem, gaf, velocity, *, density, mach, sweep: str = "velocity",
