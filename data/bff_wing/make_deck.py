@@ -4,8 +4,8 @@ The aircraft is this project's own: a tailless flying wing of 5.5 m span, leadin
 30 deg, chord 0.9 m on the centre line tapering to 0.36 m at the tip (aspect ratio 8.7), with a
 centre body that is a single lumped mass (the payload / ballast). Its short period is slow because
 the static margin is small and the pitch inertia large, and it rises with speed until it meets the
-first symmetric wing bending: body-freedom flutter, as on forward- and aft-swept flying wings
-(Weisshaar & Zeiler, J. Aircraft 20(12), 1983; Chen, AIAA J. 38(9), 2000, BFF case).
+first symmetric wing bending: body-freedom flutter, the mechanism of Weisshaar & Zeiler
+(J. Aircraft 20(12), 1983) and of the BFF example of Chen's g-method paper (AIAA J. 38(9), 2000).
 
 * units: SI (m, kg, s, N). Axes: x aft from the centre-line leading edge, y to starboard, z up.
 * symmetric half model (the starboard wing, y >= 0): AERO SYMXZ = +1 mirrors the aerodynamics;

@@ -140,8 +140,9 @@ def _mystran_deck(folder: Path) -> Path:
 
 @needs_mystran
 def test_modes_against_mystran(tmp_path):
-    """Two rigid (plunge, pitch) and eight elastic modes of the committed structure. Asserted
-    within the issue's 1 % (rigid modes below 1e-3 Hz in both)."""
+    """Two rigid (plunge, pitch) and eight elastic modes of the committed structure. Measured: the
+    elastic ones within 1.5e-8 (MYSTRAN's OP2 eigenvalues are float32); asserted within the
+    issue's 1 % (rigid modes below 1e-3 Hz in both)."""
     theirs = run_mystran(_mystran_deck(tmp_path))
     ours = np.asarray(deck_modes(FOLDER / "bff_wing.bdf")["frequency"].values, dtype=float)
     assert ours.size == theirs.size == md.NMODES
@@ -260,6 +261,17 @@ def test_short_period_three_ways(baseline):
                        (fm.frequency.values[:, 0], fm.damping.values[:, 0])):
         np.testing.assert_allclose(f, ref_f, rtol=0.05)
         np.testing.assert_allclose(damping, ref_g, rtol=0.10)
+
+
+@pytest.mark.xfail(strict=True, reason="flutter.rigid_roots labels by the largest rigid share: "
+                   "at 10 m/s this short period is 96 % plunge, 4 % pitch (kinetic energy)")
+def test_rigid_roots_are_named(baseline):
+    """The chain names the baseline's rigid-body roots: root 1 the plunge, root 2 the short
+    period. Measured: root 2 (p = -2.06 + 3.19i rad/s at 10 m/s, 0.51 Hz, g -1.29) is labelled
+    "rigid 2", because its eigenvector's participation is 95.9 % plunge mode, 4.1 % pitch mode (a
+    slow short period plunges the mass-normalised aircraft more than it pitches it)."""
+    labels = [str(x) for x in baseline["results"][0][1]["root_label"].values[:2]]
+    assert labels == ["plunge", "short period"]
 
 
 def _check_trend(variants, keys):
