@@ -14,7 +14,7 @@ from aero.rfa import _basis, fit_rfa, fit_roger
 from aero.strip import section_gaf
 from flutter.pk import pk_solve
 from flutter.pmethod import aeroelastic_statespace, p_solve, p_solve_many
-from flutter.system import ModalSystem
+from flutter.system import ModalSystem, StructuralDamping
 from flutter.tracking import assign
 from flutter_nastran import (DATA, bah_qhh_dataset, f06_flutter_summaries, f06_modes_used,
                              first_crossing)
@@ -175,6 +175,23 @@ def test_density_sweep_matches_velocity_sweep(bah):
     assert dd.attrs["sweep"] == "density" and dd.sizes["density"] == 5
     np.testing.assert_allclose(dd.eigenvalue.isel(density=-1).values, dv.eigenvalue.values,
                                rtol=1e-9, atol=1e-9)
+
+
+@pytest.mark.parametrize("kind", ["viscous", "hysteretic"])
+def test_bah_structural_damping_is_modal_viscous(bah, kind):
+    """The deck's TABDMP1 (g vs Hz) enters as modal viscous damping g_j omega_j for either kind (a
+    hysteretic i g K has no rational form): root 5, which has no aerodynamics, shows g = -g(f5)."""
+    from pyNastran.bdf.bdf import read_bdf
+
+    tab = read_bdf(str(DATA / "bah_plane" / "bah_plane.bdf"), debug=None).tables_sdamping[2001]
+    sd = StructuralDamping(frequency=tuple(tab.x), table_g=tuple(tab.y), kind=kind)
+    system = bah["system"]
+    damped = ModalSystem(system.mass, system.stiffness, structural=sd)
+    ds = p_solve(damped, bah["gaf"], bah["V"][:3], density=1.225, mach=0.2, fit=fit_rfa,
+                 fit_options={"k_max": K_MAX})
+    f5 = np.sqrt(system.stiffness[4, 4]) / (2 * np.pi)
+    np.testing.assert_allclose(ds.damping.sel(root=5).values, -sd.at(f5), rtol=1e-4)
+    assert kind in ds.attrs["structural_damping"]
 
 
 def test_assign_follows_vectors_not_order():
