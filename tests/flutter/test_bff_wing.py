@@ -108,7 +108,8 @@ def _hand_mass(params: md.BFFParameters) -> tuple[float, np.ndarray, float]:
     xyz = np.array([np.add(g[it.grid], it.offset) for it in items])
     cg = m @ xyz / m.sum()
     d = xyz - cg
-    return m.sum(), cg, float(m @ (d[:, 0] ** 2 + d[:, 2] ** 2) + sum(it.inertia[1] for it in items))
+    iyy = m @ (d[:, 0] ** 2 + d[:, 2] ** 2) + sum(it.inertia[1] for it in items)
+    return m.sum(), cg, float(iyy)
 
 
 def test_generator_is_deterministic(tmp_path):
