@@ -46,7 +46,8 @@ def test_bah_qhh_fit_under_two_percent(mach):
     assert fit.overall_error < 0.02
     assert np.all(fit.entry_error[[4, 9], :] == 0) and np.all(fit.entry_error[:, [4, 9]] == 0)
     Q0 = gaf.Q.sel(mach=mach).isel(k=0).values
-    np.testing.assert_allclose(fit.evaluate(gaf.k.values[:1])[0], Q0, rtol=0, atol=1e-12 * abs(Q0).max())
+    np.testing.assert_allclose(fit.evaluate(gaf.k.values[:1])[0], Q0, rtol=0,
+                               atol=1e-12 * abs(Q0).max())
 
 
 def test_bah_four_real_lags_are_not_enough():
