@@ -250,7 +250,7 @@ class GProblem:
             us.append(u[None])
             ok.append([good])
             outs.append([False])
-        if out.size and np.isfinite(self.interpolator(mach).k_max):
+        if np.isfinite(self.interpolator(mach).k_max):
             for j in np.flatnonzero(f[-1] > 0):   # beyond the table: Q constant in k
                 p, u = self._beyond(lam[-1, j], U[-1, j], V, rho, mach)
                 ps.append([p])
