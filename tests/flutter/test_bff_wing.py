@@ -332,7 +332,7 @@ def test_g_and_p_methods_agree_on_the_sbff(baseline, g_baseline):
     (g-method), 40.424 m/s (p-k); with three complex pairs as well, 40.423 m/s."""
     system = modal_system(baseline["modes"], StructuralDamping())
     p = p_solve(system, baseline["gaf"], np.asarray(md.VELOCITIES), density=md.RHOREF,
-                        mach=md.MACH, fit=fit_rfa, fit_options={"k_max": 0.6, "npair": 0})
+                mach=md.MACH, fit=fit_rfa, fit_options={"k_max": 0.6, "npair": 0})
     assert p.attrs["method"] == "P-RFA" and p.attrs["rfa_fit_error"] < 0.02
     assert _sbff_of(p, baseline["modes"]) == pytest.approx(
         _sbff_of(g_baseline, baseline["modes"]), rel=0.01)
