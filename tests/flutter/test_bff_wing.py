@@ -59,6 +59,9 @@ sys.path.insert(0, str(REPO / "tests" / "structures"))
 import make_deck as md  # noqa: E402
 from test_mystran import needs_mystran, run_mystran  # noqa: E402
 
+#: Modes above ~30 Hz need k beyond the table (1.5) at the lowest speeds; the solvers warn and
+#: mark those points not converged. They take no part in the SBFF.
+pytestmark = pytest.mark.filterwarnings("ignore:.*outside the tabulated k range:RuntimeWarning")
 #: The SBFF is the slowest oscillatory (above this, Hz: a static pitch instability of the
 #: flexible aircraft has ~0 Hz) flutter crossing whose rigid-body modes take at least
 #: flutter.summary.BFF_SHARE of the participation.
@@ -81,9 +84,7 @@ def grid_gaf():
 def _solve(folder: Path, grid_gaf, **params) -> dict:
     """Modes, GAFs and p-k flutter of the deck with ``params`` (md.BFFParameters fields)."""
     deck = md.write_deck(folder / "bff.bdf", md.BFFParameters(**params))
-    modes = deck_modes(deck)
-    with pytest.warns(RuntimeWarning, match="outside the tabulated k range"):
-        return flutter_chain(deck, modes, grid_gaf=grid_gaf)
+    return flutter_chain(deck, deck_modes(deck), grid_gaf=grid_gaf)
 
 
 def sbff(out: dict) -> tuple[float, float, float]:
