@@ -69,7 +69,7 @@ REDUCED_FREQUENCIES = (0.001, 0.005, 0.01, 0.02, 0.03, 0.045, 0.06, 0.08, 0.1, 0
 #: True airspeeds of the FLUTTER card (m/s).
 VELOCITIES = tuple(float(v) for v in np.arange(10.0, 150.1, 2.5))
 #: Doublet-lattice boxes of the half wing.
-NSPAN, NCHORD = 14, 10
+NSPAN, NCHORD = 20, 10
 E_MOD, NU = 70.0e9, 0.3
 #: Modes of the EIGRL card (2 rigid + 8 elastic).
 NMODES = 10

@@ -158,8 +158,8 @@ def test_sbff_is_found_and_is_body_freedom(baseline):
     oscillation at low speed; the first flutter crossing is the SBFF, between the short period's
     and the in-vacuo bending frequency, with the rigid-body modes carrying most of the motion and
     classified body-freedom flutter in the summary; the wing's own bending-torsion flutter is far
-    above it. Measured (p-k): short period 1.08 Hz, g -1.23 at 20 m/s; SBFF 40.42 m/s, 2.56 Hz,
-    rigid share 83 %; first bending in vacuo 4.07 Hz; wing flutter 113.0 m/s, 11.4 Hz."""
+    above it. Measured (p-k): short period 1.06 Hz, g -1.24 at 20 m/s; SBFF 40.83 m/s, 2.56 Hz,
+    rigid share 83 %; first bending in vacuo 4.07 Hz; wing flutter 111.5 m/s, 11.3 Hz."""
     modes = baseline["modes"]
     f_bend = float(modes["frequency"][2])
     assert np.all(modes["frequency"].values[:2] < 1e-3) and 3.0 < f_bend < 6.0
@@ -222,8 +222,8 @@ def _short_period_hz(out: dict, velocity: float) -> float:
 def test_short_period_scales_as_flight_mechanics(variants):
     """At 20 m/s (half the SBFF speed) the short period of every variant against the quasi-steady
     omega_sp ~ sqrt(static margin / I_yy) (module docstring), as ratios to the baseline's, within
-    10 %. Measured (g-method): 1.07 Hz at the baseline (0.51 Hz at 10 m/s); ratios within 0.7 %
-    (inertia) and 8 % (CG) of the estimate (the vortex lattice puts the neutral point at 0.29 MAC,
+    10 %. Measured (g-method): 1.06 Hz at the baseline (0.50 Hz at 10 m/s); ratios within 0.7 %
+    (inertia) and 7.4 % (CG) of the estimate (the vortex lattice puts the neutral point at 0.29 MAC,
     a little aft of the quarter-MAC estimate)."""
     base = (1.5, 0.70)
     f0 = _short_period_hz(variants[base], 20.0)
@@ -242,8 +242,8 @@ def test_short_period_three_ways(baseline):
     aircraft) by the g-method, the p-method (4-lag Roger fit) and flight mechanics
     (aero.stability derivatives from our VLM / DLM about the CG, flutter.short_period with the
     alpha-dot terms on the pitch rate, the modal truncation) agree within the issue's 5 % in
-    frequency and 10 % in g. Measured at 4 / 10 m/s: g-method 0.199 / 0.506 Hz, g -1.23 / -1.21;
-    p-method 0.203 / 0.514 Hz, g -1.21 / -1.19; flight mechanics 0.209 / 0.522 Hz, g -1.25 (4.7 %
+    frequency and 10 % in g. Measured at 4 / 10 m/s: g-method 0.197 / 0.499 Hz, g -1.24 / -1.22;
+    p-method 0.200 / 0.507 Hz, g -1.21 / -1.20; flight mechanics 0.206 / 0.514 Hz, g -1.26 (4.6 %
     above the g-method at 4 m/s: the derivatives are the k -> 0 limit, this short period lives at
     k ~ 0.105)."""
     deck = FOLDER / "bff_wing.bdf"
@@ -269,8 +269,8 @@ def test_short_period_three_ways(baseline):
                    "at 10 m/s this short period is 96 % plunge, 4 % pitch (kinetic energy)")
 def test_rigid_roots_are_named(baseline):
     """The chain names the baseline's rigid-body roots: root 1 the plunge, root 2 the short
-    period. Measured: root 2 (p = -2.06 + 3.19i rad/s at 10 m/s, 0.51 Hz, g -1.29) is labelled
-    "rigid 2", because its eigenvector's participation is 95.9 % plunge mode, 4.1 % pitch mode (a
+    period. Measured: root 2 (p = -2.05 + 3.14i rad/s at 10 m/s, 0.50 Hz, g -1.30) is labelled
+    "rigid 2", because its eigenvector's participation is 96.0 % plunge mode, 3.9 % pitch mode (a
     slow short period plunges the mass-normalised aircraft more than it pitches it)."""
     labels = [str(x) for x in baseline["results"][0][1]["root_label"].values[:2]]
     assert labels == ["plunge", "short period"]
@@ -288,8 +288,8 @@ def _check_trend(variants, keys):
 
 def test_sbff_speed_rises_with_pitch_inertia(variants):
     """I22 of the centre body 1.0 -> 1.5 -> 2.0 kg m^2 (aircraft I_yy 2.98 -> 3.48 -> 3.98 per
-    half): SBFF speed up, frequency down at each step. Measured (p-k): 35.6 m/s 2.90 Hz ->
-    40.4 m/s 2.56 Hz -> 47.7 m/s 2.24 Hz, +13.6 % and +18.0 % against the estimate's +8.0 % and
+    half): SBFF speed up, frequency down at each step. Measured (p-k): 35.8 m/s 2.91 Hz ->
+    40.8 m/s 2.56 Hz -> 48.5 m/s 2.23 Hz, +13.9 % and +18.9 % against the estimate's +8.0 % and
     +6.9 % (the estimate ignores the bending root's softening as it couples)."""
     _check_trend(variants, [(1.0, 0.70), (1.5, 0.70), (2.0, 0.70)])
 
@@ -297,10 +297,10 @@ def test_sbff_speed_rises_with_pitch_inertia(variants):
 def test_sbff_speed_rises_as_the_cg_moves_aft(variants):
     """Centre body at x = 0.65 -> 0.70 -> 0.72 m (aircraft CG 0.767 -> 0.797 -> 0.809 m, static
     margin 12.0 -> 7.5 -> 5.7 % MAC): SBFF speed up, frequency down at each step. Measured
-    (p-k): 38.0 m/s 2.94 Hz -> 40.4 m/s 2.56 Hz -> 42.5 m/s 2.33 Hz, +6.5 % and +5.2 % against
+    (p-k): 38.2 m/s 2.94 Hz -> 40.8 m/s 2.56 Hz -> 43.1 m/s 2.32 Hz, +6.9 % and +5.6 % against
     the estimate's +24 % and +14 % (the flexible swept wing moves the neutral point with speed,
     which the rigid estimate ignores). Further aft (x = 0.75 m) the coupled root turns real
-    (static pitch instability of the flexible aircraft, 58.8 m/s) instead of fluttering."""
+    (static pitch instability of the flexible aircraft, 58.6 m/s) instead of fluttering."""
     _check_trend(variants, [(1.5, 0.65), (1.5, 0.70), (1.5, 0.72)])
 
 
@@ -320,7 +320,7 @@ def g_baseline(baseline):
 
 
 def test_g_method_and_pk_agree_on_the_sbff(baseline, g_baseline):
-    """Both are exact at g = 0: SBFF speeds within 1 % (measured 40.423 vs 40.424 m/s)."""
+    """Both are exact at g = 0: SBFF speeds within 1 % (measured 40.826 m/s both)."""
     assert g_baseline.attrs["method"] == "G"
     assert _sbff_of(g_baseline, baseline["modes"]) == pytest.approx(sbff(baseline)[0], rel=0.01)
 
@@ -329,8 +329,8 @@ def test_g_and_p_methods_agree_on_the_sbff(baseline, g_baseline):
     """The issue's must-show: g-method and p-method SBFF speeds within 1 %. The p-method's rational
     fit (aero.rfa) has four real lags (Roger form, no complex pairs: 0.4 s instead of 29 s) over
     k <= 0.6, which covers the SBFF's k ~ 0.13 and the wing flutter's ~ 0.21; its fit error must
-    be under the issue's 2 % (measured 0.11 %). Measured SBFF: 40.445 m/s (p-method), 40.423 m/s
-    (g-method), 40.424 m/s (p-k); with three complex pairs as well, 40.423 m/s."""
+    be under the issue's 2 % (measured 0.12 %). Measured SBFF: 40.848 m/s (p-method), 40.826 m/s
+    (g-method and p-k); with three complex pairs as well (fit error 6e-6), 40.826 m/s."""
     system = modal_system(baseline["modes"], StructuralDamping())
     p = p_solve(system, baseline["gaf"], np.asarray(md.VELOCITIES), density=md.RHOREF,
                 mach=md.MACH, fit=fit_rfa, fit_options={"k_max": 0.6, "npair": 0})
