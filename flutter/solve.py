@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import os
 from dataclasses import dataclass, field
+from functools import partial
 
 import numpy as np
 import xarray as xr
@@ -20,6 +21,7 @@ import xarray as xr
 from flutter.gmethod import g_solve_many
 from flutter.kmethod import k_solve
 from flutter.pk import pk_solve_many
+from flutter.pmethod import p_solve_many
 from flutter.results import label_units
 from flutter.system import ModalSystem, StructuralDamping
 from structures.common.errors import InputError, UnsupportedCardError, card_message
@@ -32,8 +34,8 @@ METHODS = {"PK": "pk", "PKNL": "pknl", "K": "k", "KE": "k"}
 #: "pk" the p-k method (flutter.pk; name PK / PKNL as the card), "g" Chen's g-method
 #: (flutter.gmethod, name G), "p" the p-method on a rational fit of the GAFs (flutter.pmethod,
 #: name P-RFA). Which is the default for free-free aircraft, and why: README, "Flutter methods".
-SOLVERS = {"pk": pk_solve_many, "g": g_solve_many}
-SOLVER_NAMES = {"g": "G"}
+SOLVERS = {"pk": pk_solve_many, "g": g_solve_many, "p": p_solve_many}
+SOLVER_NAMES = {"g": "G", "p": "P-RFA"}
 
 
 @dataclass(frozen=True)
@@ -133,8 +135,8 @@ def _cores() -> int:
     return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
 
 
-def solve_request(system: ModalSystem, gaf: xr.Dataset,
-                  req: FlutterRequest) -> list[tuple[dict, xr.Dataset]]:
+def solve_request(system: ModalSystem, gaf: xr.Dataset, req: FlutterRequest,
+                  rational_fit=None) -> list[tuple[dict, xr.Dataset]]:
     """Solve one request on a modal system.
 
     Parameters
@@ -144,6 +146,9 @@ def solve_request(system: ModalSystem, gaf: xr.Dataset,
     gaf : xarray.Dataset
         ``Q(mach, k, mode_i, mode_j)`` with attrs ``refc`` (k = omega b / V, b = refc / 2).
     req : FlutterRequest
+    rational_fit : callable, optional
+        The rational fit of the p-method (solver "p": aero.rfa.fit_rfa, given by the caller
+        because flutter/ does not import aero/).
 
     Returns
     -------
@@ -154,19 +159,21 @@ def solve_request(system: ModalSystem, gaf: xr.Dataset,
     """
     out = []
     name = req.name
+    solve = SOLVERS[req.solver]
+    if req.solver == "p":
+        solve = partial(p_solve_many, fit=rational_fit)
     if METHODS[req.method] == "pk":
         V = np.unique(req.values)
         points = [(rho, m) for rho in req.density for m in req.mach]
         # the sweeps are independent: one per core (flutter.parallel)
-        results = SOLVERS[req.solver](system, gaf, [(V, rho, m) for rho, m in points],
-                                      workers=min(len(points), _cores()))
+        results = solve(system, gaf, [(V, rho, m) for rho, m in points],
+                        workers=min(len(points), _cores()))
         for (rho, m), ds in zip(points, results):
             out.append(({"mach": m, "density": rho, "configuration": name}, ds))
     elif METHODS[req.method] == "pknl":
         rho, mach, V = (np.asarray(x) for x in (req.density, req.mach, req.values))
         order = np.argsort(rho, kind="stable")
-        ds = SOLVERS[req.solver](system, gaf, [(V[order], rho[order], mach[order])],
-                                 sweep="density")[0]
+        ds = solve(system, gaf, [(V[order], rho[order], mach[order])], sweep="density")[0]
         out.append(({"mach": float(mach[0]), "configuration": name}, ds))
     else:
         for rho in req.density:
@@ -177,7 +184,7 @@ def solve_request(system: ModalSystem, gaf: xr.Dataset,
 
 
 def solve_flutter(modes: xr.Dataset, gaf: xr.Dataset, requests, units: str | None = None,
-                  progress=None) -> list[tuple[dict, xr.Dataset]]:
+                  progress=None, rational_fit=None) -> list[tuple[dict, xr.Dataset]]:
     """Every request on the modes' modal system, each with its own structural damping.
 
     Parameters
@@ -192,19 +199,22 @@ def solve_flutter(modes: xr.Dataset, gaf: xr.Dataset, requests, units: str | Non
         "model units"). The numbers are in the model's units either way.
     progress : callable(str), optional
         Told which request is being solved.
+    rational_fit : callable, optional
+        The p-method's rational fit (:func:`solve_request`).
 
     Returns
     -------
     list of (dict, xarray.Dataset)
         Every sweep of every request in order, as :func:`solve_request`; each Dataset's attrs
-        also hold ``method`` (the request's), ``rhoref`` and ``configuration``.
+        also hold ``method`` (the request's card method for p-k and the k-method, else the
+        solver's name: G, P-RFA), ``rhoref`` and ``configuration``.
     """
     results = []
     for i, req in enumerate(requests):
         if progress is not None:
             progress(f"{req.name} ({req.method}), request {i + 1} of {len(requests)}")
         system = modal_system(modes, req.damping)
-        for lab, ds in solve_request(system, gaf, req):
+        for lab, ds in solve_request(system, gaf, req, rational_fit):
             ds = label_units(ds, units)
             ds.attrs.update(method=SOLVER_NAMES.get(req.solver, req.method), rhoref=req.rhoref,
                             configuration=lab["configuration"])

@@ -20,6 +20,7 @@ import xarray as xr
 
 from aero.gaf import generalized_aero_forces, grid_aero_forces, project_gaf
 from aero.model import read_aero_model
+from aero.rfa import fit_rfa
 from flutter.participation import crossing_participation
 from flutter.results import summary_entries, write_flutter
 from flutter.rigid_roots import label_results
@@ -335,7 +336,7 @@ def flutter_chain(deck: str | os.PathLike, modes: xr.Dataset, *, kernel: str = "
         gaf = generalized_aero_forces(aero, modes, machs, ks, method=kernel)
     else:
         gaf = project_gaf(_covering(grid_gaf, machs, ks, kernel, str(deck)), modes)
-    results = solve_flutter(modes, gaf, requests, units, progress=progress)
+    results = solve_flutter(modes, gaf, requests, units, progress=progress, rational_fit=fit_rfa)
     if matched is not None:
         results = label_lines(results, matched, units)
     results = label_results(results, modes, rigid_hz)

@@ -220,25 +220,27 @@ def test_pipeline_flutter_deck_agrees_with_the_library(tmp_path, capsys, plain):
 
 
 @pytest.mark.filterwarnings("ignore::UserWarning", "ignore::RuntimeWarning")
-def test_case_solver_runs_the_g_method(tmp_path, capsys, plain):
+def test_case_solver_runs_the_g_and_p_methods(tmp_path, capsys, plain):
     """``[flutter] solver = "g"``: the FLUTTER 502 points are solved by the g-method (method "G" in
     summary.json and flutter.nc), and its elastic flutter point is Nastran's (394.0 m/s, 3.18 Hz,
-    F06) and p-k's within 1 % (both exact at g = 0); per-id ``solvers`` does the same."""
+    F06) and p-k's within 1 % (all exact at g = 0); ``solvers = { 502 = "p" }`` likewise with the
+    p-method on the rational fit (method "P-RFA")."""
     base = (f'name = "chain"\nunits = "si"\n[[configurations]]\nname = "baseline"\n'
             f'deck = "{DECK.as_posix()}"\nnmodes = 10\n[flutter]\nflutter_ids = [502]\n')
-    for i, extra in enumerate(('solver = "g"\n', 'solvers = { 502 = "g" }\n')):
+    for i, extra in enumerate(('solver = "g"\n', 'solvers = { 502 = "p" }\n')):
         case_file = tmp_path / f"case{i}.toml"
         case_file.write_text(base + extra)
         assert main(["flutter", str(case_file), "--out", str(tmp_path / f"fl{i}")]) == 0
         capsys.readouterr()
         summary = json.loads((tmp_path / f"fl{i}" / "baseline" / "summary.json").read_text())
         flutter = [c for c in summary if c["kind"] == "flutter"]
-        assert {c["method"] for c in summary} == {"G"}
+        method = ("G", "P-RFA")[i]
+        assert {c["method"] for c in summary} == {method}
         assert flutter[0]["velocity"] == pytest.approx(394.0, rel=0.02)
         assert flutter[0]["frequency"] == pytest.approx(3.18, rel=0.02)
         assert flutter[0]["velocity"] == pytest.approx(_flutter(plain[1])[0]["velocity"], rel=0.01)
         ds = read_dataset(tmp_path / f"fl{i}" / "baseline" / "flutter.nc")
-        assert ds["method"].values.tolist() == ["G"]
+        assert ds["method"].values.tolist() == [method]
 
 
 @pytest.mark.parametrize("extra, message", [
