@@ -8,13 +8,22 @@ below ``rigid_hz`` (0.05 Hz, the convention of
 Each is judged at the lowest speed of the sweep where it is solved, by its eigenvalue and its
 eigenvector's modal participation (:func:`flutter.participation.participation_factors`):
 
-- ``"plunge"``: a real or near-zero root (frequency below ``NEAR_ZERO * rigid_hz``): the
-  altitude (heave) root, whose aerodynamic stiffness is zero (Etkin & Reid, *Dynamics of Flight*,
-  3rd ed., sec. 6.2: the plunge-pitch system's characteristic equation has a root at zero);
-- ``"short period"``: an oscillatory root with the rigid pitch motion dominant among the rigid-body
-  modes (the short-period pair, Etkin & Reid sec. 6.2);
-- ``"phugoid"``: an oscillatory root with the rigid surge motion dominant (needs a free surge);
-- ``"rigid <n>"`` otherwise (n the starting mode's id), ``""`` for elastic roots.
+- ``"plunge"``: a real or near-zero root (``|p|`` below ``NEAR_ZERO * rigid_hz``) whose largest
+  rigid-body share is the plunge: the altitude (heave) root, whose aerodynamic stiffness is zero
+  (Etkin & Reid, *Dynamics of Flight*, 3rd ed., sec. 6.2: the plunge-pitch characteristic
+  equation has a root at zero);
+- ``"short period"``: an oscillatory root whose rigid-body share is mostly longitudinal (plunge
+  and pitch together more than surge and than the lateral sway, roll and yaw): the short-period
+  pair (Etkin & Reid sec. 6.2). Pitch alone is no test: in a short period the flight path turns
+  little, but the plunge displacement h = V gamma / p is large at low speed, so its kinetic
+  energy can dominate (data/bff_wing's 0.5 Hz short period at 10 m/s is 96 % plunge, 4 % pitch);
+- ``"phugoid"``: an oscillatory root whose rigid-body share is mostly surge (needs a free surge);
+- ``"rigid <n>"`` otherwise (n the starting mode's id, e.g. the Dutch roll or a pitch
+  instability), ``""`` for elastic roots.
+
+Each name goes to one root at most: of several candidates, the plunge to the one with the
+largest plunge share, the short period to the one with the largest pitch share, the phugoid to
+the one with the largest surge share.
 
 The rigid motion of each mode comes from ``motions`` (mode id -> "plunge", "pitch", ... : the modes'
 ``rigid_motion`` coordinate, :func:`structures.modal.rigid_body_modes`). Without it (modes imported
@@ -33,6 +42,10 @@ from flutter.summary import crossing_kinds
 #: plunge): a tenth of the rigid-mode threshold, 0.005 Hz by default, against 0.09 Hz for
 #: bah_plane's short period at 30 m/s (Nastran PK point 2).
 NEAR_ZERO = 0.1
+#: Rigid-body motions (structures.modal.RIGID_MOTIONS) grouped as flight mechanics separates them.
+_GROUPS = {"longitudinal": ("plunge", "pitch"), "surge": ("surge",),
+           "lateral": ("sway", "roll", "yaw"),
+           "all": ("surge", "sway", "plunge", "roll", "pitch", "yaw")}
 
 
 def _lowest_speed(ds: xr.Dataset) -> tuple[np.ndarray, np.ndarray]:
@@ -79,22 +92,30 @@ def root_labels(ds: xr.Dataset, omega: np.ndarray, rigid_hz: float = 0.05, *,
     named = bool(motions) and bool(np.any(motion[rigid] != ""))
     p, u = _lowest_speed(ds)
     share = participation_factors(u, np.eye(n) if mass is None else mass)
-    labels = []
-    for r in range(ds.sizes["root"]):
-        if r >= n or not rigid[r]:
-            labels.append("")
-            continue
-        near_zero = np.abs(p[r]) / (2 * np.pi) < NEAR_ZERO * rigid_hz or p[r].imag <= 0
-        if named:
-            top = motion[rigid][np.argmax(share[r, rigid])]
-            label = ("plunge" if near_zero and top == "plunge" else
-                     "short period" if not near_zero and top == "pitch" else
-                     "phugoid" if not near_zero and top == "surge" else "")
-        elif rigid.sum() == 2:
-            label = "plunge" if near_zero else "short period"
-        else:
-            label = ""
-        labels.append(label if label and label not in labels else f"rigid {modes[r]}")
+    roots = [r for r in range(min(ds.sizes["root"], n)) if rigid[r]]
+    near_zero = np.abs(p) / (2 * np.pi) < NEAR_ZERO * rigid_hz
+    near_zero |= p.imag <= 0
+    # (label, candidate roots, score): each label goes to its best-scoring candidate.
+    if named:
+        of = {name: share[:, rigid & (motion == name)].sum(axis=1) for name in _GROUPS["all"]}
+        group = {g: sum(of[name] for name in members) for g, members in _GROUPS.items()
+                 if g != "all"}
+        main = np.array([max(group, key=lambda g: group[g][r]) for r in range(len(p))])
+        top = np.array([max(of, key=lambda name: of[name][r]) for r in range(len(p))])
+        wanted = [("plunge", near_zero & (top == "plunge"), of["plunge"]),
+                  ("short period", ~near_zero & (main == "longitudinal"), of["pitch"]),
+                  ("phugoid", ~near_zero & (main == "surge"), of["surge"])]
+    elif rigid.sum() == 2:
+        wanted = [("plunge", near_zero, -np.abs(p)), ("short period", ~near_zero, np.abs(p))]
+    else:
+        wanted = []
+    labels = ["" for _ in range(ds.sizes["root"])]
+    for r in roots:
+        labels[r] = f"rigid {modes[r]}"
+    for label, ok, score in wanted:
+        free = [r for r in roots if ok[r] and labels[r].startswith("rigid ")]
+        if free:
+            labels[max(free, key=lambda r: score[r])] = label
     return labels
 
 

@@ -121,7 +121,7 @@ def test_mechanism_body_freedom_and_unpaired_modes(run, tmp_path):
     folder = tmp_path / "stage0"
     shutil.copytree(run_dir / "stage0" / "EFEW", folder / "EFEW")
     part = read_dataset(folder / "EFEW" / "flutter" / "participation.nc")
-    part["participation"][:] = [[30.0, 50.0, 15.0, 5.0], [29.0, 11.0, 20.0, 40.0],
+    part["participation"][:] = [[50.0, 30.0, 15.0, 5.0], [49.0, 5.0, 16.0, 30.0],
                                 [0.0, 10.0, 45.0, 45.5]]
     write_dataset(part, folder / "EFEW" / "flutter" / "participation.nc")
     corr = read_dataset(folder / "EFEW" / "correlation.nc")

@@ -7,7 +7,7 @@ from tests.pipeline.test_selection import participation
 
 
 def test_participation_table_names_the_rigid_body_modes():
-    """Modes 1-2 rigid (plunge, pitch) with 40 % of a body-freedom root: named under the rigid rows;
+    """Modes 1-2 rigid (plunge, pitch) with 40 % of a flutter root: named under the rigid rows;
     without names the table is as before."""
     plain = participation([[15.0, 25.0, 50.0, 10.0]], [1, 2, 3, 4], rigid=(1, 2))
     named = plain.assign_coords(rigid_motion=("mode", ["plunge", "pitch", "", ""]))
