@@ -265,14 +265,21 @@ def _overlay_section(case, stages: list[Path], labels: UnitLabels) -> str:
     return out
 
 
+#: How each summary.json "method" is named in the report's crossing tables.
+METHOD_NAMES = {"PK": "p-k (PK)", "PKNL": "p-k (PKNL, matched points)", "K": "k-method",
+                "KE": "k-method", "G": "g-method", "P-RFA": "p-method on a rational fit"}
+
+
 def _crossing_table(entries: list[dict], points: list[tuple], labels: UnitLabels) -> str:
     if not entries:
         return note("No flutter or divergence crossing in the analysed range.")
-    rows = [(e["kind"], e["root"], fmt(e["mach"], ".4g"), fmt(e["density"], ".5g"),
-             fmt(e["velocity"], ".5g"), fmt(e["frequency"], ".4g"), _mechanism_of(points, e))
+    rows = [(e["kind"], f"{e['root']} ({e['root_label']})" if e.get("root_label") else e["root"],
+             fmt(e["mach"], ".4g"), fmt(e["density"], ".5g"),
+             fmt(e["velocity"], ".5g"), fmt(e["frequency"], ".4g"), _mechanism_of(points, e),
+             METHOD_NAMES.get(str(e.get("method", "")), str(e.get("method", ""))))
             for e in sorted(entries, key=lambda e: (e.get("case", 0), e["velocity"]))]
     return table(("kind", "root", "Mach [-]", f"density [{labels.density}]",
-                  f"velocity [{labels.velocity}]", "frequency [Hz]", "mechanism"), rows)
+                  f"velocity [{labels.velocity}]", "frequency [Hz]", "mechanism", "method"), rows)
 
 
 def _stage_section(k: int, folder: Path, case, labels: UnitLabels) -> str:

@@ -37,7 +37,8 @@ def vg_overlay(flutter: list, case: int, labels: list, *, title: str = "",
     """V-g and V-f curves of one sweep at every stage, overlaid.
 
     The same root keeps its colour at every stage; the stage is told by the line style
-    (:data:`STAGE_STYLES`: stage 0 solid).
+    (:data:`STAGE_STYLES`: stage 0 solid). The legend names the rigid-body roots ("root 2 (short
+    period)") when flutter.nc has ``root_label(root)``.
 
     Parameters
     ----------
@@ -75,7 +76,11 @@ def vg_overlay(flutter: list, case: int, labels: list, *, title: str = "",
     ax_g.set_ylabel("damping g [-]")
     ax_f.set_ylabel("frequency [Hz]")
     ax_f.set_xlabel(f"velocity [{units}]")
-    root_keys = [Line2D([], [], color=f"C{i % 10}", label=f"root {r}") for i, r in enumerate(roots)]
+    names = {int(r): str(n) for ds in flutter if "root_label" in ds.coords
+             for r, n in zip(ds["root"].values, ds["root_label"].values) if str(n)}
+    root_keys = [Line2D([], [], color=f"C{i % 10}",
+                        label=f"root {r}" + (f" ({names[r]})" if r in names else ""))
+                 for i, r in enumerate(roots)]
     stage_keys = [Line2D([], [], color="k", ls=STAGE_STYLES[k % len(STAGE_STYLES)], label=label)
                   for k, label in enumerate(labels)]
     ax_g.legend(handles=root_keys, fontsize=7, ncol=3, loc="lower left")
