@@ -18,6 +18,7 @@ from structures.bdf import read_model
 from structures.common.errors import InputError, MissingReferenceError
 from structures.massprops import mass_properties
 from structures.modal import RIGID_TOL, compute_modes, rigid_body_modes, solve_eigen
+from structures.modes import read_modes, write_modes
 from structures.nastran_results import read_f06_eigenvalues
 from tests.structures.beam_decks import AREA, LENGTH, RHO, beam_deck
 
@@ -160,3 +161,18 @@ def test_bad_suport_names_file_card_grid_and_fix(tmp_path, case, bulk, error, wo
     assert str(path) in text and "Fix:" in text
     for word in words:
         assert word in text
+
+
+def test_modes_file_keeps_the_contract_and_the_rigid_names(tmp_path):
+    """modes.nc (DESIGN.md section 6) keeps its variables, coordinates and attrs; the rigid-body
+    names (``rigid_motion``) and the residual check survive the round trip."""
+    ds = compute_modes(read_model(BAH / "bah_plane.bdf"))
+    write_modes(ds, tmp_path / "modes.nc")
+    back = read_modes(tmp_path / "modes.nc")
+    assert {"frequency", "shape", "generalized_mass"} <= set(back.data_vars)
+    assert {"grid", "component", "mode", "rigid_motion"} <= set(back.coords)
+    assert back["shape"].dims == ("mode", "dof") and back["frequency"].attrs["units"] == "Hz"
+    assert list(back["mode"].values) == list(range(1, 9))
+    assert {"source", "deck", "units"} <= set(back.attrs)
+    assert list(back["rigid_motion"].values[:3]) == ["plunge", "pitch", ""]
+    assert back.attrs["rigid_modes"] == 2 and back.attrs["rigid_residual"] <= RIGID_TOL
