@@ -151,6 +151,7 @@ def test_unselected_suport1_is_ignored(tmp_path):
     ("", "SUPORT,999,35", MissingReferenceError, ["SUPORT 999", "GRID 999"]),
     ("", "SUPORT,1,3", InputError, ["SUPORT 1", "do not determine", "2 rigid-body"]),
     ("", "SUPORT,1,135", InputError, ["SUPORT 1", "component 1", "constrained"]),
+    ("", "SUPORT,1,37", InputError, ["SUPORT", "invalid component '7'"]),
 ])
 def test_bad_suport_names_file_card_grid_and_fix(tmp_path, case, bulk, error, words):
     path = _bah_variant(tmp_path, case, bulk)
