@@ -265,13 +265,11 @@ def test_short_period_three_ways(baseline):
         np.testing.assert_allclose(damping, ref_g, rtol=0.10)
 
 
-@pytest.mark.xfail(strict=True, reason="flutter.rigid_roots labels by the largest rigid share: "
-                   "at 10 m/s this short period is 96 % plunge, 4 % pitch (kinetic energy)")
 def test_rigid_roots_are_named(baseline):
     """The chain names the baseline's rigid-body roots: root 1 the plunge, root 2 the short
-    period. Measured: root 2 (p = -2.05 + 3.14i rad/s at 10 m/s, 0.50 Hz, g -1.30) is labelled
-    "rigid 2", because its eigenvector's participation is 96.0 % plunge mode, 3.9 % pitch mode (a
-    slow short period plunges the mass-normalised aircraft more than it pitches it)."""
+    period. Root 2 (p = -2.05 + 3.14i rad/s at 10 m/s, 0.50 Hz, g -1.30) has 96.0 % plunge, 3.9 %
+    pitch participation (a slow short period plunges the mass-normalised aircraft more than it
+    pitches it): flutter.rigid_roots names it by its longitudinal (plunge + pitch) share."""
     labels = [str(x) for x in baseline["results"][0][1]["root_label"].values[:2]]
     assert labels == ["plunge", "short period"]
 
