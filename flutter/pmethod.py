@@ -54,6 +54,7 @@ START_Q = 1e-14     # the first flight point is reached along q from START_Q q .
 START_STEPS = 50    # ... in this many geometric steps
 STRUCTURAL = 1e-5   # at START_Q q, roots with a smaller structural share are aerodynamic lags
 FIT_MODES = 4       # default fit range: up to FIT_MODES x the first elastic frequency (fit_range)
+FIT_POINTS = 10     # ... and at least this many tabulated k (aero.rfa's default fit has 13 matrices)
 
 
 def state_matrix(M: np.ndarray, B: np.ndarray, K: np.ndarray, rfa, velocity: float,
@@ -310,8 +311,8 @@ def p_solve_many(system: ModalSystem, gaf, cases, *, sweep: str = "velocity",
 def fit_range(system: ModalSystem, k: np.ndarray, refc: float, v_min: float,
               rigid_hz: float = 0.05) -> float:
     """Default upper end of the fitted k range: the smallest tabulated k at or above the reduced
-    frequency of FIT_MODES x the first elastic in-vacuo frequency at the lowest speed, else the
-    largest tabulated k.
+    frequency of FIT_MODES x the first elastic in-vacuo frequency at the lowest speed and at or
+    above the FIT_POINTS-th tabulated k, else the largest tabulated k.
 
     Flutter couples the lowest modes; fitting the sparse high end of a table as well costs the fit
     its accuracy where the roots are (Nastran's bah_plane QHH: strict fit error 14 % over k <= 10,
@@ -339,7 +340,8 @@ def fit_range(system: ModalSystem, k: np.ndarray, refc: float, v_min: float,
     table = np.sort(k[k > 0])
     if elastic.size == 0:
         return float(table[-1])
-    need = FIT_MODES * float(elastic.min()) * 0.5 * refc / v_min
+    need = max(FIT_MODES * float(elastic.min()) * 0.5 * refc / v_min,
+               table[min(FIT_POINTS, table.size) - 1])
     above = table[table >= need]
     return float(above[0] if above.size else table[-1])
 

@@ -27,7 +27,7 @@ NAME_HEADERS = {"configuration", "deck", "GVT", "stage", "standard", "stop reaso
                 "FE mode", "name", "check", "unit", "kind", "root", "flutter mode",
                 "design variable", "acceptance check", "limits", "configuration:test mode",
                 "FE mode before", "FE mode after", "selection role", "mechanism",
-                "stage 0 mechanism", "stage 1 mechanism"}
+                "stage 0 mechanism", "stage 1 mechanism", "method"}
 
 
 class Tables(HTMLParser):
@@ -112,8 +112,11 @@ def test_flutter_mechanisms_named_in_table5_and_crossing_tables(run):
             DASH if (config, mach, mode) == ("EFEW", 0.6, 2) else name)   # absent at stage 0
     crossing = [t for t in Tables(run[2]).tables if "mechanism" in t["header"]]
     assert len(crossing) == 4                              # 2 stages x 2 configurations
-    efew0 = {(r[2], r[4]): r[-1] for r in crossing[0]["rows"]}
+    at = crossing[0]["header"].index("mechanism")
+    efew0 = {(r[2], r[4]): r[at] for r in crossing[0]["rows"]}
     assert efew0 == {("0.2", "200"): FIRST, ("0.2", "250"): SECOND, ("0.6", "180"): FIRST}
+    # every crossing names the method that found it (the fixture's sweeps are p-k, PK)
+    assert all(r[-1] == "p-k (PK)" for t in crossing for r in t["rows"])
 
 
 def test_mechanism_body_freedom_and_unpaired_modes(run, tmp_path):
