@@ -20,10 +20,10 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.linalg as sla
-from scipy.optimize import linear_sum_assignment
 
 from flutter.gafinterp import GafInterpolator
 from flutter.linalg import inverse_iteration, path_length, pencil_system, rayleigh, unit_rows
+from flutter.rigid_start import rigid_branches
 from flutter.system import ModalSystem
 from structures.common.errors import InputError
 
@@ -233,6 +233,10 @@ class PKSolver:
                 # inverse iteration at (pn, k): eigenvectors of the pencil at the current k
                 un, wn = inverse_iteration(*pencil_system(G, kc, cd, q, hc, pn, self.system.mass,
                                                           self._KBM, ua, wa))
+                # a defective root at p = 0 (surge of a free aircraft: no aerodynamic force, T(0) u
+                # = 0 and T'(0) u = 0) gives no right-hand side: its vectors are already exact
+                lost = ~(np.isfinite(un).all(axis=1) & np.isfinite(wn).all(axis=1))
+                un[lost], wn[lost] = ua[lost], wa[lost]
                 un[flip], wn[flip] = un[flip].conj(), wn[flip].conj()
                 u[act], w[act] = un, wn
                 solved[act] = True
@@ -302,13 +306,10 @@ class PKSolver:
     def _rigid_start(self, rigid: np.ndarray, V: float, rho: float, mach: float) -> RootState:
         """First guesses of the rigid-body roots: eigenvalues of the quasi-steady p-k system.
 
-        The first-order matrix of [M p^2 + C(0) p + K_t(0)] (Q^R and Q^I/k at k -> 0, held below
-        the smallest tabulated k) has 2 n eigenvalues. The 2 n_r whose eigenvectors lie most in the
-        rigid modes (mass-weighted share of the in-vacuo rigid coordinates) are the rigid branches:
-        every oscillatory pair gives one root (Im p > 0: the short period, ...), and the real
-        eigenvalues (the near-zero plunge / flight-path pair, or a pair already split) fill the
-        remaining rigid roots, smallest |p| first. Each branch is given to the rigid mode it
-        participates in most (assignment over the rigid modes), with its right and left vectors.
+        The first-order matrix of [M p^2 + C(0) p + K_t(0)] (Q^R and Q^I/k at k -> 0) has 2 n
+        eigenvalues; :func:`flutter.rigid_start.rigid_branches` picks the branch of each rigid mode
+        (oscillatory pairs first, one root each, then real ones by |p|), returned with its right and
+        left vectors.
         """
         n, nr = self.system.n, rigid.size
         C, Kt, _ = self.pencil(np.zeros(1), V, rho, mach)
@@ -317,18 +318,7 @@ class PKSolver:
         lam, Y, X = sla.eig(A, left=True, right=True)
         U = X[:n].T                                   # right vectors of the quadratic, (2n, n)
         W = (Minv.T @ Y[n:]).T                        # left: w^H = y_2^H M^-1
-        c = np.abs(U @ (self.system.mass @ self.phi)) ** 2   # in-vacuo modal coordinates
-        share = c[:, rigid].sum(axis=1) / np.maximum(c.sum(axis=1), 1e-300)
-        branch = np.argsort(-share, kind="stable")[:2 * nr]
-        real = np.abs(lam.imag) <= 1e-9 * np.maximum(np.abs(lam), self.scale)
-        osc = [j for j in branch if not real[j] and lam[j].imag > 0]
-        reals = sorted((j for j in branch if real[j]), key=lambda j: abs(lam[j]))
-        pick = (osc + reals)[:nr]
-        if len(pick) < nr:  # an unpaired oscillatory eigenvalue: take its conjugate's partner
-            pick += [j for j in branch if j not in pick][:nr - len(pick)]
-        pick = np.array(pick)
-        rows, cols = linear_sum_assignment(-c[np.ix_(pick, rigid)])
-        pick = pick[rows[np.argsort(cols)]]
+        pick = rigid_branches(lam, U, self.system.mass @ self.phi, rigid, self.scale)
         p = np.where(lam[pick].imag < 0, lam[pick].conj(), lam[pick])
         flip = lam[pick].imag < 0
         u, w = unit_rows(U[pick]), unit_rows(W[pick])
