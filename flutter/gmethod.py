@@ -1,49 +1,10 @@
-"""Chen's g-method (damping perturbation) flutter solution with the reduced-frequency sweep.
+"""Chen's g-method (damping perturbation) flutter solution along sweeps of flight points.
 
 P. C. Chen, "Damping Perturbation Method for Flutter Solution: The g-Method", AIAA J. 38(9), 2000,
-1519-1524. With the nondimensional Laplace variable p_bar = p b / V = g + i k (b = refc / 2,
-k = omega b / V; g here is Chen's real part of p_bar, the reported damping is 2 Re p / Im p), the
-GAFs off the imaginary axis are expanded to first order about p_bar = i k (Chen's damping
-perturbation; the paper was not at hand, so no equation numbers are given here):
-
-    Q(p_bar) ~ Q(ik) + g Q'(ik),   Q'(ik) = dQ / d(ik) = -i dQ/dk,
-
-exact at g = 0 and first-order accurate in g. p-k's Q^R(k) + p_bar Q^I(k) / k agrees with it except
-for the k-derivative of Q^R off the axis (the term -i g dQ^R/dk), which is why p-k damping is only
-exact at g = 0 and the g-method's is right to first order for the heavily damped rigid-body and
-body-freedom roots. With Q^R and D = Q^I / k interpolated in k (flutter.gafinterp),
-
-    Q'(ik)       = D + k dD/dk - i dQ^R/dk,
-    Q - ik Q'    = Q^R - k dQ^R/dk - i k^2 dD/dk,
-
-and the g-method flutter equation (Chen 2000, written in p_bar and scaled by (b/V)^2, q = rho V^2/2)
-
-    [ M p_bar^2 + ((b/V) B - (rho b^2 / 2) Q') p_bar
-      + (b/V)^2 K (1 + i g_s) - (rho b^2 / 2)(Q - ik Q') ] u = 0
-
-is, for each k, a quadratic eigenproblem in p_bar with complex matrices (no conjugate pairs). A
-root is a k where an eigenvalue has Im p_bar = k (Chen's root condition Im g = 0).
-
-Chen's reduced-frequency sweep (RFS): at each flight point the
-2 n eigenvalues are computed on a grid of k (one stacked ``np.linalg.eig``), followed as branches
-across k by eigenvector correlation and continuity (flutter.tracking.assign), and every sign change
-of Im p_bar_j(k) - k is refined by Illinois root-finding on k (flutter.crossings.illinois) to
-|Im g| ~ 1e-10. At k = 0 the equation is real (Q^R is even in k, so dQ^R/dk = 0 there; hysteretic
-damping, which has no zero-frequency equivalent, is dropped as in flutter.pk): its real eigenvalues
-are the real (zero-frequency) roots, reported with Im p = 0 and Nastran's g = p cbar / (V ln 2).
-Above the GAF table Q is held constant (zero slopes), so the equation no longer depends on k and a
-branch still above Im p_bar = k at the table's end has its root at k = Im p_bar: those roots are
-flagged not converged, with one warning per root.
-
-Roots per flight point: the candidates (real roots at k = 0 and the k > 0 roots) outnumber the
-modes (a complex pair gives one root, its two real limits two), so exactly system.n are kept: at
-the first point by optimal assignment to the in-vacuo modes (modal participation and distance from
-i omega_r; root r follows mode r, rigid modes first), then point to point by assignment to the
-previous roots (eigenvector correlation and distance from the extrapolated eigenvalue). A complex
-pair that splits into two real roots continues as the nearer real root, the other real root stays
-a candidate and is picked up when a root needs it; the near-zero plunge / flight-path cluster of a
-free-free aircraft is either one complex root with tiny k or real roots, whichever continues the
-root. Missing candidates (never seen in the tests) repeat the previous point, flagged.
+1519-1524. The equation, Chen's reduced-frequency sweep and the local root solve are in
+flutter.gkernel; the roots along a sweep (one per mode, rigid-body roots started from the
+quasi-steady branches, continuation with step checks and the sweep as fallback) in flutter.gtrack.
+This module finds and refines the crossings and builds the result Datasets (flutter.results).
 
 Divergence: a real root through p = 0 is a zero of det(K - q Q^R(0)), whatever the damping terms,
 so besides the sign changes of the tracked roots' g, the dynamic pressures q_D of
@@ -73,311 +34,17 @@ from threadpoolctl import threadpool_limits
 
 from flutter.crossings import (G_TOL, Crossing, drift_roots, find_brackets, illinois,
                                interpolate_zero, resolved_damping)
-from flutter.gafinterp import GafInterpolator
-from flutter.linalg import path_length, unit_rows
+from flutter.gkernel import GProblem
+from flutter.gtrack import match, sweep_roots
 from flutter.parallel import map_cases
 from flutter.pk import check_sweep
 from flutter.results import attach_crossings, vg_dataset
 from flutter.system import ModalSystem
-from flutter.tracking import assign
 from structures.common.errors import InputError
 
-LN2 = np.log(2.0)
+__all__ = ["GProblem", "g_solve", "g_solve_many"]
+
 OPTIONS = ("nk", "rigid_hz")
-_BIG = 1e30  # eigenvalue of a placeholder candidate: never preferred by the assignment
-
-
-class GProblem:
-    """The g-method's matrices and its reduced-frequency sweep for one system and GAF set.
-
-    Parameters
-    ----------
-    system : ModalSystem
-    gaf : xarray.Dataset or callable
-        ``Q(mach, k, mode_i, mode_j)`` with attrs ``refc``, or ``gaf(mach, k) -> (nk, n, n)``.
-    refc : float, optional
-        Reference chord (b = refc / 2); default ``gaf.attrs["refc"]``.
-    interpolation : {"linear", "cubic"}
-        Interpolation of Q^R and Q^I/k in k (module docstring: cubic gives continuous dQ/dk).
-    nk : int
-        Points of the k grid of the sweep (half geometric, half uniform, plus the table's k).
-    rigid_hz : float
-        In-vacuo modes below this frequency [Hz] are rigid-body modes: their drift roots below the
-        GAF table's resolution give no crossings (flutter.crossings.drift_roots), as in p-k.
-    """
-
-    def __init__(self, system: ModalSystem, gaf, *, refc: float | None = None,
-                 interpolation: str = "cubic", nk: int = 60, rigid_hz: float = 0.05):
-        if refc is None:
-            if "refc" not in getattr(gaf, "attrs", {}):
-                raise InputError("g-method: the GAFs carry no 'refc' attribute. Fix: pass refc= "
-                                 "(the AERO card's REFC) or use the Dataset written by aero.gaf.")
-            refc = float(gaf.attrs["refc"])
-        if not refc > 0:
-            raise InputError(f"g-method: refc={refc} must be > 0. Fix: use the AERO card's REFC.")
-        if not (isinstance(nk, (int, np.integer)) and nk >= 8):
-            raise InputError(f"g-method: nk = {nk!r}. Fix: give a whole number >= 8 (default 60).")
-        if not rigid_hz >= 0:
-            raise InputError(f"g-method: rigid_hz = {rigid_hz} must be >= 0. Fix: e.g. 0.05.")
-        self.system, self.gaf, self.interpolation, self.nk = system, gaf, interpolation, int(nk)
-        self.rigid_hz = float(rigid_hz)
-        self.b = 0.5 * float(refc)
-        self._interp: dict[float, GafInterpolator] = {}
-        self.omega0, self.phi = system.in_vacuo()
-        sd = system.structural
-        self._hyst = (not sd.is_zero) and sd.kind == "hysteretic"
-        B = system.damping.copy()
-        if (not sd.is_zero) and sd.kind == "viscous":
-            B = B + system.viscous_structural()
-        self.B = B
-        self._Minv = np.linalg.inv(system.mass)
-        mach0 = float(np.atleast_1d(gaf["mach"].values)[0]) if hasattr(gaf, "coords") else 0.0
-        if self.interpolator(mach0).n != system.n:
-            raise InputError(f"g-method: the GAFs have a different number of modes than the system "
-                             f"({system.n}). Fix: compute Q_hh with the same modes as M_hh, K_hh.")
-
-    def interpolator(self, mach: float) -> GafInterpolator:
-        """The (cached) GAF interpolator at Mach ``mach``."""
-        key = round(float(mach), 9)
-        if key not in self._interp:
-            self._interp[key] = GafInterpolator(self.gaf, mach, self.interpolation)
-        return self._interp[key]
-
-    # ----------------------------------------------------------------------------- kernels
-    def eig(self, k: np.ndarray, V: float, rho: float, mach: float, vectors: bool = True):
-        """Eigenvalues p_bar and right vectors of the g-method equation at reduced frequencies k.
-
-        Parameters
-        ----------
-        k : ndarray, shape (nk,)
-            Reduced frequencies k = omega b / V (>= 0).
-        V, rho, mach : float
-            Flight point.
-        vectors : bool
-            Compute the eigenvectors (else ``U`` is None; eigenvalues only are about twice as fast).
-
-        Returns
-        -------
-        lam : ndarray, shape (nk, 2n) complex
-            p_bar = p b / V (exactly real at k = 0 where the matrices are real).
-        U : ndarray, shape (nk, 2n, n) complex, or None
-            Right vectors u (unit 2-norm) of each eigenvalue.
-        outside : ndarray of bool, shape (nk,)
-            k above the tabulated GAF range.
-        """
-        n = self.system.n
-        k = np.asarray(k, dtype=float)
-        QR, D, dQR, dD, outside = self.interpolator(mach).with_slopes(k)
-        kb = k[:, None, None]
-        dQR = np.where(kb > 0, dQR, 0.0)     # Q^R is even in k: dQ^R/dk = 0 at k = 0
-        dQ = D + kb * dD - 1j * dQR          # Q'(ik) = -i dQ/dk (Chen 2000)
-        Q0 = QR - kb * dQR - 1j * kb * kb * dD   # Q(ik) - ik Q'(ik)
-        h = 0.5 * rho * self.b ** 2          # q (b/V)^2
-        s = self.b / V
-        Kc = np.broadcast_to(s * s * self.system.stiffness, (k.size, n, n)).astype(complex)
-        if self._hyst:                       # K (1 + i g_s(f)), f = k V / (2 pi b); none at k = 0
-            gs = np.where(k > 0, self.system.structural.at(k / s / (2 * np.pi)), 0.0)
-            Kc = Kc * (1 + 1j * gs)[:, None, None]
-        A0 = Kc - h * Q0                     # g-method equation (Chen 2000) scaled by (b/V)^2
-        A1 = s * self.B[None] - h * dQ
-        A = np.zeros((k.size, 2 * n, 2 * n), dtype=complex)
-        A[:, :n, n:] = np.eye(n)
-        A[:, n:, :n] = -self._Minv @ A0
-        A[:, n:, n:] = -self._Minv @ A1
-        if not vectors:
-            lam = np.linalg.eigvals(A).astype(complex)
-            if np.any(k == 0):
-                lam[k == 0] = np.linalg.eigvals(A[k == 0].real)
-            return lam, None, outside
-        lam = np.empty((k.size, 2 * n), dtype=complex)
-        X = np.empty((k.size, 2 * n, 2 * n), dtype=complex)
-        zero = k == 0
-        if zero.any():                       # real matrices at k = 0: real roots exactly real
-            lr, Xr = np.linalg.eig(A[zero].real)
-            lam[zero], X[zero] = lr, Xr
-        if (~zero).any():
-            lam[~zero], X[~zero] = np.linalg.eig(A[~zero])
-        U = np.swapaxes(X[:, :n, :], 1, 2)
-        return lam, U / np.linalg.norm(U, axis=2, keepdims=True), outside
-
-    def grid(self, V: float, rho: float, mach: float) -> np.ndarray:
-        """The k grid of the sweep at one flight point, shape (nk',): 0, a geometric and a uniform
-        grid up to the end of the GAF table (or, for a callable, up to where every branch has
-        fallen below Im p_bar = k), and the tabulated k values."""
-        interp = self.interpolator(mach)
-        if np.isfinite(interp.k_max):
-            top, extra = interp.k_max, interp.k_grid
-        else:
-            top, extra = max(2.0 * float(self.omega0.max()) * self.b / V, 1.0), np.zeros(0)
-            for _ in range(12):
-                lam, _, _ = self.eig(np.array([top]), V, rho, mach, vectors=False)
-                if np.all(lam.imag <= top):
-                    break
-                top *= 2.0
-        half = self.nk // 2
-        return np.unique(np.concatenate([[0.0], np.geomspace(top * 1e-4, top, half),
-                                         np.linspace(0.0, top, self.nk - half), extra]))
-
-    def roots(self, V: float, rho: float, mach: float):
-        """All g-method roots at one flight point by the reduced-frequency sweep.
-
-        Returns
-        -------
-        p : ndarray, shape (m,) complex
-            Roots p = p_bar V / b (rad/s), Im p >= 0; real roots exactly real.
-        u : ndarray, shape (m, n)
-            Right eigenvectors (unit 2-norm).
-        converged : ndarray of bool, shape (m,)
-            The refinement reached Im g = 0 (False at a jump of a linear interpolant).
-        outside : ndarray of bool, shape (m,)
-            The root's k lies above the GAF table.
-        """
-        kg = self.grid(V, rho, mach)
-        lam, U, out = self.eig(kg, V, rho, mach)
-        for i in range(1, kg.size):          # branches across k (Chen's RFS), never by sorting
-            perm = assign(lam[i - 1], U[i - 1], lam[i], U[i])
-            lam[i], U[i] = lam[i][perm], U[i][perm]
-        f = lam.imag - kg[:, None]           # Im g of each branch
-        real = np.flatnonzero(lam[0].imag == 0)
-        ps = [lam[0, real]]
-        us = [U[0, real]]
-        ok = [np.ones(real.size, dtype=bool)]
-        outs = [np.zeros(real.size, dtype=bool)]
-        for i, j in zip(*np.nonzero(f[:-1] * f[1:] < 0)):
-            p, u, good = self._refine(kg[i], kg[i + 1], lam[i, j], lam[i + 1, j], f[i, j],
-                                      f[i + 1, j], V, rho, mach)
-            ps.append([p])
-            us.append(u[None])
-            ok.append([good])
-            outs.append([False])
-        if np.isfinite(self.interpolator(mach).k_max):
-            for j in np.flatnonzero(f[-1] > 0):   # beyond the table: Q constant in k
-                p, u = self._beyond(lam[-1, j], U[-1, j], V, rho, mach)
-                ps.append([p])
-                us.append(u[None])
-                ok.append([False])
-                outs.append([True])
-        pbar = np.concatenate([np.asarray(x, dtype=complex) for x in ps])
-        return (pbar * V / self.b, unit_rows(np.concatenate(us)), np.concatenate(ok),
-                np.concatenate(outs))
-
-    def _pick(self, k: float, target: complex, V, rho, mach, vectors: bool = True):
-        """The eigenvalue at k nearest ``target`` and its vector (None without ``vectors``)."""
-        lam, U, _ = self.eig(np.array([k]), V, rho, mach, vectors)
-        j = int(np.argmin(np.abs(lam[0] - target)))
-        return lam[0, j], (U[0, j] if vectors else None)
-
-    def _refine(self, ka, kb, la, lb, fa, fb, V, rho, mach):
-        """Zero of Im p_bar(k) - k on one branch between two grid points (Illinois on k)."""
-        cache = {}
-
-        def fun(t):
-            k = ka + t * (kb - ka)
-            lam, _ = self._pick(k, la + t * (lb - la), V, rho, mach, vectors=False)
-            cache[t] = (k, lam)
-            return float(lam.imag - k)
-
-        if fa > 0:                               # illinois wants fun(0) < 0 < fun(1)
-            t, good = illinois(lambda s: -fun(1 - s), -fb, -fa, xtol=1e-9)
-            t = 1 - t
-        else:
-            t, good = illinois(fun, fa, fb, xtol=1e-9)
-        k, lam = cache[t] if t in cache else cache[min(cache, key=lambda s: abs(s - t))]
-        lam, u = self._pick(k, lam, V, rho, mach)
-        good = good and abs(lam.imag - k) <= max(1e-8 * abs(lam), 1e-10)
-        return complex(lam.real, k), u, good
-
-    def _beyond(self, lam, u, V, rho, mach):
-        """A root above the GAF table: k = Im p_bar by substitution (Q held, so one or two steps)."""
-        for _ in range(20):
-            k = float(lam.imag)
-            lam, u = self._pick(k, lam, V, rho, mach)
-            if abs(lam.imag - k) <= 1e-10 * max(abs(lam), 1e-12):
-                break
-        return complex(lam.real, float(lam.imag)), u
-
-    def root_near(self, V: float, rho: float, mach: float, p_guess: complex):
-        """The root nearest ``p_guess`` (rad/s) at one flight point, without a sweep.
-
-        A real guess (Im p = 0) takes the nearest real eigenvalue at k = 0; otherwise a secant
-        iteration on k solves Im p_bar(k) = k on the eigenvalue nearest the current estimate.
-
-        Returns
-        -------
-        (p, u, converged) or None
-            None where no such root is found (no real eigenvalue, k < 0, or no convergence).
-        """
-        s = self.b / V
-        target = complex(p_guess) * s
-        if target.imag == 0:
-            lam, U, out = self.eig(np.zeros(1), V, rho, mach)
-            real = np.flatnonzero(lam[0].imag == 0)
-            if real.size == 0:
-                return None
-            j = real[np.argmin(np.abs(lam[0, real] - target))]
-            return complex(lam[0, j].real / s, 0.0), U[0, j], True
-        k0, (lam0, _) = target.imag, self._pick(target.imag, target, V, rho, mach, vectors=False)
-        f0 = lam0.imag - k0
-        k1 = k0 + f0 if f0 != 0 else k0
-        for _ in range(30):
-            if k1 < 0:
-                return None
-            lam1, _ = self._pick(k1, lam0, V, rho, mach, vectors=False)
-            f1 = lam1.imag - k1
-            if abs(f1) <= max(1e-8 * abs(lam1), 1e-10):
-                lam, u = self._pick(k1, lam1, V, rho, mach)
-                return complex(lam.real, k1) / s, u, not bool(self.interpolator(mach)(
-                    np.array([k1]))[2][0])
-            k0, f0, lam0, k1 = k1, f1, lam1, (k1 - f1 * (k1 - k0) / (f1 - f0) if f1 != f0
-                                               else k1 + f1)
-        return None
-
-    # ----------------------------------------------------------------------------- outputs
-    def damping(self, p: np.ndarray, V) -> np.ndarray:
-        """g = 2 Re p / Im p; Nastran's g = p cbar / (V ln 2) for real roots (Im p = 0)."""
-        p = np.asarray(p)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            return np.where(p.imag == 0, p.real * 2 * self.b / (np.asarray(V) * LN2),
-                            2.0 * p.real / np.where(p.imag == 0, 1.0, p.imag))
-
-
-def _match(p_ref, u_ref, p, u, ok, out):
-    """Exactly len(p_ref) roots out of the candidates (assignment; placeholders if too few)."""
-    keep = ok | out                  # a sign change at a jump of the interpolant is no root
-    if keep.sum() >= p_ref.size:
-        p, u, ok, out = p[keep], u[keep], ok[keep], out[keep]
-    n, m = p_ref.size, p.size
-    if m < n:
-        p = np.concatenate([p, np.full(n - m, _BIG + 0j)])
-        u = np.concatenate([u, np.zeros((n - m, u.shape[1]), dtype=complex)])
-        ok = np.concatenate([ok, np.zeros(n - m, dtype=bool)])
-        out = np.concatenate([out, np.zeros(n - m, dtype=bool)])
-    cols = assign(p_ref, u_ref, p, u)
-    return p[cols], u[cols], ok[cols], out[cols], cols >= m
-
-
-def _sweep(prob: GProblem, pts: list[tuple]):
-    """Roots at every flight point, exactly n per point, tracked from the in-vacuo modes."""
-    p_ref = 1j * prob.omega0.astype(complex)
-    u_ref = (prob.system.mass @ prob.phi).T.astype(complex)   # in-vacuo modal participation
-    P, Uv, C, O = [], [], [], []
-    for i, pt in enumerate(pts):
-        p, u, ok, out = prob.roots(*pt)
-        if i >= 2:                       # extrapolated eigenvalues along the sweep
-            h0, h1 = path_length(pts[i - 2], pts[i - 1]), path_length(pts[i - 1], pts[i])
-            p_ref = P[-1] + (P[-1] - P[-2]) * (h1 / h0 if h0 > 0 else 0.0)
-        elif i == 1:
-            p_ref = P[-1]
-        p, u, ok, out, missing = _match(p_ref, u_ref, p, u, ok, out)
-        if missing.any():                # repeat the previous point (the in-vacuo mode at the first)
-            p[missing] = P[-1][missing] if P else p_ref[missing]
-            u[missing] = Uv[-1][missing] if P else unit_rows(u_ref[missing])
-        P.append(p)
-        Uv.append(u)
-        C.append(ok & ~out & ~missing)
-        O.append(out)
-        u_ref = u
-    return np.array(P), np.array(Uv), np.array(C), np.array(O)
 
 
 def _warn_outside(prob: GProblem, p, outside, V, mach) -> None:
@@ -398,9 +65,18 @@ def _static_divergence(prob: GProblem, pts, U, crossings) -> list[tuple[Crossing
     """Divergence crossings: dynamic pressures q_D of (K - q_D Q^R(0)) u = 0 passed between two
     points (static divergence: the real root at k = 0 is zero where det(K - q Q^R(0)) = 0), each given to
     the root whose eigenvector correlates best with u and skipped where a tracked root's own
-    divergence crossing is already in that interval."""
+    divergence crossing is already in that interval. A free aircraft's K and Q^R(0) share null
+    vectors (rigid modes that neither K nor the steady air loads, e.g. plunge or surge), so the
+    pencil is singular and some of its eigenvalues are rounding: a q_D counts only where the
+    number of unstable real roots at k = 0 grows across the interval (X-56-class example: a
+    spurious q_D at 1538 in/s, no real root through zero)."""
     out = []
     seen = {c.index for c in crossings if c.kind == "divergence"}
+
+    def unstable(pt):
+        lam = prob.eig(np.zeros(1), *pt, vectors=False)[0][0]
+        return int(np.sum((lam.imag == 0) & (lam.real > 1e-12 * np.abs(lam).max())))
+
     for i in range(len(pts) - 1):
         (V0, r0, M0), (V1, r1, M1) = pts[i], pts[i + 1]
         q0, q1 = 0.5 * r0 * V0 * V0, 0.5 * r1 * V1 * V1
@@ -414,7 +90,7 @@ def _static_divergence(prob: GProblem, pts, U, crossings) -> list[tuple[Crossing
             return lam.real[ok], X[:, ok].T
 
         for qd, ud in zip(*modes(M0)):
-            if not q0 < qd <= q1:
+            if not q0 < qd <= q1 or unstable(pts[i + 1]) <= unstable(pts[i]):
                 continue
             t = (qd - q0) / (q1 - q0)
             for _ in range(20 if M1 != M0 else 0):   # Mach along the line: q_D(M(t)) = q(t)
@@ -434,10 +110,10 @@ def _static_divergence(prob: GProblem, pts, U, crossings) -> list[tuple[Crossing
     return out
 
 
-def _refine_crossing(prob: GProblem, pts, P, U, r, i, g0, g1):
+def _refine_crossing(prob: GProblem, pts, P, U, W, r, i, g0, g1):
     """Zero of root r's damping between points i and i+1 by Illinois root-finding on the flight
     point. Each evaluation solves root r alone from its linear interpolation between the two points
-    (:meth:`GProblem.root_near`); where that fails (e.g. the root turns real inside the bracket) a
+    (:meth:`GProblem.correct`); where that fails (e.g. the root turns real inside the bracket) a
     full reduced-frequency sweep is matched to the interpolated roots instead."""
     cache = {}
 
@@ -446,13 +122,16 @@ def _refine_crossing(prob: GProblem, pts, P, U, r, i, g0, g1):
 
     def fun(t):
         pt = point(t)
+        s = prob.b / pt[0]
         guess = P[i] + t * (P[i + 1] - P[i])
-        near = prob.root_near(*pt, guess[r])
-        if near is not None:
-            cache[t] = near
+        if P[i, r].imag == 0 or P[i + 1, r].imag == 0:
+            guess[r] = guess[r].real if P[i, r].imag == P[i + 1, r].imag else P[i + (t >= 0.5), r]
+        pb, u, _, ok, out = prob.correct(guess[r:r + 1] * s, U[i, r:r + 1], W[i, r:r + 1], *pt)
+        if ok[0]:
+            cache[t] = (pb[0] / s, u[0], not out[0])
         else:
             p, u, ok, out = prob.roots(*pt)
-            pr, ur, okr, outr, miss = _match(guess, U[i], p, u, ok, out)
+            pr, ur, okr, outr, miss = match(guess, U[i], p, u, ok, out)
             cache[t] = (pr[r], ur[r], bool(okr[r] and not outr[r] and not miss[r]))
         return float(prob.damping(cache[t][0], pt[0]))
 
@@ -546,7 +225,7 @@ def g_solve_many(system: ModalSystem, gaf, cases, *, sweep: str = "velocity",
 def _case_dataset(prob: GProblem, V, rho, M, *, sweep, interpolation, refine, g_tol) -> xr.Dataset:
     """Roots, warnings, crossings and the result Dataset of one sweep."""
     pts = list(zip(V, rho, M))
-    p, u, conv, outside = _sweep(prob, pts)
+    p, u, w, conv, outside = sweep_roots(prob, pts)
     _warn_outside(prob, p, outside, V, M)
     g = prob.damping(p, V[:, None])
     crossings, vectors = [], []
@@ -554,7 +233,7 @@ def _case_dataset(prob: GProblem, V, rho, M, *, sweep, interpolation, refine, g_
     drift = drift_roots(p, V, prob.b, k_min, prob.omega0 < 2 * np.pi * prob.rigid_hz)
     for r, i in find_brackets(resolved_damping(g, drift), g_tol):
         if refine:
-            t, pr, ur, ok = _refine_crossing(prob, pts, p, u, r, i, g[i, r], g[i + 1, r])
+            t, pr, ur, ok = _refine_crossing(prob, pts, p, u, w, r, i, g[i, r], g[i + 1, r])
         else:
             t = interpolate_zero(g[i, r], g[i + 1, r])
             pr = p[i, r] + t * (p[i + 1, r] - p[i, r])
