@@ -14,6 +14,7 @@ from flutter.gmethod import GProblem, g_solve, g_solve_many
 from flutter.crossings import drift_roots, resolved_damping
 from flutter.kmethod import k_solve
 from flutter.pk import pk_solve
+from flutter.results import FLUTTER_KINDS
 from flutter.system import ModalSystem, StructuralDamping
 from flutter_nastran import DATA, bah_qhh_dataset, f06_flutter_summaries, f06_modes_used, first_crossing
 from structures.common.errors import InputError
@@ -305,3 +306,66 @@ def test_many_cases_forked_equal_in_process():
         np.testing.assert_allclose(b.eigenvalue.values, a.eigenvalue.values, rtol=1e-12, atol=1e-14)
         np.testing.assert_allclose(b.crossing_velocity.values, a.crossing_velocity.values, rtol=1e-12)
     assert one[1].crossing_velocity.values[0] > one[0].crossing_velocity.values[0]
+
+
+# ----------------------------------------------------------------------------- X-56A-class example
+@pytest.fixture(scope="module")
+def x56_efew():
+    """The shipped example's EFEW configuration (34 modes: 6 free-free rigid + 28 elastic) on the
+    case's first matched line (Mach 0.130, 43 points, density sweep), solved by p-k and g."""
+    from dataclasses import replace
+
+    from pipeline.case import read_case
+    from pipeline.chain import case_flutter, case_grid_gaf, configuration_modes
+
+    case = read_case(DATA.parents[1] / "data" / "x56_like" / "case.toml")
+    one = replace(case.flutter, matched=replace(case.flutter.matched, mach=(0.13,)))
+    config = next(c for c in case.configurations if c.name == "efew")
+    modes, _ = configuration_modes(config)
+    grid = case_grid_gaf(replace(case, flutter=one), config)
+    out = {}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)   # high modes above the k table
+        for solver in ("pk", "g"):
+            run = replace(case, flutter=replace(one, solver=solver))
+            out[solver] = case_flutter(run, config, modes, grid_gaf=grid)["results"][0][1]
+    return out, modes.frequency.values
+
+
+def _x56_crossing(ds, rigid_hz_f0, rigid: bool, f_lo: float, f_hi: float):
+    """The first flutter crossing of a root that starts from a rigid (or elastic) mode with a
+    frequency in [f_lo, f_hi] Hz: (velocity, frequency, kind)."""
+    f0, hits = rigid_hz_f0, []
+    for j in range(ds.sizes["crossing"]):
+        r = int(ds.crossing_root.values[j])
+        if ds.crossing_kind.values[j] in FLUTTER_KINDS and (f0[r - 1] < 0.05) == rigid and \
+                f_lo <= float(ds.crossing_frequency[j]) <= f_hi:
+            hits.append((float(ds.crossing_velocity[j]), float(ds.crossing_frequency[j]),
+                         str(ds.crossing_kind.values[j])))
+    assert hits, (ds.crossing_root.values, ds.crossing_frequency.values)
+    return min(hits)
+
+
+@pytest.mark.slow
+def test_x56_body_freedom_and_wing_flutter_match_pk(x56_efew):
+    """The g-method finds the symmetric body-freedom flutter of the free-free X-56A-class aircraft
+    (a root that starts from a rigid-body mode, ~2.0 Hz at ~1667 in/s) and the wing flutter near
+    7 Hz at p-k's speed and frequency within 1 % (both methods are exact at g = 0; p-k
+    interpolates Q linearly in k, the g-method by cubic splines). Before the rigid roots started
+    from the quasi-steady branches (flutter.gtrack), the short period started as a real root and
+    the SBFF was missed. Measured: g 1667.6 in/s 2.027 Hz vs p-k 1667.4 / 2.026; wing 1676.1 /
+    7.201 vs 1677.1 / 7.175. Every g-method crossing converged, and the short period is an
+    oscillatory root at the first point (0.52 Hz; quasi-steady -0.404 + 3.264i rad/s). The SBFF
+    is labelled body-freedom flutter (flutter.summary), the wing flutter plain flutter."""
+    out, f0 = x56_efew
+    g, pk = out["g"], out["pk"]
+    assert g.attrs["method"] == "G"
+    for rigid, lo, hi in ((True, 1.5, 2.5), (False, 6.0, 8.0)):
+        Vg, fg, kind = _x56_crossing(g, f0, rigid, lo, hi)
+        Vp, fp, _ = _x56_crossing(pk, f0, rigid, lo, hi)
+        assert abs(Vg / Vp - 1) < 0.01 and abs(fg / fp - 1) < 0.01, (rigid, Vg, fg, Vp, fp)
+        assert kind == ("body_freedom_flutter" if rigid else "flutter")
+    assert bool(g.crossing_converged.all())
+    rigid_roots = g.root.values[f0 < 0.05]
+    first = g.isel({g.attrs["sweep"]: 0}).sel(root=rigid_roots)
+    assert np.max(first.frequency.values) == pytest.approx(0.52, abs=0.01)
