@@ -276,7 +276,7 @@ class GProblem:
         return complex(lam.real, k), u, good
 
     def _beyond(self, lam, u, V, rho, mach):
-        """A root above the GAF table: k = Im p_bar by substitution (Q held, so one or two steps)."""
+        """A root above the GAF table: k = Im p_bar by substitution (Q held: one or two steps)."""
         for _ in range(20):
             k = float(lam.imag)
             lam, u = self._pick(k, lam, V, rho, mach)
@@ -288,16 +288,16 @@ class GProblem:
                 mach: float):
         """Roots near first guesses at one flight point, without a sweep, batched over the roots.
 
-        Each iteration, at each root's current k: one step of two-sided nonlinear inverse iteration
-        on T(p_bar) = M p_bar^2 + A1(k) p_bar + A0(k) (Ruhe, SIAM J. Numer. Anal. 10(4), 1973: one LU
-        per root, shift at the current p_bar), the two-sided Rayleigh functional w^H T(p_bar) u = 0
-        (a quadratic in p_bar, the solution nearest the shift), and a secant step on k for Chen's
-        root condition Im p_bar(k) = k. A real guess (Im p_bar = 0) stays at k = 0, where the
-        matrices are real; a root whose k goes to zero or below (a pair turning real) continues
-        there as the real root nearest its eigenvalue. A root fails (``converged`` False) if a real
-        root's Rayleigh value turns complex (two real roots merging into a pair) or it does not
-        converge to |Im g| and the p_bar update <= ``CORRECT_TOL`` |p_bar| within
-        ``CORRECT_ITER`` iterations.
+        Each iteration, at each root's current k: one step of two-sided nonlinear inverse
+        iteration on T(p_bar) = M p_bar^2 + A1(k) p_bar + A0(k) (Ruhe, SIAM J. Numer. Anal.
+        10(4), 1973: one LU per root, shift at the current p_bar), the two-sided Rayleigh
+        functional w^H T(p_bar) u = 0 (a quadratic in p_bar, the solution nearest the shift), and
+        a secant step on k for Chen's root condition Im p_bar(k) = k. A real guess
+        (Im p_bar = 0) stays at k = 0, where the matrices are real; a root whose k goes to zero or
+        below (a pair turning real) continues there as the real root nearest its eigenvalue. A
+        root fails (``converged`` False) if a real root's Rayleigh value turns complex (two real
+        roots merging into a pair) or it does not converge to |Im g| and a p_bar update
+        <= ``CORRECT_TOL`` |p_bar| within ``CORRECT_ITER`` iterations.
 
         Parameters
         ----------

@@ -1,11 +1,12 @@
-"""Rigid-body roots at the first flight point: which quasi-steady eigenvalue starts which rigid root.
+"""Rigid-body roots at the first flight point: the quasi-steady eigenvalue that starts each one.
 
-A free aircraft's rigid-body roots cannot be followed up from V -> 0, where all of them sit at p = 0:
-a continuation from there picks an eigenvalue branch at random (Nastran's bah_plane: two slightly
-unstable ~0 Hz roots instead of a short period with g ~ -2.3). Both the p-k (flutter.pk_solver) and
-the g-method (flutter.gtrack) start them instead from the eigenvalues of the quasi-steady system
-[M p^2 + C(0) p + K_t(0)] at the first flight point (Q^R and Q^I/k at k -> 0; the p-k and g-method
-equations coincide there), one root per eigenvalue branch (:func:`rigid_branches`).
+A free aircraft's rigid-body roots cannot be followed up from V -> 0, where all of them sit at
+p = 0: a continuation from there picks an eigenvalue branch at random (Nastran's bah_plane: two
+slightly unstable ~0 Hz roots instead of a short period with g ~ -2.3). Both the p-k
+(flutter.pk_solver) and the g-method (flutter.gtrack) start them instead from the eigenvalues of
+the quasi-steady system [M p^2 + C(0) p + K_t(0)] at the first flight point (Q^R and Q^I/k at
+k -> 0; the p-k and g-method equations coincide there), one root per eigenvalue branch
+(:func:`rigid_branches`).
 """
 from __future__ import annotations
 
@@ -19,9 +20,10 @@ def rigid_branches(lam: np.ndarray, U: np.ndarray, mphi: np.ndarray, rigid: np.n
 
     The 2 n_r eigenvalues whose eigenvectors lie most in the rigid modes (mass-weighted share of the
     in-vacuo rigid coordinates) are the rigid branches: every oscillatory pair gives one root
-    (Im p > 0: the short period, the dutch roll, ...), and the real eigenvalues (the near-zero plunge
-    / flight-path pair, or a pair already split) fill the remaining rigid roots, smallest |p| first.
-    Each branch is given to the rigid mode it participates in most (assignment over the rigid modes).
+    (Im p > 0: the short period, the dutch roll, ...), and the real eigenvalues (the near-zero
+    plunge / flight-path pair, or a pair already split) fill the remaining rigid roots, smallest
+    |p| first. Each branch is given to the rigid mode it participates in most (assignment over
+    the rigid modes).
 
     Parameters
     ----------
