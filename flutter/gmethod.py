@@ -166,7 +166,8 @@ def g_solve(system: ModalSystem, gaf, velocity, *, density, mach, sweep: str = "
     g_tol : float
         Neutral-damping band for crossings.
     **options
-        ``nk``: points of the k grid (default 60); ``rigid_hz``: rigid-body mode threshold [Hz]
+        ``nk``: points of the k grid of the reduced-frequency sweep (default 60; used at the first
+        point and where a continuation step fails); ``rigid_hz``: rigid-body mode threshold [Hz]
         (default 0.05).
 
     Returns

@@ -6,7 +6,8 @@ complex pair gives one root, its two real limits two), so exactly system.n are k
 assignment (flutter.tracking.assign) to references: elastic mode r at i omega_r with its in-vacuo
 modal participation, and the rigid-body modes (in-vacuo frequency below ``rigid_hz``) at the
 eigenvalue branches of the quasi-steady system at that point (:func:`flutter.rigid_start.
-rigid_branches`, as p-k's start; oscillatory branches solved locally to their g-method root).
+rigid_branches`, as p-k's start; each branch solved locally to its g-method root, which joins
+the candidates: the sweep misses roots whose k lies below its first k > 0, such as the drift pair).
 Without that, every rigid mode sits at i omega_r = 0 and the assignment prefers the near-zero real
 candidates to the short period (the X-56-class example: its short period came out as a real root).
 
@@ -123,13 +124,17 @@ def _first(prob: GProblem, pt: tuple) -> GState:
         flip = lam[0, pick].imag < 0
         pr = np.where(flip, lam[0, pick].conj(), lam[0, pick])
         ur = np.where(flip[:, None], U[0, pick].conj(), U[0, pick])
-        osc = pr.imag > 0
-        if osc.any():                # quasi-steady guess -> the g-method root (Im p_bar = k)
-            pc, uc, _, ok, _ = prob.correct(pr[osc], ur[osc], ur[osc].conj(), V, rho, mach)
-            pr[osc] = np.where(ok, pc, pr[osc])
-            ur[osc] = np.where(ok[:, None], uc, ur[osc])
+        # quasi-steady guess -> the g-method root (Im p_bar = k; real eigenvalues are roots)
+        pc, uc, _, solved, _ = prob.correct(pr, ur, ur.conj(), V, rho, mach)
+        pr, ur = np.where(solved, pc, pr), np.where(solved[:, None], uc, ur)
         p_ref[rigid], u_ref[rigid] = pr / s, ur
     p, u, ok, outside = prob.roots(V, rho, mach)
+    if rigid.size and solved.any():  # the sweep misses roots below its first k > 0 (drift pair)
+        tol = 1e-6 * np.maximum(np.abs(p), 1e-3 * float(prob.omega0.max()))
+        new = (np.abs(p[:, None] - pr[solved][None, :] / s) > tol[:, None]).all(axis=1)
+        p, u = np.concatenate([p[new], pr[solved] / s]), np.concatenate([u[new], ur[solved]])
+        ok = np.concatenate([ok[new], np.ones(solved.sum(), dtype=bool)])
+        outside = np.concatenate([outside[new], np.zeros(solved.sum(), dtype=bool)])
     p, u, ok, outside, missing = match(p_ref, u_ref, p, u, ok, outside)
     p[missing], u[missing] = p_ref[missing], unit_rows(u_ref[missing])
     return GState(p, u, u.conj(), ok & ~outside & ~missing, outside, np.zeros(n, dtype=complex))
