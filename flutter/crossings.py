@@ -66,6 +66,38 @@ class Crossing:
                 "converged": self.converged}
 
 
+def crossing_at(root: int, index: int, t: float, start: tuple, end: tuple, p: complex, *,
+                real: bool, converged: bool, refined: bool) -> Crossing:
+    """The crossing of a root a fraction ``t`` of the way between two flight points.
+
+    Parameters
+    ----------
+    root, index : int
+        0-based root and the sweep point before the crossing.
+    t : float
+        Fraction of the way from ``start`` to ``end`` (0..1).
+    start, end : tuple of float
+        (V, rho, M) of points ``index`` and ``index + 1``; the crossing's flight point is their
+        linear interpolation.
+    p : complex
+        The root's eigenvalue at the crossing.
+    real : bool
+        The root is real there: a divergence (frequency 0); else flutter at |Im p| / 2 pi.
+    converged, refined : bool
+        As :class:`Crossing`.
+
+    Returns
+    -------
+    Crossing
+    """
+    V, rho, M = (a + t * (b - a) for a, b in zip(start, end))
+    return Crossing(root=root + 1, index=int(index), t=float(t), velocity=float(V),
+                    density=float(rho), mach=float(M),
+                    frequency=0.0 if real else float(abs(p.imag) / (2 * np.pi)),
+                    kind="divergence" if real else "flutter", converged=bool(converged),
+                    refined=bool(refined))
+
+
 def find_brackets(damping: np.ndarray, g_tol: float = G_TOL) -> list[tuple[int, int]]:
     """Sweep intervals where a root's damping goes from below 0 to above ``g_tol``.
 

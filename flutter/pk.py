@@ -25,7 +25,7 @@ import numpy as np
 import xarray as xr
 from threadpoolctl import threadpool_limits
 
-from flutter.crossings import (G_TOL, Crossing, drift_roots, find_brackets, illinois,
+from flutter.crossings import (G_TOL, crossing_at, drift_roots, find_brackets, illinois,
                                interpolate_zero, resolved_damping)
 from flutter.parallel import map_cases
 from flutter.pk_solver import PKSolver, RootState
@@ -49,6 +49,30 @@ def check_sweep(velocity: np.ndarray, density: np.ndarray, mach: np.ndarray, swe
                          f"{i + 2} ({swept[i]} then {swept[i + 1]}). Fix: sort the FLFACT {sweep} "
                          "values in increasing order and remove duplicates (for a density sweep "
                          "use sweep='density').")
+
+
+def sweep_flights(cases, sweep: str) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
+    """The flight points of every case, broadcast and checked (:func:`check_sweep`).
+
+    Parameters
+    ----------
+    cases : list of (velocity, density, mach)
+        Each an array_like of shape (npts_c,) or a scalar (broadcast).
+    sweep : {"velocity", "density"}
+        The swept variable, which must increase strictly.
+
+    Returns
+    -------
+    list of (V, rho, M), each ndarray of shape (npts_c,) (new arrays)
+    """
+    flights = []
+    for velocity, density, mach in cases:
+        V, rho, M = np.broadcast_arrays(np.atleast_1d(np.asarray(velocity, dtype=float)),
+                                        np.atleast_1d(np.asarray(density, dtype=float)),
+                                        np.atleast_1d(np.asarray(mach, dtype=float)))
+        check_sweep(V, rho, M, sweep)
+        flights.append((V.copy(), rho.copy(), M.copy()))
+    return flights
 
 
 def sweep_states(solver: PKSolver, velocity, density, mach) -> list[RootState]:
@@ -240,13 +264,7 @@ def pk_solve_many(system: ModalSystem, gaf, cases, *, sweep: str = "velocity",
                         g_tol=g_tol, **options)
         return map_cases(lambda case: pk_solve_many(system, gaf, [case], **settings)[0],
                          list(cases), workers)
-    flights = []
-    for velocity, density, mach in cases:
-        V, rho, M = np.broadcast_arrays(np.atleast_1d(np.asarray(velocity, dtype=float)),
-                                        np.atleast_1d(np.asarray(density, dtype=float)),
-                                        np.atleast_1d(np.asarray(mach, dtype=float)))
-        check_sweep(V, rho, M, sweep)
-        flights.append((V.copy(), rho.copy(), M.copy()))
+    flights = sweep_flights(cases, sweep)
     solver = PKSolver(system, gaf, refc=refc, interpolation=interpolation, **options)
     for m in np.unique(np.concatenate([M for _, _, M in flights])):
         solver.interpolator(m)
@@ -282,14 +300,10 @@ def _case_dataset(solver: PKSolver, states: list[RootState], V, rho, M, *, sweep
             ur = u[i, r] if t < 0.5 else u[i + 1, r]
             ok = True
         vectors.append(ur)
-        Vc, rc, Mc = (a + t * (b - a) for a, b in zip(pts[i], pts[i + 1]))
-        real = abs(pr.imag) <= 1e-9 * max(abs(pr), solver.scale)
-        crossings.append(Crossing(root=r + 1, index=i, t=float(t), velocity=float(Vc),
-                                  density=float(rc), mach=float(Mc),
-                                  frequency=0.0 if real else float(abs(pr.imag) / (2 * np.pi)),
-                                  kind="divergence" if real else "flutter",
-                                  converged=bool(ok and conv[i, r] and conv[i + 1, r]),
-                                  refined=refine))
+        crossings.append(crossing_at(r, i, t, pts[i], pts[i + 1], pr,
+                                     real=abs(pr.imag) <= 1e-9 * max(abs(pr), solver.scale),
+                                     converged=ok and conv[i, r] and conv[i + 1, r],
+                                     refined=refine))
     ds = vg_dataset(p, u, g, conv, V, rho, M, b=solver.b, modes=system.modes, sweep=sweep,
                     method="PKNL" if sweep == "density" else "PK",
                     attrs={"interpolation": interpolation, "g_tol": g_tol,

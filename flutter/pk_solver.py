@@ -97,12 +97,8 @@ class PKSolver:
         omega, self.phi = system.in_vacuo()
         self.omega0 = omega
         self.scale = 1e-3 * max(float(omega.max()), 1e-12)
-        sd = system.structural
-        self._hyst = (not sd.is_zero) and sd.kind == "hysteretic"
-        B = system.damping.copy()
-        if (not sd.is_zero) and sd.kind == "viscous":
-            B = B + system.viscous_structural()
-        self.B = B
+        self._hyst = system.hysteretic
+        B = self.B = system.viscous_damping()
         self._MKB = np.concatenate([system.mass.T, system.stiffness.T, B.T], axis=1).astype(complex)
         self._KBM = np.stack([system.stiffness.ravel(), B.ravel(), system.mass.ravel()])
         n = system.n

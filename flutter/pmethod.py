@@ -39,11 +39,11 @@ import numpy as np
 import xarray as xr
 from scipy.optimize import linear_sum_assignment
 
-from flutter.crossings import (G_TOL, Crossing, drift_roots, find_brackets, illinois,
+from flutter.crossings import (G_TOL, crossing_at, drift_roots, find_brackets, illinois,
                                interpolate_zero, resolved_damping)
 from flutter.gafinterp import _q_at_mach
 from flutter.parallel import map_cases
-from flutter.pk import check_sweep
+from flutter.pk import sweep_flights
 from flutter.results import attach_crossings, vg_dataset
 from flutter.system import ModalSystem
 from flutter.tracking import assign, mac_matrix
@@ -285,13 +285,7 @@ def p_solve_many(system: ModalSystem, gaf, cases, *, sweep: str = "velocity",
             raise InputError("p-method: the GAFs carry no 'refc' attribute. Fix: pass refc= (the "
                              "AERO card's REFC) or use the Dataset written by aero.gaf.")
         refc = float(gaf.attrs["refc"])
-    flights = []
-    for velocity, density, mach in cases:
-        V, rho, M = np.broadcast_arrays(np.atleast_1d(np.asarray(velocity, dtype=float)),
-                                        np.atleast_1d(np.asarray(density, dtype=float)),
-                                        np.atleast_1d(np.asarray(mach, dtype=float)))
-        check_sweep(V, rho, M, sweep)
-        flights.append((V.copy(), rho.copy(), M.copy()))
+    flights = sweep_flights(cases, sweep)
     k = np.asarray(gaf["k"].values, dtype=float)
     options = dict(fit_options or {})
     v_min = min(float(V.min()) for V, _, _ in flights)
@@ -371,15 +365,10 @@ def _case(model: _Model, flight: tuple, sweep: str, interpolation: str, refine: 
         else:
             t = interpolate_zero(g[i, r], g[i + 1, r])
             pr, ur, ok = P[i, r] + t * (P[i + 1, r] - P[i, r]), U[i if t < 0.5 else i + 1, r], True
-        Vc, rc, Mc = (a + t * (c - a) for a, c in zip(pts[i], pts[i + 1]))
-        real = pr.imag == 0
         vectors.append(ur)
-        crossings.append(Crossing(root=r + 1, index=i, t=float(t), velocity=float(Vc),
-                                  density=float(rc), mach=float(Mc),
-                                  frequency=0.0 if real else float(pr.imag / (2 * np.pi)),
-                                  kind="divergence" if real else "flutter",
-                                  converged=bool(ok and conv[i, r] and conv[i + 1, r]),
-                                  refined=refine))
+        crossings.append(crossing_at(r, i, t, pts[i], pts[i + 1], pr, real=pr.imag == 0,
+                                     converged=ok and conv[i, r] and conv[i + 1, r],
+                                     refined=refine))
     used = [fits[key] for key in sorted({_key(m) for m in M})]
     sd = model.system.structural
     ds = vg_dataset(P, U, g, conv, V, rho, M, b=b, modes=model.system.modes, sweep=sweep,

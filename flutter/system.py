@@ -137,6 +137,18 @@ class ModalSystem:
         lam, phi = sla.eigh(0.5 * (self.stiffness + self.stiffness.T), 0.5 * (self.mass + self.mass.T))
         return np.sqrt(np.maximum(lam, 0.0)), phi
 
+    @property
+    def hysteretic(self) -> bool:
+        """True if structural damping is given and enters as i g K (hysteretic kind)."""
+        return (not self.structural.is_zero) and self.structural.kind == "hysteretic"
+
+    def viscous_damping(self) -> np.ndarray:
+        """All viscous damping, shape (n, n): B_hh plus the modal viscous structural damping when
+        the structural damping is of the viscous kind (:meth:`viscous_structural`)."""
+        if (not self.structural.is_zero) and self.structural.kind == "viscous":
+            return self.damping + self.viscous_structural()
+        return self.damping.copy()
+
     def viscous_structural(self) -> np.ndarray:
         """Modal viscous structural damping B_s = M Phi diag(g_j omega_j) Phi^T M, shape (n, n)."""
         omega, phi = self.in_vacuo()
