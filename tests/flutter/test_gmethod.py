@@ -322,6 +322,25 @@ def test_bah_no_unstable_root_below_flutter(bah):
     assert bool(conv.all())
 
 
+def test_bah_linear_interpolation_same_flutter_no_drift_crossing(bah):
+    """With Q interpolated linearly in k (jumps of dQ/dk at the tabulated k) the only crossing is
+    still root 4's elastic flutter, within 0.15 % of the cubic one; the plunge root starts as the
+    drift root (|p| b / V < k_min) although the sweep does not see it (it lies below the sweep's
+    first k > 0): before the first point's locally solved rigid roots joined the candidates, root 2
+    started on a k ~ k_min root and crossed at 363 m/s (0.0013 Hz)."""
+    gm, gk, _ = f06_modes_used(F06)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        ds = g_solve(ModalSystem(np.diag(gm), np.diag(gk)), bah_qhh_dataset(), bah["V"],
+                     density=float(bah["ds"].density[0]), mach=float(bah["ds"].mach[0]),
+                     interpolation="linear")
+    assert ds.crossing_root.values.tolist() == [4]
+    cubic = bah["ds"].crossing_velocity.values[bah["ds"].crossing_root.values == 4][0]
+    assert abs(float(ds.crossing_velocity[0]) / cubic - 1) < 1.5e-3
+    p0 = ds.eigenvalue.sel(root=2).values[0]
+    assert abs(p0) * 0.5 * float(bah["refc"]) / bah["V"][0] < 1e-3
+
+
 def test_many_cases_forked_equal_in_process():
     """Two cases (densities) on two forked workers give the in-process numbers (1e-12)."""
     V = np.linspace(1.0, 3.0, 12)
