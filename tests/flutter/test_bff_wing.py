@@ -28,6 +28,7 @@ Independent references:
 """
 from __future__ import annotations
 
+import importlib.util
 import subprocess
 import sys
 from pathlib import Path
@@ -53,11 +54,15 @@ from structures.massprops import mass_properties
 
 REPO = Path(__file__).resolve().parents[2]
 FOLDER = REPO / "data" / "bff_wing"
-sys.path.insert(0, str(FOLDER))
 sys.path.insert(0, str(REPO / "tests" / "structures"))
 
-import make_deck as md  # noqa: E402
 from test_mystran import needs_mystran, run_mystran  # noqa: E402
+
+# the generator under a name of its own: tests/data/practitioner_wing has a make_deck.py too
+_spec = importlib.util.spec_from_file_location("bff_wing_make_deck", FOLDER / "make_deck.py")
+md = importlib.util.module_from_spec(_spec)
+sys.modules[_spec.name] = md   # (dataclasses look their module up there)
+_spec.loader.exec_module(md)
 
 #: Modes above ~30 Hz need k beyond the table (1.5) at the lowest speeds; the solvers warn and
 #: mark those points not converged. They take no part in the SBFF.

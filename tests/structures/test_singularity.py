@@ -3,6 +3,7 @@ practitioner wing deck of issue 10 (film skin over spars and ribs), cross-checke
 from __future__ import annotations
 
 import dataclasses
+import importlib.util
 import sys
 import warnings
 from pathlib import Path
@@ -24,8 +25,12 @@ from structures.singularity import SingularityWarning, block_singularities, grid
 from test_mystran import needs_mystran, run_mystran
 
 WING = Path(__file__).resolve().parents[1] / "data" / "practitioner_wing"
-sys.path.insert(0, str(WING))
-import make_deck  # noqa: E402  (the deck's own generator, beside the deck)
+# the deck's own generator, beside the deck, under a name of its own (data/bff_wing has a
+# make_deck.py too; a plain import would take whichever was imported first)
+_spec = importlib.util.spec_from_file_location("practitioner_wing_make_deck", WING / "make_deck.py")
+make_deck = importlib.util.module_from_spec(_spec)
+sys.modules[_spec.name] = make_deck   # (dataclasses look their module up there)
+_spec.loader.exec_module(make_deck)
 
 
 def _block(angle_deg: float, k1=2.0, k2=1.0, kn=2.0e-9):
