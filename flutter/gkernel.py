@@ -92,12 +92,8 @@ class GProblem:
         self.b = 0.5 * float(refc)
         self._interp: dict[float, GafInterpolator] = {}
         self.omega0, self.phi = system.in_vacuo()
-        sd = system.structural
-        self._hyst = (not sd.is_zero) and sd.kind == "hysteretic"
-        B = system.damping.copy()
-        if (not sd.is_zero) and sd.kind == "viscous":
-            B = B + system.viscous_structural()
-        self.B = B
+        self._hyst = system.hysteretic
+        self.B = system.viscous_damping()
         self._Minv = np.linalg.inv(system.mass)
         mach0 = float(np.atleast_1d(gaf["mach"].values)[0]) if hasattr(gaf, "coords") else 0.0
         if self.interpolator(mach0).n != system.n:

@@ -32,12 +32,12 @@ import scipy.linalg as sla
 import xarray as xr
 from threadpoolctl import threadpool_limits
 
-from flutter.crossings import (G_TOL, Crossing, drift_roots, find_brackets, illinois,
-                               interpolate_zero, resolved_damping)
+from flutter.crossings import (G_TOL, Crossing, crossing_at, drift_roots, find_brackets,
+                               illinois, interpolate_zero, resolved_damping)
 from flutter.gkernel import GProblem
 from flutter.gtrack import match, sweep_roots
 from flutter.parallel import map_cases
-from flutter.pk import check_sweep
+from flutter.pk import sweep_flights
 from flutter.results import attach_crossings, vg_dataset
 from flutter.system import ModalSystem
 from structures.common.errors import InputError
@@ -103,10 +103,8 @@ def _static_divergence(prob: GProblem, pts, U, crossings) -> list[tuple[Crossing
                 t = t_new
             ud = ud / np.linalg.norm(ud)
             r = int(np.argmax(np.abs(U[i].conj() @ ud)))
-            Vc, rc, Mc = (a + t * (b - a) for a, b in zip(pts[i], pts[i + 1]))
-            out.append((Crossing(root=r + 1, index=i, t=float(t), velocity=float(Vc),
-                                 density=float(rc), mach=float(Mc), frequency=0.0,
-                                 kind="divergence", converged=True, refined=True), ud))
+            out.append((crossing_at(r, i, t, pts[i], pts[i + 1], 0j, real=True, converged=True,
+                                    refined=True), ud))
     return out
 
 
@@ -214,10 +212,7 @@ def g_solve_many(system: ModalSystem, gaf, cases, *, sweep: str = "velocity",
     prob = GProblem(system, gaf, refc=refc, interpolation=interpolation, **options)
     out = []
     with threadpool_limits(limits=1, user_api="blas"):
-        for velocity, density, mach in cases:
-            V, rho, M = (a.astype(float).copy() for a in np.broadcast_arrays(
-                *(np.atleast_1d(np.asarray(x, dtype=float)) for x in (velocity, density, mach))))
-            check_sweep(V, rho, M, sweep)
+        for V, rho, M in sweep_flights(cases, sweep):
             out.append(_case_dataset(prob, V, rho, M, sweep=sweep, interpolation=interpolation,
                                      refine=refine, g_tol=g_tol))
     return out
@@ -239,15 +234,10 @@ def _case_dataset(prob: GProblem, V, rho, M, *, sweep, interpolation, refine, g_
             t = interpolate_zero(g[i, r], g[i + 1, r])
             pr = p[i, r] + t * (p[i + 1, r] - p[i, r])
             ur, ok = (u[i, r] if t < 0.5 else u[i + 1, r]), True
-        Vc, rc, Mc = (a + t * (b - a) for a, b in zip(pts[i], pts[i + 1]))
-        real = pr.imag == 0
         vectors.append(ur)
-        crossings.append(Crossing(root=r + 1, index=i, t=float(t), velocity=float(Vc),
-                                  density=float(rc), mach=float(Mc),
-                                  frequency=0.0 if real else float(pr.imag / (2 * np.pi)),
-                                  kind="divergence" if real else "flutter",
-                                  converged=bool(ok and conv[i, r] and conv[i + 1, r]),
-                                  refined=refine))
+        crossings.append(crossing_at(r, i, t, pts[i], pts[i + 1], pr, real=pr.imag == 0,
+                                     converged=ok and conv[i, r] and conv[i + 1, r],
+                                     refined=refine))
     for c, ud in _static_divergence(prob, pts, u, crossings):
         crossings.append(c)
         vectors.append(ud)
