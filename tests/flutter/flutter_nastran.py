@@ -109,3 +109,22 @@ def bah_qhh_dataset() -> xr.Dataset:
                       coords={"mach": machs, "k": ks, "mode_i": np.arange(1, n + 1),
                               "mode_j": np.arange(1, n + 1)},
                       attrs={"refc": float(bdf.aero.cref), "rhoref": float(bdf.aero.rho_ref)})
+
+
+def bah_flutter_502() -> dict:
+    """Nastran's bah_plane FLUTTER 502 as our solvers take it: ``gaf`` (the QHH), ``gm``, ``gk``
+    (generalized mass and stiffness of the F06), ``rho``, ``mach``, ``V`` (the FLFACT lists),
+    ``sdamp`` (the deck's TABDMP1 2001) and ``summaries`` (the F06's FLUTTER SUMMARY tables at
+    that Mach number)."""
+    from pyNastran.bdf.bdf import read_bdf
+
+    f06 = DATA / "bah_plane" / "bah_plane.f06"
+    gm, gk, _ = f06_modes_used(f06)
+    bdf = read_bdf(str(DATA / "bah_plane" / "bah_plane.bdf"), debug=None)
+    fl = bdf.flutters[502]
+    mach = bdf.flfacts[fl.mach].factors[0]
+    return dict(gaf=bah_qhh_dataset(), gm=gm, gk=gk,
+                rho=bdf.flfacts[fl.density].factors[0] * bdf.aero.rho_ref, mach=mach,
+                V=np.asarray(bdf.flfacts[fl.reduced_freq_velocity].factors, dtype=float),
+                sdamp=bdf.tables_sdamping[2001],
+                summaries=[s for s in f06_flutter_summaries(f06) if np.isclose(s["mach"], mach)])

@@ -5,7 +5,6 @@ import warnings
 
 import numpy as np
 import pytest
-from pyNastran.bdf.bdf import read_bdf
 from scipy.optimize import fsolve
 from scipy.special import kv
 
@@ -16,7 +15,7 @@ from flutter.kmethod import k_solve
 from flutter.pk import pk_solve
 from flutter.results import FLUTTER_KINDS
 from flutter.system import ModalSystem, StructuralDamping
-from flutter_nastran import DATA, bah_qhh_dataset, f06_flutter_summaries, f06_modes_used, first_crossing
+from flutter_nastran import DATA, bah_flutter_502, bah_qhh_dataset, f06_modes_used, first_crossing
 from structures.common.errors import InputError
 from test_pk_typical_section import A, B, RHO, gaf, section
 
@@ -233,14 +232,9 @@ def test_quasi_steady_second_order_error(quasi_steady):
 # ----------------------------------------------------------------------------- Nastran bah_plane
 @pytest.fixture(scope="module")
 def bah():
-    gaf_b = bah_qhh_dataset()
-    gm, gk, _ = f06_modes_used(F06)
-    bdf = read_bdf(str(DATA / "bah_plane" / "bah_plane.bdf"), debug=None)
-    fl = bdf.flutters[502]
-    rho = bdf.flfacts[fl.density].factors[0] * bdf.aero.rho_ref
-    mach = bdf.flfacts[fl.mach].factors[0]
-    V = np.asarray(bdf.flfacts[fl.reduced_freq_velocity].factors, dtype=float)
-    summaries = {s["point"]: s for s in f06_flutter_summaries(F06) if np.isclose(s["mach"], mach)}
+    case = bah_flutter_502()
+    gaf_b, gm, gk, rho, mach, V = (case[key] for key in ("gaf", "gm", "gk", "rho", "mach", "V"))
+    summaries = {s["point"]: s for s in case["summaries"]}
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         ds = g_solve(ModalSystem(np.diag(gm), np.diag(gk)), gaf_b, V, density=rho, mach=mach)

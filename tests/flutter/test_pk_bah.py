@@ -9,31 +9,21 @@ import warnings
 
 import numpy as np
 import pytest
-from pyNastran.bdf.bdf import read_bdf
 
 from flutter.pk import pk_solve
 from flutter.system import ModalSystem, StructuralDamping
-from flutter_nastran import DATA, bah_qhh_dataset, f06_flutter_summaries, f06_modes_used, first_crossing
+from flutter_nastran import bah_flutter_502, first_crossing
 import flutter_plain_pk as plain
-
-F06 = DATA / "bah_plane" / "bah_plane.f06"
 
 
 @pytest.fixture(scope="module")
 def bah():
-    gaf = bah_qhh_dataset()
-    gm, gk, _ = f06_modes_used(F06)
-    bdf = read_bdf(str(DATA / "bah_plane" / "bah_plane.bdf"), debug=None)
-    fl = bdf.flutters[502]
-    rho = bdf.flfacts[fl.density].factors[0] * bdf.aero.rho_ref
-    mach = bdf.flfacts[fl.mach].factors[0]
-    V = np.asarray(bdf.flfacts[fl.reduced_freq_velocity].factors, dtype=float)
-    tab = bdf.tables_sdamping[2001]
-    summaries = [s for s in f06_flutter_summaries(F06) if np.isclose(s["mach"], mach)]
+    case = bah_flutter_502()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)  # roots 9-10 start above k = 10 (checked below)
-        ds = pk_solve(ModalSystem(np.diag(gm), np.diag(gk)), gaf, V, density=rho, mach=mach)
-    return dict(gaf=gaf, gm=gm, gk=gk, rho=rho, mach=mach, V=V, tab=tab, summaries=summaries, ds=ds)
+        ds = pk_solve(ModalSystem(np.diag(case["gm"]), np.diag(case["gk"])), case["gaf"], case["V"],
+                      density=case["rho"], mach=case["mach"])
+    return dict(case, tab=case["sdamp"], ds=ds)
 
 
 def test_qhh_layout(bah):
