@@ -66,6 +66,31 @@ class Crossing:
                 "converged": self.converged}
 
 
+def root_damping(p: np.ndarray, velocity, b: float, real: np.ndarray) -> np.ndarray:
+    """Damping g of roots (DESIGN.md section 3): 2 Re p / Im p, and Nastran's g = p cbar /
+    (V ln 2) = 2 p b / (V ln 2) for the roots flagged ``real`` (the F06's value for KFREQ = 0).
+
+    Parameters
+    ----------
+    p : ndarray, complex
+        Eigenvalues.
+    velocity : float or ndarray, broadcast against ``p``
+        Flight velocity of each root.
+    b : float
+        Reference semi-chord (REFC / 2).
+    real : ndarray of bool, shape as ``p``
+        Roots that are real (each solver's own test of Im p = 0).
+
+    Returns
+    -------
+    ndarray, shape as ``p``
+    """
+    p = np.asarray(p)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(real, p.real * 2 * b / (np.asarray(velocity) * np.log(2.0)),
+                        2.0 * p.real / np.where(real, 1.0, p.imag))
+
+
 def crossing_at(root: int, index: int, t: float, start: tuple, end: tuple, p: complex, *,
                 real: bool, converged: bool, refined: bool) -> Crossing:
     """The crossing of a root a fraction ``t`` of the way between two flight points.

@@ -43,14 +43,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from flutter.crossings import illinois
+from flutter.crossings import illinois, root_damping
 from flutter.gafinterp import GafInterpolator
 from flutter.linalg import inverse_iteration, unit_rows
 from flutter.system import ModalSystem
 from flutter.tracking import assign
 from structures.common.errors import InputError
 
-LN2 = np.log(2.0)
 CORRECT_ITER = 30   # local iterations per root (normally 3-6)
 CORRECT_TOL = 1e-10  # relative convergence of p_bar and of Chen's Im g = 0 in the local solve
 
@@ -370,6 +369,4 @@ class GProblem:
     def damping(self, p: np.ndarray, V) -> np.ndarray:
         """g = 2 Re p / Im p; Nastran's g = p cbar / (V ln 2) for real roots (Im p = 0)."""
         p = np.asarray(p)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            return np.where(p.imag == 0, p.real * 2 * self.b / (np.asarray(V) * LN2),
-                            2.0 * p.real / np.where(p.imag == 0, 1.0, p.imag))
+        return root_damping(p, V, self.b, p.imag == 0)

@@ -21,13 +21,13 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg as sla
 
+from flutter.crossings import root_damping
 from flutter.gafinterp import GafInterpolator
 from flutter.linalg import inverse_iteration, path_length, pencil_system, rayleigh, unit_rows
 from flutter.rigid_start import rigid_branches
 from flutter.system import ModalSystem
 from structures.common.errors import InputError
 
-LN2 = np.log(2.0)
 NEWTON_ITER = 12  # Newton k-matching normally converges in 2-4 iterations; slower roots are retried
 
 
@@ -456,11 +456,7 @@ class PKSolver:
     def damping(self, p: np.ndarray, V: np.ndarray) -> np.ndarray:
         """Damping g = 2 Re(p)/Im(p) (p = omega(gamma + i)); g = p cbar/(V ln 2) for real roots."""
         p = np.asarray(p)
-        real = np.abs(p.imag) <= 1e-9 * np.maximum(np.abs(p), self.scale)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            g = np.where(real, p.real * 2 * self.b / (np.asarray(V) * LN2),
-                         2.0 * p.real / np.where(real, 1.0, p.imag))
-        return g
+        return root_damping(p, V, self.b, np.abs(p.imag) <= 1e-9 * np.maximum(np.abs(p), self.scale))
 
 
 def _subset(state: RootState, idx: np.ndarray) -> RootState:

@@ -34,13 +34,12 @@ from __future__ import annotations
 
 from typing import Callable
 
-import control
 import numpy as np
 import xarray as xr
 from scipy.optimize import linear_sum_assignment
 
 from flutter.crossings import (G_TOL, crossing_at, drift_roots, find_brackets, illinois,
-                               interpolate_zero, resolved_damping)
+                               interpolate_zero, resolved_damping, root_damping)
 from flutter.gafinterp import _q_at_mach
 from flutter.parallel import map_cases
 from flutter.pk import sweep_flights
@@ -49,7 +48,6 @@ from flutter.system import ModalSystem
 from flutter.tracking import assign, mac_matrix
 from structures.common.errors import InputError, SolverError
 
-LN2 = np.log(2.0)
 START_Q = 1e-14     # the first flight point is reached along q from START_Q q ...
 START_STEPS = 50    # ... in this many geometric steps
 STRUCTURAL = 1e-5   # at START_Q q, roots with a smaller structural share are aerodynamic lags
@@ -93,9 +91,11 @@ def state_matrix(M: np.ndarray, B: np.ndarray, K: np.ndarray, rfa, velocity: flo
 
 
 def aeroelastic_statespace(M: np.ndarray, B: np.ndarray, K: np.ndarray, rfa, velocity: float,
-                           density: float) -> control.StateSpace:
+                           density: float):
     """The LTI aeroelastic model of :func:`state_matrix` as a python-control system (outputs u,
-    one zero input: the poles are the flutter roots)."""
+    one zero input: the poles are the flutter roots; for control design, hence imported here)."""
+    import control
+
     A = state_matrix(M, B, K, rfa, velocity, density)
     N, n = A.shape[0], M.shape[0]
     C = np.zeros((n, N))
@@ -143,23 +143,28 @@ class _Model:
         pick = assign(p_prev, u_prev, lam, U)
         return lam[pick], U[pick]
 
-    def ok(self, p0, u0, p1, u1) -> bool:
-        """A step is kept when no root jumps by half its distance to the nearest other root and no
-        root loses eigenvector correlation (MAC < mac_min) while moving."""
+    def jumped(self, p0, u0, p1, u1) -> np.ndarray:
+        """Roots (R,) of a step that jump by half their distance to the nearest other root, or
+        lose eigenvector correlation (MAC < mac_min) while moving; a step is kept when none do."""
         sep = np.abs(p0[:, None] - p0[None, :])
         np.fill_diagonal(sep, np.inf)
         jump = np.abs(p1 - p0) / np.maximum(sep.min(axis=1), self.scale)
         mac = np.diag(mac_matrix(u0, u1))
-        return not (np.any(jump > 0.5) or np.any((mac < self.mac_min) & (jump > 0.05)))
+        return (jump > 0.5) | ((mac < self.mac_min) & (jump > 0.05))
 
     def step(self, frm: tuple, to: tuple, p0, u0, depth: int = 0):
-        """Roots at ``to`` continued from (p0, u0) at ``frm``, bisecting rejected steps."""
+        """Roots at ``to`` continued from (p0, u0) at ``frm``, bisecting rejected steps.
+
+        Returns p (R,), u (R, n) and the roots (R,) whose step still jumped at the smallest
+        bisection (not tracked with confidence: flagged not converged by the caller)."""
         p1, u1 = self.roots(to, p0, u0)
-        if depth < self.max_depth and not self.ok(p0, u0, p1, u1):
+        bad = self.jumped(p0, u0, p1, u1)
+        if depth < self.max_depth and bad.any():
             mid = tuple(0.5 * (a + c) for a, c in zip(frm, to))
-            pm, um = self.step(frm, mid, p0, u0, depth + 1)
-            return self.step(mid, to, pm, um, depth + 1)
-        return p1, u1
+            pm, um, bad_a = self.step(frm, mid, p0, u0, depth + 1)
+            p1, u1, bad_b = self.step(mid, to, pm, um, depth + 1)
+            return p1, u1, bad_a | bad_b
+        return p1, u1, bad
 
     def start(self, point: tuple):
         """Roots at the first flight point, continued from the in-vacuo modes along q.
@@ -177,7 +182,7 @@ class _Model:
                               f"V = {V:g}. Fix: check the modal matrices (duplicated modes).")
         rhos = rho * np.geomspace(START_Q, 1.0, START_STEPS)
         for r0, r1 in zip(rhos[:-1], rhos[1:]):
-            p, u = self.step((V, r0, mach), (V, r1, mach), p, u)
+            p, u, _ = self.step((V, r0, mach), (V, r1, mach), p, u)
         rigid = np.flatnonzero(self.omega0 < 2 * np.pi * self.rigid_hz)
         if rigid.size > 1:  # as p-k: each rigid root to the rigid mode it participates in most
             c = np.abs(u[rigid] @ (self.system.mass @ self.phi[:, rigid])) ** 2
@@ -189,11 +194,8 @@ class _Model:
 
     def damping(self, p: np.ndarray, V) -> np.ndarray:
         """g = 2 Re p / Im p; Nastran's g = p cbar / (V ln 2) for real roots."""
-        b = self.fits[next(iter(self.fits))].refc / 2.0
-        real = p.imag == 0
-        with np.errstate(divide="ignore", invalid="ignore"):
-            return np.where(real, p.real * 2 * b / (np.asarray(V) * LN2),
-                            2.0 * p.real / np.where(real, 1.0, p.imag))
+        p = np.asarray(p)
+        return root_damping(p, V, self.fits[next(iter(self.fits))].refc / 2.0, p.imag == 0)
 
 
 def _key(mach: float) -> float:
@@ -274,12 +276,6 @@ def p_solve_many(system: ModalSystem, gaf, cases, *, sweep: str = "velocity",
     if fit is None:
         raise InputError("p-method: no rational-fit function given. Fix: pass fit=aero.rfa.fit_rfa "
                          "(flutter/ does not import aero).")
-    if workers > 1 and len(cases) > 1:
-        settings = dict(sweep=sweep, refc=refc, interpolation=interpolation, refine=refine,
-                        g_tol=g_tol, fit=fit, fit_options=fit_options, mac_min=mac_min,
-                        max_depth=max_depth, rigid_hz=rigid_hz)
-        return map_cases(lambda case: p_solve_many(system, gaf, [case], **settings)[0],
-                         list(cases), workers)
     if refc is None:
         if "refc" not in getattr(gaf, "attrs", {}):
             raise InputError("p-method: the GAFs carry no 'refc' attribute. Fix: pass refc= (the "
@@ -288,8 +284,15 @@ def p_solve_many(system: ModalSystem, gaf, cases, *, sweep: str = "velocity",
     flights = sweep_flights(cases, sweep)
     k = np.asarray(gaf["k"].values, dtype=float)
     options = dict(fit_options or {})
+    # one fit range for all the cases, however they are spread over workers
     v_min = min(float(V.min()) for V, _, _ in flights)
     options.setdefault("k_max", fit_range(system, k, refc, v_min, rigid_hz))
+    if workers > 1 and len(cases) > 1:
+        settings = dict(sweep=sweep, refc=refc, interpolation=interpolation, refine=refine,
+                        g_tol=g_tol, fit=fit, fit_options=options, mac_min=mac_min,
+                        max_depth=max_depth, rigid_hz=rigid_hz)
+        return map_cases(lambda case: p_solve_many(system, gaf, [case], **settings)[0],
+                         list(cases), workers)
     fits = {}
     for m in np.unique(np.concatenate([M for _, _, M in flights])):
         Q = _q_at_mach(gaf, float(m))
@@ -346,16 +349,18 @@ def _case(model: _Model, flight: tuple, sweep: str, interpolation: str, refine: 
     V, rho, M = flight
     pts = list(zip(V, rho, M))
     p, u = model.start(pts[0])
-    P, U = [p], [u]
+    P, U, lost = [p], [u], [np.zeros(p.size, dtype=bool)]
     for a, c in zip(pts[:-1], pts[1:]):
-        p, u = model.step(a, c, p, u)
+        p, u, bad = model.step(a, c, p, u)
         P.append(p)
         U.append(u)
+        lost.append(bad)
     P, U = np.array(P), np.array(U)
     fits = model.fits
     b = fits[_key(M[0])].refc / 2.0
     kmax = np.array([fits[_key(m)].k_max for m in M])
-    conv = np.abs(P.imag) * b / V[:, None] <= kmax[:, None] * (1 + 1e-9)
+    # not converged: k above the fitted range, or a step that still jumped at the smallest bisection
+    conv = (np.abs(P.imag) * b / V[:, None] <= kmax[:, None] * (1 + 1e-9)) & ~np.array(lost)
     g = model.damping(P, V[:, None])
     crossings, vectors = [], []
     drift = drift_roots(P, V, b, np.full(V.size, k_min), model.omega0 < 2 * np.pi * model.rigid_hz)
@@ -392,7 +397,7 @@ def _refine(model: _Model, a: tuple, c: tuple, p0, u0, r: int, g0: float, g1: fl
 
     def fun(t):
         pt = tuple(x + t * (y - x) for x, y in zip(a, c))
-        p, u = model.step(a, pt, p0, u0)
+        p, u, _ = model.step(a, pt, p0, u0)
         cache[t] = (p[r], u[r])
         return float(model.damping(p[r:r + 1], pt[0])[0])
 

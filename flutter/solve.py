@@ -80,6 +80,11 @@ class FlutterRequest:
     def __post_init__(self):
         if not self.name:
             object.__setattr__(self, "name", f"FLUTTER {self.sid}")
+        if self.method not in METHODS:
+            raise UnsupportedCardError(card_message(
+                f"flutter method {self.method!r} is not supported.", card="FLUTTER",
+                card_id=self.sid, filename=self.source or None,
+                fix=f"use one of {sorted(METHODS)}."))
         if self.solver not in SOLVERS:
             raise InputError(card_message(
                 f"flutter solver {self.solver!r} is not known.", card="FLUTTER", card_id=self.sid,
@@ -89,11 +94,6 @@ class FlutterRequest:
                 f"solver {self.solver!r} solves PK / PKNL flight points; this request is "
                 f"{self.method}.", card="FLUTTER", card_id=self.sid, filename=self.source or None,
                 fix="use solver 'pk' for K / KE requests (the k-method), or make the card PK."))
-        if self.method not in METHODS:
-            raise UnsupportedCardError(card_message(
-                f"flutter method {self.method!r} is not supported.", card="FLUTTER",
-                card_id=self.sid, filename=self.source or None,
-                fix=f"use one of {sorted(METHODS)}."))
         for name in ("density", "mach", "values"):
             object.__setattr__(self, name, tuple(float(x) for x in getattr(self, name)))
         if self.method == "PKNL" and not (len(self.density) == len(self.mach) == len(self.values)):
@@ -136,7 +136,7 @@ def _cores() -> int:
 
 
 def solve_request(system: ModalSystem, gaf: xr.Dataset, req: FlutterRequest,
-                  rational_fit=None) -> list[tuple[dict, xr.Dataset]]:
+                  rational_fit=None, rigid_hz: float = 0.05) -> list[tuple[dict, xr.Dataset]]:
     """Solve one request on a modal system.
 
     Parameters
@@ -149,6 +149,9 @@ def solve_request(system: ModalSystem, gaf: xr.Dataset, req: FlutterRequest,
     rational_fit : callable, optional
         The rational fit of the p-method (solver "p": aero.rfa.fit_rfa, given by the caller
         because flutter/ does not import aero/).
+    rigid_hz : float
+        In-vacuo modes below this frequency [Hz] are rigid-body modes (their roots' start and the
+        drift roots of every solver).
 
     Returns
     -------
@@ -159,9 +162,9 @@ def solve_request(system: ModalSystem, gaf: xr.Dataset, req: FlutterRequest,
     """
     out = []
     name = req.name
-    solve = SOLVERS[req.solver]
+    solve = partial(SOLVERS[req.solver], rigid_hz=rigid_hz)
     if req.solver == "p":
-        solve = partial(p_solve_many, fit=rational_fit)
+        solve = partial(solve, fit=rational_fit)
     if METHODS[req.method] == "pk":
         V = np.unique(req.values)
         points = [(rho, m) for rho in req.density for m in req.mach]
@@ -184,7 +187,8 @@ def solve_request(system: ModalSystem, gaf: xr.Dataset, req: FlutterRequest,
 
 
 def solve_flutter(modes: xr.Dataset, gaf: xr.Dataset, requests, units: str | None = None,
-                  progress=None, rational_fit=None) -> list[tuple[dict, xr.Dataset]]:
+                  progress=None, rational_fit=None,
+                  rigid_hz: float = 0.05) -> list[tuple[dict, xr.Dataset]]:
     """Every request on the modes' modal system, each with its own structural damping.
 
     Parameters
@@ -201,6 +205,8 @@ def solve_flutter(modes: xr.Dataset, gaf: xr.Dataset, requests, units: str | Non
         Told which request is being solved.
     rational_fit : callable, optional
         The p-method's rational fit (:func:`solve_request`).
+    rigid_hz : float
+        Rigid-body modes' frequency bound [Hz] (:func:`solve_request`).
 
     Returns
     -------
@@ -214,7 +220,7 @@ def solve_flutter(modes: xr.Dataset, gaf: xr.Dataset, requests, units: str | Non
         if progress is not None:
             progress(f"{req.name} ({req.method}), request {i + 1} of {len(requests)}")
         system = modal_system(modes, req.damping)
-        for lab, ds in solve_request(system, gaf, req, rational_fit):
+        for lab, ds in solve_request(system, gaf, req, rational_fit, rigid_hz):
             ds = label_units(ds, units)
             ds.attrs.update(method=SOLVER_NAMES.get(req.solver, req.method), rhoref=req.rhoref,
                             configuration=lab["configuration"])

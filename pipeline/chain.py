@@ -336,7 +336,8 @@ def flutter_chain(deck: str | os.PathLike, modes: xr.Dataset, *, kernel: str = "
         gaf = generalized_aero_forces(aero, modes, machs, ks, method=kernel)
     else:
         gaf = project_gaf(_covering(grid_gaf, machs, ks, kernel, str(deck)), modes)
-    results = solve_flutter(modes, gaf, requests, units, progress=progress, rational_fit=fit_rfa)
+    results = solve_flutter(modes, gaf, requests, units, progress=progress, rational_fit=fit_rfa,
+                            rigid_hz=rigid_hz)
     if matched is not None:
         results = label_lines(results, matched, units)
     results = label_results(results, modes, rigid_hz)
