@@ -232,6 +232,7 @@ class PKSolver:
                 # a defective root at p = 0 (surge of a free aircraft: no aerodynamic force, T(0) u
                 # = 0 and T'(0) u = 0) gives no right-hand side: its vectors are already exact
                 lost = ~(np.isfinite(un).all(axis=1) & np.isfinite(wn).all(axis=1))
+                lost &= np.abs(pn) <= 1e-9 * self.scale
                 un[lost], wn[lost] = ua[lost], wa[lost]
                 un[flip], wn[flip] = un[flip].conj(), wn[flip].conj()
                 u[act], w[act] = un, wn
