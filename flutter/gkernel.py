@@ -10,8 +10,10 @@ perturbation; the paper was not at hand, so no equation numbers are given here):
 
 exact at g = 0 and first-order accurate in g. p-k's Q^R(k) + p_bar Q^I(k) / k agrees with it except
 for the k-derivative of Q^R off the axis (the term -i g dQ^R/dk), which is why p-k damping is only
-exact at g = 0 and the g-method's is right to first order for the heavily damped rigid-body and
-body-freedom roots. With Q^R and D = Q^I / k interpolated in k (flutter.gafinterp),
+exact at g = 0 and the g-method's is right to first order in g. The expansion is about ik, and the
+aerodynamics have a branch point at p_bar = 0, so it holds while |g| is well below k: for a root
+near critical damping (bah_plane's short period, g ~ -1.15 k) the g-method's |p| is 10-15 % above
+the exact root's (tests/flutter/test_rigid_roots_bah.py, test_gmethod.py's xfail). With Q^R and D = Q^I / k interpolated in k (flutter.gafinterp),
 
     Q'(ik)       = D + k dD/dk - i dQ^R/dk,
     Q - ik Q'    = Q^R - k dQ^R/dk - i k^2 dD/dk,

@@ -36,10 +36,12 @@ MARGIN_FACTOR = 1.15
 #: moves its rigid-body modes much less. Measured (p-k, our modes and GAFs): classical flutter
 #: 9.2 % (bah_plane wing bending-torsion, 394 m/s), 15.6-25.6 % (X-56A-class wing flutters, both
 #: configurations, 4 Mach), 27.0 and 30.3 % (data/bff_wing's 11 and 21 Hz wing flutters);
-#: body-freedom flutter 83-95 % (X-56A-class SBFF), 75-82 % (its EFEW 7 Hz flutter with the
-#: body), 83 % (bff_wing SBFF). 50 % lies 1.65 x above the largest classical share and 1.5 x
-#: below the smallest body-freedom one (30 %, the earlier value, named bff_wing's 30.3 % wing
-#: flutter body-freedom).
+#: symmetric body-freedom flutter (the short period with the first bending) 83-95 % (X-56A-class
+#: SBFF, both configurations) and 83 % (bff_wing SBFF). 50 % lies 1.65 x above the largest
+#: classical share and 1.66 x below the smallest SBFF one (30 %, the earlier value, named
+#: bff_wing's 30.3 % wing flutter body-freedom). The X-56A-class EFEW 7 Hz antisymmetric flutter,
+#: in which the rigid roll takes 74-82 %, then falls on the body-freedom side too (reported
+#: "body-freedom: roll-AW1T").
 BFF_SHARE = 50.0
 
 

@@ -266,7 +266,7 @@ def _overlay_section(case, stages: list[Path], labels: UnitLabels) -> str:
 
 
 #: How each summary.json "method" is named in the report's crossing tables.
-METHOD_NAMES = {"PK": "p-k (PK)", "PKNL": "p-k (PKNL, matched points)", "K": "k-method",
+METHOD_NAMES = {"PK": "p-k (PK)", "PKNL": "p-k (PKNL)", "K": "k-method",
                 "KE": "k-method", "G": "g-method", "P-RFA": "p-method on a rational fit"}
 
 
