@@ -271,7 +271,9 @@ class FlutterSettings:
         object.__setattr__(self, "solvers", pairs)
         for name in (self.solver,) + tuple(v for _, v in pairs):
             if name not in SOLVERS:
-                raise InputError(f"solver = {name!r}; valid: {', '.join(sorted(SOLVERS))}.")
+                raise InputError(f"solver = {name!r}; valid: {', '.join(sorted(SOLVERS))}. Fix: "
+                                 "e.g. solver = \"pk\" (p-k), \"g\" (g-method) or \"p\" "
+                                 "(p-method on a rational fit).")
         if self.matched is not None and self.solvers:
             raise InputError("solvers (per FLUTTER id) and [flutter.matched] were both given. Fix: "
                              "the matched points are solved by solver = ...; remove solvers.")
