@@ -127,12 +127,37 @@ def _shift_invert(k, m, nmodes: int, shifted: sp.csc_matrix, shift: float, group
     # cheaper multi-right-hand-side solves. A Lanczos basis of nmodes + 20..30 vectors takes the
     # fewest solves (60,744-DOF plate: 86 solves for 40 modes against 103 with 2 nmodes + 1; 51
     # for 20 modes, 156 for 80 against 162; 31 for 10), eigenvalues unchanged to 3e-14.
-    op = spla.LinearOperator((n, n), matvec=factor.solve, dtype=float)
-    ncv = min(n, nmodes + int(np.clip(nmodes, 20, 30)))
+    mass = m.diagonal()
+    carried = np.flatnonzero(mass > 0)
+    lumped = m.count_nonzero() == carried.size and nmodes < carried.size
+    size = carried.size if lumped else n
+    ncv = min(size, nmodes + int(np.clip(nmodes, 20, 30)))
+    if lumped:
+        # Diagonal (lumped) M = diag(D, 0): the standard symmetric problem C y = mu y on the
+        # DOFs with mass alone, C = D^1/2 [(K - sigma M)^-1]_mm D^1/2, mu = 1 / (lambda - sigma)
+        # (Ericsson & Ruhe 1980, Math. Comp. 35, eq. 2.3, with the massless DOFs condensed):
+        # Lanczos vectors half as long at 60,744 DOF (30,372 with mass), 0.2 s less ARPACK work
+        # for 40 modes; phi = (K - sigma M)^-1 M phi / mu from one block solve, residuals ~1e-15.
+        root = np.sqrt(mass[carried])
+
+        def reduced(y: np.ndarray) -> np.ndarray:
+            b = np.zeros(n)
+            b[carried] = root * y
+            return root * factor.solve(b)[carried]
+
+        op = spla.LinearOperator((size, size), matvec=reduced, dtype=float)
+    else:
+        op = spla.LinearOperator((n, n), matvec=factor.solve, dtype=float)
     try:
         with ThreadpoolController().select(internal_api="openblas").limit(limits=1):
-            lam, vec = spla.eigsh(k, k=nmodes, M=m, sigma=shift, which="LM", OPinv=op,
-                                  ncv=ncv, tol=1e-9)
+            if lumped:
+                mu, y = spla.eigsh(op, k=nmodes, which="LA", ncv=ncv, tol=1e-9)
+                b = np.zeros((n, nmodes))
+                b[carried] = root[:, None] * y
+                lam, vec = shift + 1.0 / mu, factor.solve(b) / mu
+            else:
+                lam, vec = spla.eigsh(k, k=nmodes, M=m, sigma=shift, which="LM", OPinv=op,
+                                      ncv=ncv, tol=1e-9)
     except spla.ArpackNoConvergence as exc:
         raise SolverError(card_message(f"the eigensolver did not converge ({exc}).",
                                        filename=filename,
