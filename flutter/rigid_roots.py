@@ -42,6 +42,9 @@ from flutter.summary import crossing_kinds
 #: plunge): a tenth of the rigid-mode threshold, 0.005 Hz by default, against 0.09 Hz for
 #: bah_plane's short period at 30 m/s (Nastran PK point 2).
 NEAR_ZERO = 0.1
+#: ... and below this share of the largest rigid root's |p| at that speed (bah_plane at 30 m/s: the
+#: plunge drift root 0.0003 rad/s against the short period's 0.86).
+NEAR_SHARE = 0.01
 #: Rigid-body motions (structures.modal.RIGID_MOTIONS) grouped as flight mechanics separates them.
 _GROUPS = {"longitudinal": ("plunge", "pitch"), "surge": ("surge",),
            "lateral": ("sway", "roll", "yaw"),
@@ -93,7 +96,10 @@ def root_labels(ds: xr.Dataset, omega: np.ndarray, rigid_hz: float = 0.05, *,
     p, u = _lowest_speed(ds)
     share = participation_factors(u, np.eye(n) if mass is None else mass)
     roots = [r for r in range(min(ds.sizes["root"], n)) if rigid[r]]
-    near_zero = np.abs(p) / (2 * np.pi) < NEAR_ZERO * rigid_hz
+    # near zero: below NEAR_ZERO x rigid_hz and far below the largest rigid root at that speed
+    # (a sweep that starts slowly has a slow short period too: p scales with V)
+    largest = float(np.abs(p[roots]).max()) if roots else 0.0
+    near_zero = (np.abs(p) / (2 * np.pi) < NEAR_ZERO * rigid_hz) & (np.abs(p) <= NEAR_SHARE * largest)
     near_zero |= p.imag <= 0
     # (label, candidate roots, score): each label goes to its best-scoring candidate.
     if named:

@@ -194,3 +194,16 @@ def test_real_rigid_roots_against_the_f06(solved):
     point1 = _summary(1)["rows"]
     below = V < float(ds.crossing_velocity.min())
     assert np.all(np.abs(plunge[below]) <= np.abs(point1[below, 5] + 1j * point1[below, 6]))
+
+
+def test_labels_do_not_depend_on_the_first_speed(solved):
+    """A sweep that starts at 1 m/s has a short period of 0.0046 Hz there (|p| ~ V): it is still
+    named the short period, not the plunge (near zero means far below the largest rigid root too)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        slow = pk_solve(solved["system"], solved["gaf"], np.linspace(1.0, 100.0, 10), density=RHO,
+                        mach=MACH)
+    labels = root_labels(slow, solved["omega"])
+    p = slow["eigenvalue"].isel(velocity=0).values
+    assert abs(p[labels.index("short period")]) / (2 * np.pi) < 0.005     # below NEAR_ZERO x 0.05 Hz
+    assert labels[:2] == root_labels(solved["pk"], solved["omega"])[:2]
