@@ -42,9 +42,10 @@ from flutter.summary import crossing_kinds
 #: plunge): a tenth of the rigid-mode threshold, 0.005 Hz by default, against 0.09 Hz for
 #: bah_plane's short period at 30 m/s (Nastran PK point 2).
 NEAR_ZERO = 0.1
-#: ... and below this share of the largest rigid root's |p| at that speed (bah_plane at 30 m/s: the
-#: plunge drift root 0.0003 rad/s against the short period's 0.86).
-NEAR_SHARE = 0.01
+#: ... and below this share of the largest rigid root's |p| at that speed (bah_plane at 30 m/s:
+#: the plunge drift root 0.0003 rad/s against the short period's 0.86; X-56A-class EFEW: 0.0015
+#: against 3.3).
+NEAR_SHARE = 0.05
 #: Rigid-body motions (structures.modal.RIGID_MOTIONS) grouped as flight mechanics separates them.
 _GROUPS = {"longitudinal": ("plunge", "pitch"), "surge": ("surge",),
            "lateral": ("sway", "roll", "yaw"),
