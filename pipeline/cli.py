@@ -8,6 +8,7 @@ the stage that was running). Anything else is a bug and shows its traceback.
 from __future__ import annotations
 
 import argparse
+import gc
 import importlib
 import sys
 import warnings
@@ -50,6 +51,13 @@ def _show_warning(message, category, filename, lineno, file=None, line=None) -> 
 
 def main(argv=None) -> int:
     parser = build_parser()
+    program = argv is None
+    if program:
+        # As a program (not called in-process with ``argv``): the imported modules' objects
+        # (~500k with xarray, scipy and pyNastran) leave the cyclic collector's scans, cheaper
+        # while decks are parsed, and the interpreter's exit takes 0.04 s instead of 0.33 s
+        # (measured, benchmarks/modal.py).
+        gc.freeze()
     args = parser.parse_args(argv)
     if args.command is None:
         args = parser.parse_args(["run", *(argv or [])])
@@ -66,6 +74,8 @@ def main(argv=None) -> int:
         return 130
     finally:
         warnings.showwarning = shown
+        if program:
+            gc.freeze()
 
 
 if __name__ == "__main__":
