@@ -205,14 +205,18 @@ def validate_model(model: FEModel) -> None:
     for prop in model.properties.values():
         _check_section(prop, model.filename)
     for card, es in model.elements.items():
-        for row, eid in zip(es.nodes, es.eids):
-            used = row[row != 0] if card in _GROUNDED else row
-            grids.index(used, card=card, card_id=eid, filename=model.filename)
+        # Whole-array checks; the first failing element (in card order) is the one named.
+        known = np.isin(es.nodes, grids.ids) | ((es.nodes == 0) if card in _GROUNDED else False)
+        for r in np.flatnonzero(~np.all(known, axis=1))[:1]:
+            row = es.nodes[r]
+            grids.index(row[row != 0] if card in _GROUNDED else row, card=card,
+                        card_id=es.eids[r], filename=model.filename)
         if card in _PROPERTY_OF:
-            for eid, pid in zip(es.eids, es.pids):
-                if card == "CELAS" and pid == 0:
+            _, first = np.unique(es.pids, return_index=True)
+            for r in np.sort(first):                 # each property once, at its first element
+                if card == "CELAS" and es.pids[r] == 0:
                     continue
-                _check_property(model, card, eid, pid)
+                _check_property(model, card, es.eids[r], es.pids[r])
         _check_element_values(model, es)
         if card == "CROD":
             _check_rods(model, es)

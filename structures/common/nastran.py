@@ -53,6 +53,8 @@ def _check_includes(path: Path, text: str, include_dir: str, chain: tuple = ()) 
     from pyNastran.bdf.bdf_interface.include_file import get_include_filename
 
     _check_thru_ranges(path, text)
+    if "INCLUDE" not in text.upper():
+        return []
     chain = chain + (path.resolve(),)
     lines = text.splitlines()
     included = []
@@ -111,6 +113,8 @@ _THRU = re.compile(r"([+-]?\d+)[,\s]*THRU[,\s]*([+-]?\d+)", re.IGNORECASE)
 def _check_thru_ranges(path: Path, text: str) -> None:
     """Refuse id ranges ``a THRU b`` longer than :data:`MAX_THRU_RANGE` before pyNastran expands
     them."""
+    if not _THRU.search(text):
+        return
     for number, line in enumerate(text.splitlines(), 1):
         for match in _THRU.finditer(line.split("$")[0]):
             low, high = int(match.group(1)), int(match.group(2))
