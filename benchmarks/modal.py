@@ -19,7 +19,6 @@ Usage: ``PYTHONPATH=. python benchmarks/modal.py [--sizes 60000,240000 --modes 4
 from __future__ import annotations
 
 import argparse
-import gc
 import json
 import os
 import statistics
@@ -86,12 +85,10 @@ def worker(deck: Path, out: Path, nmodes: int) -> None:
     from structures.modes import write_modes
     from structures.sparse_factor import choose_backend
 
-    import pyNastran.bdf.bdf  # noqa: F401  (read_model's parser, imported here to be frozen)
+    import pyNastran.bdf.bdf  # noqa: F401  (read_model's parser, imported before settling)
+    from structures.common.process import settle_process
 
-    # As the ``pipeline`` CLI: the imported modules' objects (~500k) leave the collector's scans,
-    # which then cost less while pyNastran builds its cards and at interpreter exit (measured
-    # 0.33 -> 0.04 s exit, read 0.54 -> 0.46 s, 61,206 DOF).
-    gc.freeze()
+    settle_process()                   # as the ``pipeline`` command does
     times["imports"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     model = read_model(deck)
@@ -107,7 +104,7 @@ def worker(deck: Path, out: Path, nmodes: int) -> None:
     times["write"] = time.perf_counter() - t0
     print(json.dumps({"times": times, "frequencies": [float(f) for f in ds["frequency"].values],
                       "a_set_dof": int(system.K.shape[0]), "backend": choose_backend()}))
-    gc.freeze()
+    settle_process()
 
 
 def main() -> None:

@@ -8,13 +8,13 @@ the stage that was running). Anything else is a bug and shows its traceback.
 from __future__ import annotations
 
 import argparse
-import gc
 import importlib
 import sys
 import warnings
 
 from pipeline.stage import Interrupted, running
 from structures.common.errors import PipelineError
+from structures.common.process import settle_process
 
 #: Subcommand modules, in the order ``pipeline --help`` lists them.
 COMMANDS = ("pipeline.cmd_run", "pipeline.cmd_select", "pipeline.cmd_modes",
@@ -52,12 +52,8 @@ def _show_warning(message, category, filename, lineno, file=None, line=None) -> 
 def main(argv=None) -> int:
     parser = build_parser()
     program = argv is None
-    if program:
-        # As a program (not called in-process with ``argv``): the imported modules' objects
-        # (~500k with xarray, scipy and pyNastran) leave the cyclic collector's scans, cheaper
-        # while decks are parsed, and the interpreter's exit takes 0.04 s instead of 0.33 s
-        # (measured, benchmarks/modal.py).
-        gc.freeze()
+    if program:                      # not when called in-process with ``argv`` (tests)
+        settle_process()
     args = parser.parse_args(argv)
     if args.command is None:
         args = parser.parse_args(["run", *(argv or [])])
@@ -75,7 +71,7 @@ def main(argv=None) -> int:
     finally:
         warnings.showwarning = shown
         if program:
-            gc.freeze()
+            settle_process()
 
 
 if __name__ == "__main__":
