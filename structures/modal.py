@@ -368,6 +368,24 @@ def exact_rigid_modes(m, lam: np.ndarray, phi: np.ndarray,
             np.concatenate([phi_r[:, :nr], elastic], axis=1))
 
 
+def _check_rigid_count(model, lam: np.ndarray, nr: int) -> None:
+    """The nr lowest eigenvalues that :func:`exact_rigid_modes` replaces must be rigid-body ones:
+    zero next to the first elastic eigenvalue (measured 1e-11 of it on the X-56A-class model); an
+    eigen-solution that missed a rigid mode would otherwise lose its first elastic mode."""
+    if nr == 0 or nr >= lam.size:
+        return
+    first = max(abs(float(lam[nr])), np.finfo(float).tiny)
+    ratio = float(np.abs(lam[:nr]).max()) / first
+    if ratio > 1e-6:
+        zero = int(np.sum(np.abs(lam[:nr]) <= 1e-6 * first))
+        raise SolverError(card_message(
+            f"the model has {nr} rigid-body motions, but only {zero} of the lowest eigenvalues "
+            f"are zero (largest of them {ratio:.3g} x the first elastic one).",
+            filename=model.filename,
+            fix="check the constraints and SUPORT: a rigid motion the model should not have, or "
+                "an eigen-solution that missed one (raise the number of modes)."))
+
+
 def _check_mechanisms(model, system, lam, phi, scale):
     zero = np.abs(lam) <= 1e-12 * scale
     if not np.any(zero):
@@ -421,6 +439,7 @@ def compute_modes(model: FEModel, nmodes: int | None = None, *, mass: str = "dec
     scale = float(np.median(ratio)) if ratio.size else 1.0
     _check_mechanisms(model, system, lam, phi, scale)
     phi_r, motions = rigid_body_modes(model, system)
+    _check_rigid_count(model, lam, phi_r.shape[1])
     lam, phi = exact_rigid_modes(system.M, lam, phi, phi_r)
     freq = np.sqrt(np.clip(lam, 0.0, None)) / (2.0 * np.pi)
     shapes = (system.rotation @ (system.T @ phi)).T

@@ -177,3 +177,17 @@ def test_modes_file_keeps_the_contract_and_the_rigid_names(tmp_path):
     assert {"source", "deck", "units"} <= set(back.attrs)
     assert list(back["rigid_motion"].values[:3]) == ["plunge", "pitch", ""]
     assert back.attrs["rigid_modes"] == 2 and back.attrs["rigid_residual"] <= RIGID_TOL
+
+
+def test_rigid_count_check_refuses_to_replace_an_elastic_mode():
+    """exact_rigid_modes replaces the lowest eigenpairs: with 2 rigid motions and only one zero
+    eigenvalue below the elastic ones, the solve stops with an error naming the counts."""
+    from types import SimpleNamespace
+
+    from structures.common.errors import SolverError
+    from structures.modal import _check_rigid_count
+
+    model = SimpleNamespace(filename="free.bdf")
+    _check_rigid_count(model, np.array([1e-12, -3e-13, 40.0, 90.0]), 2)        # both zero: fine
+    with pytest.raises(SolverError, match="2 rigid-body motions, but only 1"):
+        _check_rigid_count(model, np.array([1e-12, 38.0, 40.0, 90.0]), 2)
