@@ -44,6 +44,9 @@ Example (``data/bah_wing/case.toml``)::
                              # design-change prior and takes the rest of its objective from the
                              # selection, pipeline.loop)
 
+    [diagnose]               # optional: pipeline diagnose's settings (schema in
+                             # pipeline.diagnose.inputs; every configuration needs a gvt)
+
 :func:`read_case` checks the whole file before anything is computed: unknown keys raise with the
 list of valid ones, every value has the type its key needs (an integer is never a bool or a float,
 a list of FLUTTER ids is never a bare number or a string), and every deck, GVT file and restart
@@ -79,6 +82,9 @@ _KINDS = {
     "int list": (lambda v: isinstance(v, list) and all(
         isinstance(i, int) and not isinstance(i, bool) for i in v), "a list of integers", "[502]"),
     "list": (lambda v: isinstance(v, list), "a list", "[...]"),
+    "str list": (lambda v: isinstance(v, list) and all(isinstance(i, str) for i in v),
+                 "a list of strings", '["lumped_mass"]'),
+    "bool": (lambda v: isinstance(v, bool), "a boolean", "true"),
     "float list": (lambda v: isinstance(v, list) and len(v) > 0 and all(
         _KINDS["float"][0](i) for i in v), "a non-empty list of finite numbers", "[0.2, 0.6]"),
     "table": (lambda v: isinstance(v, dict), "a table", "{ ... }"),
@@ -100,7 +106,7 @@ _TOML_TYPES = {str: "a string", bool: "a boolean", int: "an integer", float: "a 
 
 #: The keys of every table and the type of each.
 CASE_KEYS = {"name": "str", "units": "str", "configurations": "table list", "flutter": "table",
-             "selection": "table", "loop": "table", "tuning": "table"}
+             "selection": "table", "loop": "table", "tuning": "table", "diagnose": "table"}
 CONFIGURATION_KEYS = {"name": "str", "deck": "str", "nmodes": "int", "mass": "str", "gvt": "str",
                       "measured_mass": "table or str"}
 FLUTTER_KEYS = {"kernel": "str", "flutter_ids": "int list", "structural_damping": "float",
@@ -373,6 +379,7 @@ class Case:
     path: Path | None = None
     selection: SelectionSettings = SelectionSettings()
     loop: LoopSettings | None = None
+    diagnose: object = None   # pipeline.diagnose.inputs.DiagnoseCaseSettings ([diagnose])
 
     def __post_init__(self):
         if self.units not in UNIT_SYSTEMS:
@@ -530,6 +537,10 @@ def read_case(path) -> Case:
             sections[key] = _built(cls, where, **_checked(data[key], schema, where))
     name = data.get("name", path.stem)
     tuning = None if "tuning" not in data else _tuning(data["tuning"], path, name, tuple(configs))
+    if "diagnose" in data:   # the table's schema and checks: pipeline.diagnose.inputs
+        from pipeline.diagnose.inputs import diagnose_case_settings
+        sections["diagnose"] = diagnose_case_settings(data["diagnose"], path, tuple(configs),
+                                                      flutter is not None)
     return _built(Case, f"file {path}", name=name, configurations=tuple(configs),
                   units=data.get("units", "si"), flutter=flutter, tuning=tuning,
                   path=path.resolve(), **sections)

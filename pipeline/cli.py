@@ -19,7 +19,7 @@ from structures.common.process import settle_process
 #: Subcommand modules, in the order ``pipeline --help`` lists them.
 COMMANDS = ("pipeline.cmd_run", "pipeline.cmd_select", "pipeline.cmd_modes",
             "pipeline.cmd_correlate", "pipeline.cmd_flutter", "pipeline.cmd_tune",
-            "pipeline.cmd_check")
+            "pipeline.cmd_check", "pipeline.cmd_diagnose")
 
 
 def positive_int(text: str) -> int:

@@ -10,7 +10,8 @@ envelope with the 15 % margin; V-g / V-f of every stage overlaid (Figs. 11, 12, 
 design-variable changes (Table 24); then per stage and configuration the test-analysis frequency
 table with MAC, the orthogonality / cross-orthogonality off-diagonals and the acceptance checks,
 the correlation maps, the mass properties and the flutter crossings, and per stage the participation
-and selection table (Table 6). Every figure is embedded as a PNG data URI, so the page renders offline
+and selection table (Table 6). A diagnosis in the run folder adds its section
+(pipeline.report_diagnose) before the stages. Every figure is embedded as a PNG data URI, so the page renders offline
 with nothing beside it; every number carries its unit (structures.units); a missing optional piece
 (no GVT, no tuning stage, no envelope, no flutter) is left out with one line saying why.
 
@@ -26,6 +27,7 @@ from pathlib import Path
 import numpy as np
 
 from flutter.summary import BFF_SHARE, classify
+from pipeline.report_diagnose import diagnose_section
 from pipeline.report_figures import (boundary_figure, figure_data_uri, png_data_uri, vg_overlay)
 from pipeline.report_tables import (correlation_section, design_change_section, fmt,
                                     mass_section, modes_section, note, selection_roles,
@@ -344,7 +346,7 @@ def write_report(case, run_dir, *, out=None) -> Path:
             (_boundary_section(case, stages, labels) + _overlay_section(case, stages, labels)
              if case.flutter is not None else
              note("No [flutter] section in the case: no flutter boundary and no V-g / V-f.")) +
-            design_change_section(stages[1:]) +
+            design_change_section(stages[1:]) + diagnose_section(run_dir, labels) +
             "".join(_stage_section(k, folder, case, labels) for k, folder in enumerate(stages)))
     page = (f'<!DOCTYPE html><html lang="en"><head><meta charset="utf-8"><title>'
             f"{html.escape(case.name)}: pipeline run report</title><style>{_STYLE}</style></head>"

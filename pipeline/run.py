@@ -18,8 +18,8 @@ from pathlib import Path
 from pipeline.graph import Graph, source_version
 from pipeline.progress import Display
 from pipeline.stage import running
-from pipeline.stages import (case_aero_groups, final_stages, possible_stage_names, read_targets,
-                             stage_plan)
+from pipeline.stages import (case_aero_groups, diagnose_plan, final_stages, possible_stage_names,
+                             read_targets, stage_plan)
 from structures.common.files import check_output
 
 EXAMPLE_CASE = Path(__file__).resolve().parents[1] / "data" / "x56_like" / "case.toml"
@@ -27,15 +27,20 @@ EXAMPLE_CASE = Path(__file__).resolve().parents[1] / "data" / "x56_like" / "case
 PACKAGES = ("structures", "aero", "flutter", "pipeline")
 
 
-def _walk(case, graph: Graph, display: Display, execute: bool, baseline_only: bool = False) -> int:
+def _walk(case, graph: Graph, display: Display, execute: bool, baseline_only: bool = False,
+          diagnose_only: bool = False) -> int:
     """Register (and with ``execute`` bring up to date) the stages of the run in order; returns
     the last loop stage. Without ``execute`` a stage n + 1 is listed only when stage n's targets
-    are known (its selection done) to be missed. ``baseline_only``: stage 0 and nothing else."""
+    are known (its selection done) to be missed. ``baseline_only``: stage 0 and nothing else;
+    ``diagnose_only``: the stages of pipeline.stages.diagnose_plan and nothing else."""
+    baseline_only = baseline_only or diagnose_only
     last = case.loop.stages if case.loop is not None and not baseline_only else 0
     names, n = [], 0
     aero = case_aero_groups(case)
     while True:
-        for stage in stage_plan(case, n, display, aero):
+        plan = diagnose_plan(case, display, aero) if diagnose_only else stage_plan(case, n,
+                                                                                  display, aero)
+        for stage in plan:
             graph.add(stage)
             names.append(stage.name)
             if execute:
@@ -60,7 +65,7 @@ def _walk(case, graph: Graph, display: Display, execute: bool, baseline_only: bo
 
 
 def run_case(case, out_dir, log=None, from_stage: str | None = None,
-             baseline_only: bool = False) -> Path:
+             baseline_only: bool = False, diagnose_only: bool = False) -> Path:
     """Bring every stage of ``case`` up to date in ``out_dir``; returns the report's path.
 
     Parameters
@@ -74,6 +79,9 @@ def run_case(case, out_dir, log=None, from_stage: str | None = None,
         Rerun this stage (a name, a prefix such as ``stage1`` or a glob) and everything after it.
     baseline_only : bool
         Bring stage 0 up to date and stop (``pipeline select``); returns the run folder.
+    diagnose_only : bool
+        Bring the ``diagnose`` stage and the stage-0 stages it reads up to date and stop
+        (``pipeline diagnose``); returns the run folder.
     """
     from pipeline.chain import check_flutter_requests
 
@@ -89,7 +97,8 @@ def run_case(case, out_dir, log=None, from_stage: str | None = None,
         graph.force(from_stage, valid=possible_stage_names(case))
     graph.clean_staging()
     try:
-        _walk(case, graph, display, execute=True, baseline_only=baseline_only)
+        _walk(case, graph, display, execute=True, baseline_only=baseline_only,
+              diagnose_only=diagnose_only)
     except BaseException:
         if not graph.manifest:   # nothing finished: leave no folder this run created
             for folder in created:
@@ -98,7 +107,7 @@ def run_case(case, out_dir, log=None, from_stage: str | None = None,
                 elif folder.is_dir() and not any(folder.iterdir()):
                     folder.rmdir()
         raise
-    if baseline_only:
+    if baseline_only or diagnose_only:
         return out
     report = out / "report.html"
     display.log(f"report: {report}")

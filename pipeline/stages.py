@@ -19,6 +19,10 @@ stage                       reads                                    writes
 ``stageN/selection``        participation, correlation, [selection]  ``stageN/selection.nc``,
                             [loop]                                   ``selection.txt``,
                                                                      ``targets.json`` (with [loop])
+``diagnose`` ([diagnose])   decks, GVT files, measured mass,         ``diagnose/diagnose.json``,
+                            [diagnose]; stage 0's flutter and grid   ``diagnose.nc``, ``*.png``,
+                            GAFs (flutter on); after stage 0 with    ``C_diagnosed.bdf``,
+                            before_tuning, else before the report    ``C/flutter/*``
 ``flutter_change``          every stage's participation              ``flutter_change.nc``
 ``report``                  the whole run folder                     ``report.html``
 ==========================  =======================================  ==============================
@@ -198,6 +202,14 @@ def _flutter_change(ctx: StageContext, case, last: int) -> None:
     write_dataset(flutter_change(stages), ctx.output("flutter_change.nc"))
 
 
+def _diagnose(ctx: StageContext, case, aero: dict, progress=None) -> None:
+    from pipeline.diagnose.outputs import write_diagnosis
+
+    result = write_diagnosis(case, ctx.folder, ctx.run_dir, aero=aero, progress=progress)
+    named = "; ".join(f"{e[0].kind} at {e[0].label}" for e in result.effects)
+    return f"verdict {result.verdict}" + (f": {named}" if named else "")
+
+
 def _report(ctx: StageContext, case) -> None:
     from pipeline.report import write_report
 
@@ -223,6 +235,31 @@ def _tuning_settings(case) -> dict:
             "standard": case.loop.standard,
             "configurations": [[c.name, c.nmodes, c.mass, sorted(c.measured_mass.items())]
                                for c in case.configurations]}
+
+
+def diagnose_stage(case, aero: dict, display=None) -> Stage:
+    """The ``diagnose`` stage (pipeline.diagnose.outputs): reads every configuration's deck, GVT
+    file and measured mass, ``[diagnose]``, and with its flutter on ``[flutter]`` and stage 0's
+    flutter and grid GAFs; writes ``diagnose/*``."""
+    from pipeline.diagnose.inputs import case_diagnose_settings
+
+    options = case_diagnose_settings(case)
+    flutter = options.flutter and case.flutter is not None
+    after = tuple(f"stage0/flutter/{c.name}" for c in case.configurations) if flutter else ()
+    after += tuple(sorted({f"stage0/aero/{aero[c.name][0]}" for c in case.configurations})
+                   if flutter else ())
+    settings = {"diagnose": options.record(),
+                "measured_mass": [[c.name, sorted(c.measured_mass.items())]
+                                  for c in case.configurations],
+                "flutter": _flutter_settings(case) if flutter else None}
+    files = tuple(f for c in case.configurations for f in (*deck_files(c.deck), c.gvt))
+    return Stage("diagnose", partial(_diagnose, case=case, aero=aero,
+                                     progress=None if display is None else display.note),
+                 settings=settings, files=files, after=after)
+
+
+def _before_tuning(case) -> bool:
+    return case.diagnose is not None and case.diagnose.before_tuning
 
 
 # ------------------------------------------------------------------------------------ the plan
@@ -282,12 +319,23 @@ def stage_plan(case, n: int, display=None, aero: dict | None = None) -> list[Sta
                     "loop": None if case.loop is None else [case.loop.stages, case.loop.standard]}
         out.append(Stage(f"stage{n}/selection", partial(_selection, case=case, n=n),
                          settings=settings, after=after))
+    out += [diagnose_stage(case, aero, display)] if n == 0 and _before_tuning(case) else []
     return out
+
+
+def diagnose_plan(case, display=None, aero: dict | None = None) -> list[Stage]:
+    """The stages ``pipeline diagnose`` runs: stage 0's grid GAFs, modes and flutter when the
+    diagnosis computes flutter speeds, then ``diagnose``."""
+    aero = case_aero_groups(case) if aero is None else aero
+    stage = diagnose_stage(case, aero, display)
+    needed = {a for s in stage.after for a in (s, f"stage0/modes/{s.rsplit('/', 1)[-1]}")}
+    return [s for s in stage_plan(case, 0, display, aero) if s.name in needed] + [stage]
 
 
 def final_stages(case, last: int, upstream: list[str]) -> list[Stage]:
     """The flutter-change table over stages 0..``last`` and the report (after ``upstream``)."""
-    out = []
+    out = [] if case.diagnose is None or _before_tuning(case) else [
+        diagnose_stage(case, case_aero_groups(case))]
     if case.flutter is not None:
         after = tuple(f"stage{k}/flutter/{c.name}" for k in range(last + 1)
                       for c in case.configurations)

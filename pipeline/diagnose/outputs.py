@@ -1,0 +1,161 @@
+"""The diagnose stage's outputs in a run folder, and the verdict as text.
+
+:func:`write_diagnosis` runs :func:`pipeline.diagnose.diagnose` on a case's configurations and
+writes, below ``folder`` (the stage's staging folder, run-folder layout):
+
+- ``diagnose/diagnose.json``: the verdict record (:meth:`DiagnoseResult.to_json`);
+- ``diagnose/diagnose.nc``: :meth:`DiagnoseResult.to_dataset`;
+- ``diagnose/<config>_diagnosed.bdf``: each configuration's deck with the named effects
+  (:func:`pipeline.diagnose.effects.write_effect_deck`), when an effect was named;
+- ``diagnose/candidates.png`` and ``diagnose/gap.png`` (:mod:`pipeline.diagnose.plots`);
+- with the case's ``[flutter]`` and ``[diagnose] flutter`` on: ``diagnose/<config>/flutter/*``,
+  the flutter solution of the diagnosed deck through the one chain (pipeline.chain.case_flutter on
+  the baseline's grid GAFs). ``gap_before["flutter_speed"]`` is the lowest flutter crossing of the
+  baseline (stage 0's ``summary.json`` of every configuration), ``gap_after["flutter_speed"]`` that
+  of the diagnosed decks (the baseline's when no effect was named), in the model's velocity unit.
+"""
+from __future__ import annotations
+
+import json
+from dataclasses import replace
+from pathlib import Path
+
+from flutter.results import is_flutter
+from structures.common.files import read_dataset, write_dataset, write_json
+
+#: The stage's folder in the run folder.
+FOLDER = "diagnose"
+
+
+def lowest_flutter_speed(summaries) -> float | None:
+    """The lowest velocity of the flutter crossings (not divergence) of ``summaries``.
+
+    Parameters
+    ----------
+    summaries : iterable of list of dict
+        Flutter ``summary.json`` entries (DESIGN.md section 6), one list per configuration.
+
+    Returns
+    -------
+    float or None
+        None when no summary has a flutter crossing.
+    """
+    speeds = [float(c["velocity"]) for entries in summaries for c in entries
+              if is_flutter(c["kind"])]
+    return min(speeds) if speeds else None
+
+
+def _named_effects(result) -> list:
+    """(Candidate, values) of every named effect, in the order named."""
+    return [(effect[0], effect[1]) for effect in result.effects]
+
+
+def _diagnosed_flutter(case, folder: Path, run_dir: Path, decks: dict, aero: dict,
+                       progress=None) -> float | None:
+    """Lowest flutter speed of the diagnosed decks (their flutter written below ``folder``)."""
+    from pipeline.chain import case_flutter, configuration_modes
+
+    summaries = []
+    for config in case.configurations:
+        diagnosed = replace(config, deck=decks[config.name])
+        modes, _ = configuration_modes(diagnosed)
+        grid = read_dataset(run_dir / f"stage0/aero/{aero[config.name][0]}/grid_gaf.nc")
+        out = folder / FOLDER / config.name / "flutter"
+        out.mkdir(parents=True, exist_ok=True)
+        summaries.append(case_flutter(case, diagnosed, modes, out_dir=out, progress=progress,
+                                      grid_gaf=grid)["summary"])
+    return lowest_flutter_speed(summaries)
+
+
+def write_diagnosis(case, folder, run_dir, aero: dict | None = None, progress=None):
+    """Diagnose the case's configurations and write the outputs (module docstring).
+
+    Parameters
+    ----------
+    case : pipeline.case.Case
+    folder : path
+        Where the outputs go (``folder / "diagnose" / ...``): the stage's staging folder.
+    run_dir : path
+        The run folder (stage 0's flutter summaries and grid GAFs, when flutter is on).
+    aero : dict, optional
+        :func:`pipeline.chain.aero_groups` of the case (needed when flutter is on).
+    progress : callable(str), optional
+        Receives progress notes of the flutter solutions.
+
+    Returns
+    -------
+    pipeline.diagnose.DiagnoseResult
+        With ``flutter_speed`` filled in ``gap_before`` / ``gap_after`` when flutter is on.
+    """
+    from pipeline.diagnose import diagnose
+    from pipeline.diagnose.effects import write_effect_deck
+    from pipeline.diagnose.inputs import (case_diagnose_settings, configurations_from_case,
+                                          settings_from_case)
+    from pipeline.diagnose.plots import plot_candidates, plot_gap
+
+    folder, run_dir = Path(folder), Path(run_dir)
+    options = case_diagnose_settings(case)
+    configurations = configurations_from_case(case)
+    result = diagnose(configurations, settings_from_case(case))
+    effects = _named_effects(result)
+    decks = {}
+    if effects:
+        for data in configurations:
+            decks[data.name] = write_effect_deck(
+                data.deck, folder / FOLDER / f"{data.name}_diagnosed.bdf", data.model, effects)
+    if options.flutter and case.flutter is not None:
+        before = lowest_flutter_speed(
+            json.loads((run_dir / f"stage0/{c.name}/flutter/summary.json").read_text())
+            for c in case.configurations)
+        after = (_diagnosed_flutter(case, folder, run_dir, decks, aero, progress)
+                 if effects else before)
+        result = replace(result, gap_before={**result.gap_before, "flutter_speed": before},
+                         gap_after={**result.gap_after, "flutter_speed": after})
+    record = result.to_json()
+    write_json(record, folder / FOLDER / "diagnose.json")
+    write_dataset(result.to_dataset(), folder / FOLDER / "diagnose.nc")
+    plot_candidates(record).savefig(folder / FOLDER / "candidates.png", dpi=90,
+                                    metadata={"Software": None})
+    plot_gap(record).savefig(folder / FOLDER / "gap.png", dpi=90, metadata={"Software": None})
+    return result
+
+
+def _number(value, fmt: str = ".3g") -> str:
+    return "-" if value is None else format(float(value), fmt)
+
+
+def _location(location: dict) -> str:
+    return ", ".join(f"{k} {list(v)}" for k, v in (location or {}).items() if v) or "-"
+
+
+def _parameters(parameters: dict) -> str:
+    return ", ".join(f"{k} = {_number(v, '.4g')}" for k, v in (parameters or {}).items())
+
+
+def verdict_summary(record: dict, top: int = 5) -> str:
+    """A few lines of a diagnosis' JSON record: the verdict, each named effect with its location
+    and parameters, the ``top`` candidates and the gap before -> after."""
+    lines = [f"verdict: {record['verdict']}"]
+    for i, effect in enumerate(record.get("effects") or [], 1):
+        lines.append(f"  effect {i}: {effect['kind']} at {_location(effect.get('location'))}: "
+                     f"{_parameters(effect.get('parameters'))}")
+    candidates = list(record.get("candidates") or [])[:top]
+    if candidates:
+        lines.append(f"candidates (best {len(candidates)} of {len(record['candidates'])}, score: "
+                     "BIC difference to the best):")
+        lines += [f"  {i}. {c['kind']:<18} {_number(c.get('score'), '9.2f')}  "
+                  f"{c.get('label') or _location(c.get('location'))}"
+                  for i, c in enumerate(candidates, 1)]
+    before, after = record.get("gap_before") or {}, record.get("gap_after") or {}
+    lines.append("gap before -> after:")
+    for key in sorted(set(before) | set(after)):
+        if isinstance(before.get(key), dict) or isinstance(after.get(key), dict):
+            for q in sorted(set(before.get(key) or {}) | set(after.get(key) or {})):
+                lines.append(f"  {key} {q}: {_number((before.get(key) or {}).get(q))} -> "
+                             f"{_number((after.get(key) or {}).get(q))}")
+        else:
+            lines.append(f"  {key}: {_number(before.get(key))} -> {_number(after.get(key))}")
+    lines += [f"note: {n}" for n in record.get("notes") or []]
+    if record.get("separating_measurement"):
+        lines.append(f"separating measurement: {record['separating_measurement']}")
+    return "\n".join(lines)

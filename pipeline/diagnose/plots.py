@@ -1,0 +1,116 @@
+"""Figures of a diagnosis (plotting only): the candidate ranking and the gap before / after.
+
+Both read the JSON record of a diagnosis (:meth:`pipeline.diagnose.DiagnoseResult.to_json`, the
+``diagnose/diagnose.json`` of a run folder), so the report draws them from the run folder alone.
+Figures are built on :class:`matplotlib.figure.Figure` without pyplot (no global figure state).
+"""
+from __future__ import annotations
+
+import numpy as np
+from matplotlib.figure import Figure
+from matplotlib.patches import Patch
+
+#: Bar colour of each effect kind (pipeline.diagnose.effects.KINDS, and "none").
+KIND_COLOURS = {"lumped_mass": "tab:blue", "joint_flexibility": "tab:red",
+                "member_taper": "tab:green", "member_curvature": "tab:purple",
+                "boundary_stiffness": "tab:orange", "none": "0.5"}
+#: The gap metrics drawn, per panel: (title, unit, [(key, label)]).
+GAP_PANELS = (("frequency error", "RMS %", (("frequency_rms_held_out", "held-out modes"),
+                                            ("frequency_rms", "all paired modes"))),
+              ("mode shapes", "-", (("max_cross_orthogonality_offdiag", "largest |S_ij|, i != j"),
+                                    ("mac_min", "smallest paired MAC"))))
+
+
+def candidate_label(entry: dict) -> str:
+    """A candidate's text: its ``label`` when given, else its kind and location."""
+    if entry.get("label"):
+        return str(entry["label"])
+    where = ", ".join(f"{k} {v}" for k, v in (entry.get("location") or {}).items() if v)
+    return f"{entry['kind']} ({where})" if where else str(entry["kind"])
+
+
+def plot_candidates(record: dict, top: int = 12, *, ax=None) -> Figure:
+    """The ranked candidates of the first round as horizontal bars of their score.
+
+    Parameters
+    ----------
+    record : dict
+        A diagnosis' JSON record; its ``candidates`` (ranked, best first, each with ``kind``,
+        ``location``, ``score`` and optional ``label``) are drawn.
+    top : int
+        Candidates shown (the best ``top``).
+    ax : matplotlib Axes, optional
+        Draw into it instead of a new figure.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Bars coloured by kind (:data:`KIND_COLOURS`), best at the top.
+    """
+    entries = list(record.get("candidates") or [])[:top]
+    fig = ax.figure if ax is not None else Figure(figsize=(8.0, 1.0 + 0.35 * max(len(entries), 2)))
+    ax = ax if ax is not None else fig.add_subplot()
+    if not entries:
+        ax.text(0.5, 0.5, "no candidate screened", ha="center", va="center",
+                transform=ax.transAxes)
+        ax.set_axis_off()
+        return fig
+    y = np.arange(len(entries))[::-1]
+    scores = np.array([np.nan if e.get("score") is None else float(e["score"]) for e in entries])
+    colours = [KIND_COLOURS.get(e["kind"], "k") for e in entries]
+    ax.barh(y, scores, color=colours)
+    ax.set_yticks(y, [candidate_label(e) for e in entries], fontsize=8)
+    ax.set_xlabel("score (BIC difference to the best candidate; lower is better)")
+    ax.set_title(f"Candidate ranking (verdict: {record.get('verdict', '?')})")
+    kinds = list(dict.fromkeys(e["kind"] for e in entries))
+    ax.legend(handles=[Patch(color=KIND_COLOURS.get(k, "k"), label=k) for k in kinds],
+              fontsize=8, loc="lower right")
+    fig.tight_layout()
+    return fig
+
+
+def _value(gap: dict, key: str) -> float:
+    value = (gap or {}).get(key)
+    return np.nan if value is None or isinstance(value, dict) else float(value)
+
+
+def plot_gap(record: dict) -> Figure:
+    """The test-analysis gap before and after the named effects, as grouped bars per metric.
+
+    Parameters
+    ----------
+    record : dict
+        A diagnosis' JSON record: ``gap_before`` and ``gap_after`` with the frequency RMS errors
+        (%), the largest cross-orthogonality off-diagonal, the smallest MAC, the mass-property
+        errors ``mass`` (quantity -> %) and ``flutter_speed`` (model units, or null).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        One panel per group of :data:`GAP_PANELS`, one for the mass errors when stated and one for
+        the flutter speed when it was computed before and after.
+    """
+    before, after = record.get("gap_before") or {}, record.get("gap_after") or {}
+    panels = [(title, unit, [(label, _value(before, k), _value(after, k)) for k, label in keys])
+              for title, unit, keys in GAP_PANELS]
+    mass = sorted(set(before.get("mass") or {}) | set(after.get("mass") or {}))
+    if mass:
+        panels.append(("mass properties", "error %", [
+            (q, _value(before.get("mass"), q), _value(after.get("mass"), q)) for q in mass]))
+    speeds = (_value(before, "flutter_speed"), _value(after, "flutter_speed"))
+    if not np.isnan(speeds).all():
+        panels.append(("flutter", "speed (model units)", [("lowest flutter speed", *speeds)]))
+    fig = Figure(figsize=(3.2 * len(panels) + 1.0, 3.6))
+    axes = fig.subplots(1, len(panels), squeeze=False)[0]
+    width = 0.38
+    for ax, (title, unit, rows) in zip(axes, panels):
+        x = np.arange(len(rows))
+        ax.bar(x - width / 2, [r[1] for r in rows], width, color="0.6", label="before")
+        ax.bar(x + width / 2, [r[2] for r in rows], width, color="tab:green", label="after")
+        ax.set_xticks(x, [r[0] for r in rows], rotation=20, ha="right", fontsize=8)
+        ax.axhline(0.0, color="k", linewidth=0.6)
+        ax.set_title(title)
+        ax.set_ylabel(unit)
+    axes[0].legend(fontsize=8)
+    fig.tight_layout()
+    return fig

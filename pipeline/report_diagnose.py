@@ -1,0 +1,95 @@
+"""The report's diagnose section, from the run folder's ``diagnose/`` (no computation).
+
+:func:`diagnose_section` reads ``diagnose/diagnose.json`` (pipeline.diagnose.outputs) and shows the
+verdict, the named effects with their location and parameters, the ranked candidates, the gap
+before and after (frequency errors, MAC, cross-orthogonality, mass properties, flutter speed) with
+units, the notes, and the candidate-ranking and gap figures (``diagnose/*.png``) embedded. A run
+folder without ``diagnose/diagnose.json`` gives an empty section.
+"""
+from __future__ import annotations
+
+import html
+import json
+from pathlib import Path
+
+from pipeline.report_figures import png_data_uri
+from pipeline.report_tables import fmt, note, table
+from structures.units import UnitLabels
+
+#: Unit of each scalar gap metric (``flutter_speed``: the unit system's velocity).
+GAP_UNITS = {"frequency_rms_held_out": "%", "frequency_rms": "%",
+             "max_cross_orthogonality_offdiag": "-", "mac_min": "-"}
+#: Candidates listed in the table.
+TOP = 10
+
+
+def _value(value) -> str:
+    return fmt(float("nan") if value is None else value, ".4g")
+
+
+def _location(location: dict) -> str:
+    return "; ".join(f"{k}: {', '.join(str(i) for i in v)}"
+                     for k, v in (location or {}).items() if v) or "\u2013"
+
+
+def _gap_rows(before: dict, after: dict, labels: UnitLabels) -> list:
+    rows = []
+    for key in sorted(set(before) | set(after)):
+        b, a = before.get(key), after.get(key)
+        if isinstance(b, dict) or isinstance(a, dict):
+            rows += [(f"{key}: {q}", "%", _value((b or {}).get(q)), _value((a or {}).get(q)))
+                     for q in sorted(set(b or {}) | set(a or {}))]
+        else:
+            unit = labels.velocity if key == "flutter_speed" else GAP_UNITS.get(key, "")
+            rows.append((key, unit, _value(b), _value(a)))
+    return rows
+
+
+def diagnose_section(run_dir, labels: UnitLabels) -> str:
+    """The HTML section of a run folder's diagnosis ("" when it has none).
+
+    Parameters
+    ----------
+    run_dir : path
+        The run folder.
+    labels : structures.units.UnitLabels
+        The case's unit labels (the flutter speed's unit).
+
+    Returns
+    -------
+    str
+        ``<h2 id="diagnose">`` and its tables and figures.
+    """
+    folder = Path(run_dir) / "diagnose"
+    path = folder / "diagnose.json"
+    if not path.is_file():
+        return ""
+    record = json.loads(path.read_text())
+    out = ('<h2 id="diagnose">Diagnose: the missing effect</h2>'
+           f"<p>Verdict: <b>{html.escape(str(record['verdict']))}</b>.</p>")
+    effects = record.get("effects") or []
+    if effects:
+        out += table(("round", "kind", "location", "parameters"), [
+            (i, e["kind"], _location(e.get("location")),
+             ", ".join(f"{k} = {_value(v)}" for k, v in (e.get("parameters") or {}).items()))
+            for i, e in enumerate(effects, 1)], table_id="diagnose-effects")
+    else:
+        out += note("No effect was named, so the model is unchanged.")
+    candidates = list(record.get("candidates") or [])
+    out += (f"<h3>Candidates of the first round (best {min(TOP, len(candidates))} of "
+            f"{len(candidates)})</h3>")
+    out += table(("rank", "kind", "candidate", "location", "score [BIC difference to the best]"),
+                 [(i, c["kind"], c.get("label") or "", _location(c.get("location")),
+                   _value(c.get("score"))) for i, c in enumerate(candidates[:TOP], 1)],
+                 table_id="diagnose-candidates")
+    out += "<h3>Gap between test and analysis, before and after the named effects</h3>"
+    out += table(("metric", "unit", "before", "after"),
+                 _gap_rows(record.get("gap_before") or {}, record.get("gap_after") or {}, labels),
+                 table_id="diagnose-gap")
+    out += "".join(note(str(n)) for n in record.get("notes") or [])
+    if record.get("separating_measurement"):
+        out += note(f"Measurement that would separate the candidates: "
+                    f"{record['separating_measurement']}")
+    out += "".join(f'<img src="{png_data_uri(p.read_bytes())}" alt="diagnose {html.escape(p.stem)}"'
+                   f' width="640">' for p in sorted(folder.glob("*.png")))
+    return out
