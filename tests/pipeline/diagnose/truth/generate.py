@@ -1,0 +1,192 @@
+"""``make_case``: one blind-study case -- analysis decks, synthetic GVT and weighing of a hidden truth.
+
+The truth of a case is the analysis structure with nuisance scatter (``effects.scatter``: PBAR
+fields 3 %, CONM2 2 %, E 1 %, clipped at 2 sigma) and one hidden effect of the requested kind
+(``effects.draw`` / ``effects.apply``). The effect is re-drawn (up to ``ATTEMPTS`` times, from
+the same seeded stream) until it shifts the largest of the measured elastic frequencies of the
+first configuration by ``SHIFT_RANGE`` (a few %: visible above 1 % noise, not a different
+aircraft); the draw closest to the range is kept when none falls in it.
+
+The GVT follows ``data/x56_like/truth/make_truth.py``: the truth's elastic modes 7 .. 6 + N_TEST
+(our solver) at the 120 sensors (analysis grid ids and positions), each shape's sign fixed
+(largest entry positive), then frequencies x (1 + 1 % N(0, 1)), shapes + N(0, (5 % of the mode's
+RMS)^2) per DOF, damping zeta uniform 1-2 %; UFF 15 + 55. The weighing is the truth's exact
+weight, CG and inertia about the CG (``make_truth.measured_mass``).
+
+Random streams, all ``numpy.random.default_rng((seed, structure, kind, stream))``: 0 scatter,
+1 effect, 2 + i the noise of configuration i.
+"""
+from __future__ import annotations
+
+import json
+import tempfile
+from pathlib import Path
+
+import numpy as np
+import xarray as xr
+
+from structures.bdf import read_model
+from structures.common.errors import InputError
+from structures.common.files import write_json, write_text
+from structures.common.nastran import read_pynastran
+from structures.gvt import make_gvt_dataset, write_uff
+from structures.massprops import mass_properties
+from structures.modal import compute_modes
+
+from . import effects, frame, x56
+
+#: The library's kinds (the contract's ``KINDS``, spelled out: the generator never imports the
+#: workflow).
+KINDS = ("lumped_mass", "joint_flexibility", "member_taper", "member_curvature",
+         "boundary_stiffness")
+TRUTH_KINDS = KINDS + ("none", "outside")
+STRUCTURES = ("x56", "frame")
+N_RIGID = 6
+SHIFT_RANGE = (0.03, 0.15)
+ATTEMPTS = 12
+FREQUENCY_NOISE, SHAPE_NOISE, DAMPING = 0.01, 0.05, (0.01, 0.02)
+#: The sixth (suspension) mode must stay below this fraction of the first elastic one.
+SUSPENSION_RATIO = 0.8
+
+
+def _structure(structure: str, folder: Path, work: Path):
+    """(units, n_test, sensors, {configuration: analysis deck}, {configuration: start deck})."""
+    if structure == "frame":
+        deck = frame.write_frame(folder)
+        return frame.UNITS, frame.N_TEST, frame.sensors(), {"frame": deck}, {"frame": deck}
+    decks = x56.write_analysis(folder)
+    starts = {c: x56.write_structure(work, c) for c in x56.CONFIGURATIONS}
+    return x56.UNITS, x56.N_TEST, x56.sensors(), decks, starts
+
+
+def _truth_modes(start: Path, work: Path, effect, rng_seed, n_test: int):
+    """Scatter + effect on the start deck: (modes, mass properties)."""
+    bdf = read_pynastran(start)
+    effects.scatter(bdf, np.random.default_rng(rng_seed))
+    if effect is not None:
+        effects.apply(bdf, effect)
+    path = work / f"truth_{start.stem}.bdf"
+    bdf.write_bdf(str(path), enddata=True)
+    model = read_model(path)
+    return compute_modes(model, N_RIGID + n_test + 8), mass_properties(model)
+
+
+def _shift(base: np.ndarray, modes: xr.Dataset, n_test: int) -> float:
+    """Largest |f / f_base - 1| over the measured elastic modes (sorted frequencies)."""
+    f = modes["frequency"].values[N_RIGID:N_RIGID + n_test]
+    return float(np.max(np.abs(f / base - 1.0)))
+
+
+def _suspended(modes: xr.Dataset) -> bool:
+    f = modes["frequency"].values
+    return bool(f[N_RIGID - 1] < SUSPENSION_RATIO * f[N_RIGID])
+
+
+def _gvt(modes: xr.Dataset, sensors, analysis_xyz: dict, n_test: int, rng, units: str,
+         title: str) -> xr.Dataset:
+    """Noisy GVT of the truth's elastic modes at the sensors (module docstring)."""
+    key = {(int(g), int(c)): j for j, (g, c) in
+           enumerate(zip(modes["grid"].values, modes["component"].values))}
+    elastic = modes.isel(mode=slice(N_RIGID, N_RIGID + n_test))
+    shape = elastic["shape"].values[:, [key[s] for s in sensors]]
+    peak = np.take_along_axis(shape, np.abs(shape).argmax(axis=1)[:, None], axis=1)
+    shape = shape * np.sign(peak)
+    f = elastic["frequency"].values * (1.0 + FREQUENCY_NOISE * rng.standard_normal(n_test))
+    rms = np.sqrt(np.mean(shape ** 2, axis=1, keepdims=True))
+    shape = shape + SHAPE_NOISE * rms * rng.standard_normal(shape.shape)
+    zeta = rng.uniform(*DAMPING, n_test)
+    return make_gvt_dataset(f, shape, [g for g, _ in sensors], [c for _, c in sensors],
+                            mode=np.arange(N_RIGID + 1, N_RIGID + 1 + n_test), damping=zeta,
+                            xyz=[analysis_xyz[g] for g, _ in sensors], source=title, units=units)
+
+
+def _jsonable(value):
+    if isinstance(value, dict):
+        return {str(k): _jsonable(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple, np.ndarray)):
+        return [_jsonable(v) for v in value]
+    if isinstance(value, (np.integer,)):
+        return int(value)
+    if isinstance(value, (np.floating,)):
+        return float(value)
+    return value
+
+
+def _case_toml(name: str, units: str, configurations) -> str:
+    lines = [f"# blind-study case (tests/pipeline/diagnose/truth): the truth is in truth.json",
+             f'name = "{name}"', f'units = "{units}"']
+    for c, deck in configurations:
+        lines += ["", "[[configurations]]", f'name = "{c}"', f'deck = "{deck.name}"',
+                  f'gvt = "gvt_{c}.unv"', f'measured_mass = "mass_{c}.json"']
+    return "\n".join(lines) + "\n"
+
+
+def make_case(structure: str, kind: str, seed: int, out) -> Path:
+    """Write a blind-study case into ``out``; returns the path of its ``case.toml``.
+
+    Parameters
+    ----------
+    structure : one of ``STRUCTURES`` ("frame": one configuration; "x56": EFEW and FFFW)
+    kind : one of ``TRUTH_KINDS``
+    seed : int, every random draw (deterministic)
+    out : folder (created)
+
+    Returns
+    -------
+    Path
+        ``out / "case.toml"``; beside it the analysis decks, ``gvt_<configuration>.unv``,
+        ``mass_<configuration>.json`` and ``truth.json`` (``kind``, ``grids``, ``elements``,
+        ``properties``, ``size`` in the analysis deck's ids, ``neighbours``, ``structure``,
+        ``seed``, ``parameters``, ``max_frequency_shift``).
+    """
+    if structure not in STRUCTURES:
+        raise InputError(f"structure {structure!r}; valid: {', '.join(STRUCTURES)}.")
+    if kind not in TRUTH_KINDS:
+        raise InputError(f"kind {kind!r}; valid: {', '.join(TRUTH_KINDS)}.")
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    streams = (int(seed), STRUCTURES.index(structure), TRUTH_KINDS.index(kind))
+    with tempfile.TemporaryDirectory() as tmp:
+        work = Path(tmp)
+        units, n_test, sensors, decks, starts = _structure(structure, out, work)
+        first = next(iter(starts))
+        analysis = read_pynastran(starts[first])
+        topo = effects.topology(analysis)
+        base, _ = _truth_modes(starts[first], work, None, (*streams, 0), n_test)
+        f_base = base["frequency"].values[N_RIGID:N_RIGID + n_test]
+        rng = np.random.default_rng((*streams, 1))
+        chosen, shift, truth = effects.Effect("none"), 0.0, {first: None}
+        if kind != "none":
+            best = None
+            for _ in range(ATTEMPTS):
+                effect = effects.draw(kind, analysis, topo, rng, float(f_base[0]))
+                modes = _truth_modes(starts[first], work, effect, (*streams, 0), n_test)
+                s = _shift(f_base, modes[0], n_test) if _suspended(modes[0]) else np.inf
+                miss = max(SHIFT_RANGE[0] - s, s - SHIFT_RANGE[1], 0.0)
+                if best is None or miss < best[0]:
+                    best = (miss, effect, s, modes)
+                if miss == 0.0:
+                    break
+            _, chosen, shift, truth[first] = best
+        written = {}
+        for i, (c, start) in enumerate(starts.items()):
+            modes, props = truth.get(c) or _truth_modes(start, work, None if kind == "none"
+                                                         else chosen, (*streams, 0), n_test)
+            xyz = effects.topology(read_pynastran(start)).xyz if c != first else topo.xyz
+            gvt = _gvt(modes, sensors, {g: tuple(float(v) for v in p) for g, p in xyz.items()},
+                       n_test, np.random.default_rng((*streams, 2 + i)), units,
+                       f"blind-study truth {structure} {kind} seed {seed}, {c}")
+            write_uff(gvt, out / f"gvt_{c}.unv", title=f"{structure} {c} GVT")
+            write_json(x56.measured_mass(props), out / f"mass_{c}.json")
+            written[c] = decks[c]
+    grids, els = effects.neighbours(topo, chosen.grids, chosen.elements)
+    record = {"kind": kind, "structure": structure, "seed": int(seed),
+              "grids": list(chosen.grids), "elements": list(chosen.elements),
+              "properties": list(chosen.properties), "size": float(chosen.size),
+              "size_meaning": effects.SIZE[kind] if kind in effects.SIZE else "",
+              "neighbours": {"grids": grids, "elements": els} if kind != "none" else
+              {"grids": [], "elements": []},
+              "max_frequency_shift": shift, "parameters": _jsonable(chosen.params)}
+    write_text(json.dumps(record, indent=1) + "\n", out / "truth.json")
+    return write_text(_case_toml(f"{structure}_{kind}_{seed}", units, written.items()),
+                      out / "case.toml")
