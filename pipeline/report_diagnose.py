@@ -12,13 +12,14 @@ import html
 import json
 from pathlib import Path
 
+from pipeline.diagnose.outputs import flat_gap
 from pipeline.report_figures import png_data_uri
 from pipeline.report_tables import fmt, note, table
 from structures.units import UnitLabels
 
 #: Unit of each scalar gap metric (``flutter_speed``: the unit system's velocity).
 GAP_UNITS = {"frequency_rms_held_out": "%", "frequency_rms": "%",
-             "max_cross_orthogonality_offdiag": "-", "mac_min": "-"}
+             "max_cross_orthogonality_offdiag": "-", "mac_min": "-", "mac_mean": "-"}
 #: Candidates listed in the table.
 TOP = 10
 
@@ -32,17 +33,16 @@ def _location(location: dict) -> str:
                      for k, v in (location or {}).items() if v) or "\u2013"
 
 
+def _unit(key: str, labels: UnitLabels) -> str:
+    if key == "flutter_speed":
+        return labels.velocity
+    return "%" if key.startswith("mass") else GAP_UNITS.get(key, "")
+
+
 def _gap_rows(before: dict, after: dict, labels: UnitLabels) -> list:
-    rows = []
-    for key in sorted(set(before) | set(after)):
-        b, a = before.get(key), after.get(key)
-        if isinstance(b, dict) or isinstance(a, dict):
-            rows += [(f"{key}: {q}", "%", _value((b or {}).get(q)), _value((a or {}).get(q)))
-                     for q in sorted(set(b or {}) | set(a or {}))]
-        else:
-            unit = labels.velocity if key == "flutter_speed" else GAP_UNITS.get(key, "")
-            rows.append((key, unit, _value(b), _value(a)))
-    return rows
+    before, after = flat_gap(before), flat_gap(after)
+    return [(key, _unit(key, labels), _value(before.get(key)), _value(after.get(key)))
+            for key in sorted(set(before) | set(after))]
 
 
 def diagnose_section(run_dir, labels: UnitLabels) -> str:

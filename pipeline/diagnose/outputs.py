@@ -22,6 +22,7 @@ from pathlib import Path
 
 from flutter.results import is_flutter
 from structures.common.files import read_dataset, write_dataset, write_json
+from structures.units import unit_labels
 
 #: The stage's folder in the run folder.
 FOLDER = "diagnose"
@@ -80,7 +81,7 @@ def write_diagnosis(case, folder, run_dir, aero: dict | None = None, progress=No
     aero : dict, optional
         :func:`pipeline.chain.aero_groups` of the case (needed when flutter is on).
     progress : callable(str), optional
-        Receives progress notes of the flutter solutions.
+        Receives progress notes of the diagnosis and the flutter solutions.
 
     Returns
     -------
@@ -89,14 +90,13 @@ def write_diagnosis(case, folder, run_dir, aero: dict | None = None, progress=No
     """
     from pipeline.diagnose import diagnose
     from pipeline.diagnose.effects import write_effect_deck
-    from pipeline.diagnose.inputs import (case_diagnose_settings, configurations_from_case,
-                                          settings_from_case)
+    from pipeline.diagnose.inputs import case_diagnose_settings, configurations_from_case
     from pipeline.diagnose.plots import plot_candidates, plot_gap
 
     folder, run_dir = Path(folder), Path(run_dir)
     options = case_diagnose_settings(case)
     configurations = configurations_from_case(case)
-    result = diagnose(configurations, settings_from_case(case))
+    result = diagnose(configurations, options.workflow, progress=progress)
     effects = _named_effects(result)
     decks = {}
     if effects:
@@ -113,11 +113,26 @@ def write_diagnosis(case, folder, run_dir, aero: dict | None = None, progress=No
                          gap_after={**result.gap_after, "flutter_speed": after})
     record = result.to_json()
     write_json(record, folder / FOLDER / "diagnose.json")
-    write_dataset(result.to_dataset(), folder / FOLDER / "diagnose.nc")
+    speeds = [record["gap_before"].get("flutter_speed"), record["gap_after"].get("flutter_speed")]
+    dataset = result.to_dataset().assign(flutter_speed=("when", [
+        float("nan") if v is None else v for v in speeds], {
+            "long_name": "lowest flutter crossing speed (NaN: none, or not computed)",
+            "units": unit_labels(case.units).velocity}))
+    write_dataset(dataset, folder / FOLDER / "diagnose.nc")
     plot_candidates(record).savefig(folder / FOLDER / "candidates.png", dpi=90,
                                     metadata={"Software": None})
     plot_gap(record).savefig(folder / FOLDER / "gap.png", dpi=90, metadata={"Software": None})
     return result
+
+
+def flat_gap(gap: dict, prefix: str = "") -> dict:
+    """A gap record with nested tables flattened: ``{"mass": {"weight": -3.5}}`` becomes
+    ``{"mass weight": -3.5}``."""
+    out = {}
+    for key, value in gap.items():
+        name = f"{prefix}{key}"
+        out.update(flat_gap(value, f"{name} ") if isinstance(value, dict) else {name: value})
+    return out
 
 
 def _number(value, fmt: str = ".3g") -> str:
@@ -146,15 +161,10 @@ def verdict_summary(record: dict, top: int = 5) -> str:
         lines += [f"  {i}. {c['kind']:<18} {_number(c.get('score'), '9.2f')}  "
                   f"{c.get('label') or _location(c.get('location'))}"
                   for i, c in enumerate(candidates, 1)]
-    before, after = record.get("gap_before") or {}, record.get("gap_after") or {}
+    before, after = (flat_gap(record.get(k) or {}) for k in ("gap_before", "gap_after"))
     lines.append("gap before -> after:")
-    for key in sorted(set(before) | set(after)):
-        if isinstance(before.get(key), dict) or isinstance(after.get(key), dict):
-            for q in sorted(set(before.get(key) or {}) | set(after.get(key) or {})):
-                lines.append(f"  {key} {q}: {_number((before.get(key) or {}).get(q))} -> "
-                             f"{_number((after.get(key) or {}).get(q))}")
-        else:
-            lines.append(f"  {key}: {_number(before.get(key))} -> {_number(after.get(key))}")
+    lines += [f"  {key}: {_number(before.get(key))} -> {_number(after.get(key))}"
+              for key in sorted(set(before) | set(after))]
     lines += [f"note: {n}" for n in record.get("notes") or []]
     if record.get("separating_measurement"):
         lines.append(f"separating measurement: {record['separating_measurement']}")

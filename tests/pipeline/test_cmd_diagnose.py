@@ -1,0 +1,167 @@
+"""``pipeline diagnose CASE.toml [--json FILE] [--out DIR]``: bad input fails before any
+computation (exit 2, one line naming the key and the fix, no folder left); a real run on a small
+case writes the contract's JSON, the netCDF, the diagnosed deck and the figures, and ``pipeline
+run`` with ``[diagnose]`` puts the diagnose section into the report."""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from pipeline.cli import main
+from structures.bdf import read_model
+from structures.common.files import read_dataset
+from structures.gvt import load_gvt, make_gvt_dataset, write_uff
+from structures.massprops import mass_properties
+from structures.modal import compute_modes
+
+#: The hidden effect of the small case: a mass at grid 500 missing from the analysis deck.
+HIDDEN_GRID, HIDDEN_MASS = 500, 0.6
+MASSES = (1.0, 1.2, 1.4, 1.0, 1.2, 1.4)
+GAP_KEYS = {"frequency_rms_held_out", "frequency_rms", "max_cross_orthogonality_offdiag",
+            "mac_min", "mass", "flutter_speed"}
+
+
+def cli(argv, capsys) -> tuple[int, str, str]:
+    try:
+        code = main([str(a) for a in argv])
+    except SystemExit as exc:  # argparse
+        code = exc.code
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def chain_deck(path: Path, extra=()) -> None:
+    """Six grids along x tied by CELAS2 springs in x, y, z, CONM2 masses, rotations fixed."""
+    cards = ["CEND", "BEGIN BULK"]
+    for i, m in enumerate(MASSES):
+        cards += [f"GRID,{100 * (i + 1)},,{float(i)},0.,0.", f"CONM2,{900 + i},{100 * (i + 1)},,{m}"]
+    for i in range(len(MASSES) - 1):
+        for c, k in ((1, 4.0e4), (2, 1.0e4), (3, 2.5e4)):
+            cards.append(f"CELAS2,{10 * i + c},{k * (1.0 + 0.1 * i)},{100 * (i + 1)},{c},"
+                         f"{100 * (i + 2)},{c}")
+    cards += ["SPC1,1,456," + ",".join(str(100 * (i + 1)) for i in range(len(MASSES))),
+              *extra, "ENDDATA"]
+    path.write_text("\n".join(cards) + "\n")
+
+
+@pytest.fixture()
+def folder(tmp_path) -> Path:
+    """chain.bdf (the analysis model) and gvt.unv: modes 7-18 of the truth (the chain with
+    HIDDEN_MASS more at HIDDEN_GRID) at every translational DOF, with its weighing."""
+    chain_deck(tmp_path / "chain.bdf")
+    chain_deck(tmp_path / "truth.bdf", extra=[f"CONM2,999,{HIDDEN_GRID},,{HIDDEN_MASS}"])
+    modes = compute_modes(read_model(tmp_path / "truth.bdf"), 18)
+    pick = modes.isel(dof=np.nonzero(modes["component"].values <= 3)[0]).sel(mode=range(7, 19))
+    write_uff(make_gvt_dataset(pick["frequency"].values, pick["shape"].values,
+                               pick["grid"].values, pick["component"].values,
+                               mode=list(range(1, 13))), tmp_path / "gvt.unv")
+    (tmp_path / "mass.json").write_text(json.dumps({"weight": sum(MASSES) + HIDDEN_MASS}))
+    (tmp_path / "truth.bdf").unlink()
+    return tmp_path
+
+
+def case_file(folder: Path, body: str = "[diagnose]\nmax_effects = 1\n",
+              config: str = 'gvt = "gvt.unv"\nmeasured_mass = "mass.json"\n') -> Path:
+    path = folder / "case.toml"
+    path.write_text('name = "chain"\n[[configurations]]\nname = "base"\ndeck = "chain.bdf"\n'
+                    + config + body)
+    return path
+
+
+def failed(argv, capsys, *needles) -> str:
+    code, out, err = cli(argv, capsys)
+    assert code == 2, (code, out, err)
+    assert "Traceback" not in out + err and len(err.strip().splitlines()) == 1, err
+    for needle in needles:
+        assert needle in err, (needle, err)
+    return err
+
+
+# ------------------------------------------------------------------------------------ bad input
+def test_missing_case(tmp_path, capsys):
+    failed(["diagnose", tmp_path / "nope.toml", "--out", tmp_path / "run"], capsys,
+           "nope.toml", "no such case file", "Fix")
+    assert not (tmp_path / "run").exists()
+
+
+@pytest.mark.parametrize("body, needles", [
+    ("[diagnose]\nmargins = 3\n", ("[diagnose]", "unknown keys ['margins']", "valid:")),
+    ("[diagnose]\nmax_effects = true\n", ("max_effects = True", "an integer", "Fix")),
+    ("[diagnose]\nkinds = [\"mass\"]\n", ("kinds ['mass'] not in", "lumped_mass", "Fix")),
+    ("[diagnose]\nfrequency_noise = -0.01\n", ("frequency_noise = -0.01 must be a positive",)),
+    ("[diagnose]\nflutter = true\n", ("flutter = true", "[flutter]", "Fix")),
+])
+def test_bad_diagnose_table(folder, capsys, body, needles):
+    path = case_file(folder, body)
+    failed(["diagnose", path, "--out", folder / "run"], capsys, str(path), *needles)
+    assert not (folder / "run").exists()
+
+
+def test_configuration_without_gvt(folder, capsys):
+    path = case_file(folder, "", config="")
+    failed(["diagnose", path, "--out", folder / "run"], capsys, "['base']", "no GVT file",
+           "Fix: add gvt")
+    assert not (folder / "run").exists()
+
+
+def test_bad_deck_fails_before_any_folder(folder, capsys):
+    chain_deck(folder / "chain.bdf", extra=["CQUAD8,1,1,100,200,300,400"])
+    failed(["diagnose", case_file(folder), "--out", folder / "run"], capsys, "chain.bdf",
+           "CQUAD8")
+    assert not (folder / "run").exists()
+
+
+def test_json_path_that_is_a_folder(folder, capsys):
+    (folder / "out.json").mkdir()
+    failed(["diagnose", case_file(folder), "--out", folder / "run", "--json", folder / "out.json"],
+           capsys, "--json", "is a folder", "Fix")
+    assert not (folder / "run").exists()
+
+
+# ------------------------------------------------------------------------------------ a real run
+def test_run_writes_the_contract_outputs(folder, capsys):
+    code, out, err = cli(["diagnose", case_file(folder), "--out", folder / "run", "--json",
+                          folder / "verdict.json"], capsys)
+    assert code == 0, err
+    run = folder / "run" / "diagnose"
+    record = json.loads((run / "diagnose.json").read_text())
+    assert json.loads((folder / "verdict.json").read_text()) == record
+    assert {"verdict", "effect", "effects", "candidates", "gap_before", "gap_after",
+            "notes"} <= set(record)
+    assert record["verdict"] in ("effect", "none", "ambiguous", "unexplained")
+    for entry in record["candidates"]:
+        assert {"kind", "location", "score"} <= set(entry)
+        assert set(entry["location"]) == {"grids", "elements", "properties"}
+    assert GAP_KEYS <= set(record["gap_before"]) and GAP_KEYS <= set(record["gap_after"])
+    assert record["gap_before"]["flutter_speed"] is None            # the case has no [flutter]
+    assert record["verdict"] == "effect" and record["effect"]["kind"] == "lumped_mass"
+    assert set(record["effect"]["location"]["grids"]) & {HIDDEN_GRID - 100, HIDDEN_GRID,
+                                                          HIDDEN_GRID + 100}
+    assert (record["gap_after"]["frequency_rms_held_out"]
+            < record["gap_before"]["frequency_rms_held_out"])
+    # the diagnosed deck carries the truth's mass and gives the truth's (the GVT's) frequencies
+    diagnosed = read_model(run / "base_diagnosed.bdf")
+    assert mass_properties(diagnosed).mass == pytest.approx(sum(MASSES) + HIDDEN_MASS, rel=1e-3)
+    test = load_gvt(folder / "gvt.unv")["frequency"].values
+    fe = compute_modes(diagnosed, 18)["frequency"].values[6:]
+    np.testing.assert_allclose(fe, test, rtol=1e-3)
+    ds = read_dataset(run / "diagnose.nc")
+    assert ds.attrs["verdict"] == "effect" and str(ds["kind"].values[0]) == "lumped_mass"
+    assert np.isnan(ds["flutter_speed"].values).all()
+    assert {p.name for p in run.glob("*.png")} == {"candidates.png", "gap.png"}
+    assert "verdict: effect" in out and "lumped_mass" in out and "gap before -> after" in out
+
+
+def test_pipeline_run_reports_the_diagnosis(folder, capsys):
+    code, _, err = cli(["run", case_file(folder, "[diagnose]\nmax_effects = 1\nbefore_tuning = "
+                                                 "true\n"), "--out", folder / "run"], capsys)
+    assert code == 0, err
+    page = (folder / "run" / "report.html").read_text()
+    for needle in ('<h2 id="diagnose">', 'id="diagnose-candidates"', 'id="diagnose-gap"',
+                   'alt="diagnose candidates"', 'alt="diagnose gap"'):
+        assert needle in page
+    code, out, _ = cli(["status", folder / "case.toml", "--out", folder / "run"], capsys)
+    assert code == 0 and "diagnose" in out and "missing" not in out
