@@ -1,0 +1,241 @@
+"""The diagnose problem (configurations, their models and residuals) and the nominal calibration.
+
+Nominal parameters (DESIGN.md section 5 step 2): Young's modulus of every MAT1 (E and G linked,
+so the Poisson ratio stays) and MAT8 (E1, E2, G12 linked) material that an element uses, and one
+scale of all CONM2 masses, each a relative change theta (x = x0 (1 + theta)) within
++-``CALIBRATION_BOUND``, shared by the configurations (one structure, several loadings), applied
+with :func:`structures.design.apply_design`. They are fitted by bounded least squares
+(``scipy.optimize.least_squares``) of the training residual (:mod:`pipeline.diagnose.evidence`).
+
+Model-form flags (the fit "stalls", DESIGN.md section 5): a parameter within ``BOUND_TOLERANCE``
+of its bound; configurations wanting values that differ by more than ``CONSISTENCY_SIGMAS`` times
+their uncertainty (one Gauss-Newton step per configuration from the joint solution, with the
+joint Jacobian's blocks: theta_c = theta - (J_c^T J_c)^-1 J_c^T r_c, covariance (J_c^T J_c)^-1);
+a residual that fails the goodness-of-fit test; frequency residuals whose signs run in long
+stretches along the modes (runs test p below ``RUNS_P``).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import least_squares
+
+from pipeline.diagnose.evidence import chi_square, evaluate, gof_limit, runs_test
+from structures.design import DesignVariable, apply_design, bind
+from structures.model import FEModel
+
+#: Bound of every nominal parameter (relative): a material's modulus or the masses are known to
+#: about +-10 % before a test; a larger change is a model-form problem, not a calibration.
+CALIBRATION_BOUND = 0.10
+#: A parameter closer than this (relative, of the bound) to its bound sits on it.
+BOUND_TOLERANCE = 0.02
+#: Configurations disagree when their estimates differ by more than this many standard deviations.
+CONSISTENCY_SIGMAS = 3.0
+#: Runs test p-value below which the frequency residual is structured.
+RUNS_P = 0.01
+#: Optimiser scaling of the relative parameters (theta / THETA_SCALE is of order one).
+THETA_SCALE = 0.02
+#: Relative finite-difference step of the optimiser (large enough that a step never re-pairs modes
+#: through eigen-solver rounding, small against the parameters' scale).
+DIFF_STEP = 1e-4
+#: Most residual evaluations of the calibration (a few Gauss-Newton iterations of ~3 parameters).
+CALIBRATION_NFEV = 40
+
+
+def _material_variables(model: FEModel) -> list:
+    used = set()
+    for es in model.elements.values():
+        for pid in np.unique(es.pids):
+            prop = model.properties.get(int(pid))
+            if prop is None:
+                continue
+            for key, value in prop.fields.items():
+                if key.startswith("MID") and value:
+                    used.add(int(value))
+    out = []
+    for mid in sorted(used):
+        mat = model.materials.get(mid)
+        if mat is None:
+            continue
+        if mat.card == "MAT1" and mat.fields.get("E"):
+            fields = [("MAT1", mid, "E")] + ([("MAT1", mid, "G")] if mat.fields.get("G") else [])
+        elif mat.card == "MAT8" and mat.fields.get("E1"):
+            fields = [("MAT8", mid, f) for f in ("E1", "E2", "G12") if mat.fields.get(f)]
+        else:
+            continue
+        out.append(DesignVariable(f"E{mid}", tuple(fields)))
+    return out
+
+
+def _mass_variable(model: FEModel) -> list:
+    hit = np.flatnonzero(np.asarray(model.masses.mass) != 0.0)
+    if hit.size == 0:
+        return []
+    fields = tuple(("CONM2", int(model.masses.eids[i]), "M") for i in hit)
+    return [DesignVariable("mass", fields)]
+
+
+@dataclass(frozen=True)
+class Problem:
+    """Configurations with their nominal models, references and nominal parameters.
+
+    Attributes
+    ----------
+    names : tuple of str, the nominal parameters (``E<mid>``, ``mass``), shared by the
+        configurations.
+    refs : tuple of Reference, one per configuration.
+    models : tuple of FEModel, nominal.
+    spaces : tuple of DesignSpace, per configuration (the variables it has).
+    index : tuple of int arrays, per configuration the theta index of each variable of its space.
+    """
+
+    names: tuple
+    refs: tuple
+    models: tuple
+    spaces: tuple
+    index: tuple
+
+    @classmethod
+    def build(cls, refs, models) -> "Problem":
+        """Nominal parameters of every configuration's model (shared by name)."""
+        names, spaces, index = [], [], []
+        for model in models:
+            variables = _material_variables(model) + _mass_variable(model)
+            space = bind(variables, [model])
+            for var in variables:
+                if var.name not in names:
+                    names.append(var.name)
+            spaces.append(space)
+            index.append(np.array([names.index(v.name) for v in variables], int))
+        return cls(tuple(names), tuple(refs), tuple(models), tuple(spaces), tuple(index))
+
+    @property
+    def n_theta(self) -> int:
+        return len(self.names)
+
+    def model(self, i: int, theta, effects=()) -> FEModel:
+        """Configuration ``i``'s model at nominal parameters ``theta`` with ``effects`` applied.
+
+        ``effects`` is a sequence of (Candidate, values) applied in order
+        (:func:`pipeline.diagnose.effects.apply_effect`).
+        """
+        from pipeline.diagnose.effects import apply_effect
+
+        space = self.spaces[i]
+        model = self.models[i]
+        if len(space):
+            x = space.x0 * (1.0 + np.asarray(theta, float)[self.index[i]])
+            model = apply_design(model, space, x)
+        for candidate, values in effects:
+            model = apply_effect(model, candidate, np.asarray(values, float))
+        return model
+
+    def evaluate(self, theta, effects=()) -> list:
+        """Evaluations (:class:`Evaluation`) of every configuration."""
+        return [evaluate(ref, self.model(i, theta, effects)) for i, ref in enumerate(self.refs)]
+
+    def vector(self, evaluations) -> np.ndarray:
+        """Training residual vector over the configurations."""
+        return np.concatenate([ev.vector(ref.train) for ev, ref in zip(evaluations, self.refs)])
+
+    def n_data(self) -> int:
+        """Number of training residuals."""
+        n = 0
+        for ref in self.refs:
+            per_mode = 1 + (ref.basis.shape[1] if ref.has_shapes else 0)
+            n += int(ref.train.sum()) * per_mode + len(ref.mass_scale)
+        return n
+
+
+@dataclass(frozen=True)
+class Calibration:
+    """Result of :func:`calibrate`.
+
+    Attributes
+    ----------
+    theta : (n_theta,) relative changes of the nominal parameters.
+    chi2 : float, training chi^2 at theta.
+    n_data : int
+    evaluations : list of Evaluation at theta.
+    flags : tuple of str, model-form warnings (empty when the fit is clean).
+    per_configuration : {configuration: (n_theta,) estimates} from one Gauss-Newton step each.
+    """
+
+    theta: np.ndarray
+    chi2: float
+    n_data: int
+    evaluations: list
+    flags: tuple
+    per_configuration: dict
+
+
+def calibrate(problem: Problem, effects=()) -> Calibration:
+    """Fit the nominal parameters within +-CALIBRATION_BOUND; flag model-form error."""
+    n = problem.n_theta
+    if n == 0:
+        evs = problem.evaluate(np.zeros(0), effects)
+        r = problem.vector(evs)
+        return Calibration(np.zeros(0), chi_square(r), r.size, evs, (), {})
+    bound = CALIBRATION_BOUND / THETA_SCALE
+
+    def fun(z):
+        return problem.vector(problem.evaluate(z * THETA_SCALE, effects))
+
+    sol = least_squares(fun, np.zeros(n), bounds=(-bound, bound), method="trf",
+                        diff_step=DIFF_STEP, max_nfev=CALIBRATION_NFEV)
+    theta = sol.x * THETA_SCALE
+    evs = problem.evaluate(theta, effects)
+    r = problem.vector(evs)
+    chi2 = chi_square(r)
+    flags = []
+    for name, t in zip(problem.names, theta):
+        if abs(abs(t) - CALIBRATION_BOUND) < BOUND_TOLERANCE * CALIBRATION_BOUND:
+            flags.append(f"nominal parameter {name} sits on its bound ({100 * t:+.1f} %): the "
+                         "calibration compensates for something it cannot represent.")
+    jac = sol.jac / THETA_SCALE
+    per_conf = _per_configuration(problem, evs, jac, theta, flags)
+    dof = r.size - n
+    if chi2 > gof_limit(dof):
+        flags.append(f"after calibration chi^2 / dof = {chi2 / max(dof, 1):.2f} fails the "
+                     f"goodness-of-fit test (limit {gof_limit(dof) / max(dof, 1):.2f}).")
+    for ev, ref in zip(evs, problem.refs):
+        p = runs_test(ev.frequency)
+        if p < RUNS_P:
+            flags.append(f"configuration {ref.name}: the frequency errors run in long stretches "
+                         f"of one sign along the modes (runs test p = {p:.1e}): a structured "
+                         "residual.")
+    return Calibration(theta, chi2, r.size, evs, tuple(flags), per_conf)
+
+
+def _per_configuration(problem: Problem, evs, jac, theta, flags: list) -> dict:
+    """One Gauss-Newton step per configuration from the joint solution; flags disagreements."""
+    out, covs = {}, {}
+    start = 0
+    for ev, ref in zip(evs, problem.refs):
+        r_c = ev.vector(ref.train)
+        j_c = jac[start:start + r_c.size]
+        start += r_c.size
+        jtj = j_c.T @ j_c
+        seen = np.diag(jtj) > 0
+        est = np.full(theta.size, np.nan)
+        cov = np.full(theta.size, np.inf)
+        if seen.any():
+            sub = jtj[np.ix_(seen, seen)]
+            inv = np.linalg.pinv(sub)
+            est[seen] = theta[seen] - inv @ (j_c[:, seen].T @ r_c)
+            cov[seen] = np.diag(inv)
+        out[ref.name] = est
+        covs[ref.name] = cov
+    names = list(out)
+    for a in range(len(names)):
+        for b in range(a + 1, len(names)):
+            diff = out[names[a]] - out[names[b]]
+            sd = np.sqrt(covs[names[a]] + covs[names[b]])
+            bad = np.isfinite(diff) & (np.abs(diff) > CONSISTENCY_SIGMAS * sd)
+            for k in np.flatnonzero(bad):
+                flags.append(f"configurations {names[a]} and {names[b]} want {problem.names[k]} "
+                             f"{100 * out[names[a]][k]:+.1f} % and {100 * out[names[b]][k]:+.1f} % "
+                             f"(difference {abs(diff[k]) / sd[k]:.1f} sigma): inconsistent.")
+    return out
+

@@ -1,0 +1,108 @@
+"""The gap between model and test (before / after), and the measurement that separates two fits.
+
+Gap metrics (issue 14 step 6, the contract's JSON keys), over all configurations:
+
+- ``frequency_rms_held_out`` / ``frequency_rms``: RMS of 100 (f_FE - f_GVT) / f_GVT (paper eq. 18)
+  over the held-out paired modes / all paired modes [%];
+- ``max_cross_orthogonality_offdiag``: largest |S_ij|, i != j, of the cross-orthogonality of the
+  test modes with their paired analysis modes (paper eq. 20; SEREP on the rigid and paired modes,
+  eqs. 11-14, :mod:`structures.correlation`);
+- ``mac_min``, ``mac_mean``: of the paired modes (paper eq. 23);
+- ``mass``: relative error [%] of every measured quantity, from the configuration with the
+  largest |error|; ``mass_by_configuration`` all of them;
+- ``flutter_speed``: None (the pipeline stage fills it).
+Without shapes the cross-orthogonality and MAC entries are None.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from structures.correlation import cross_orthogonality, mac, serep_coordinates
+from pipeline.diagnose.evidence import elastic_index, unit_rms
+from structures.massprops import compare_mass_properties
+
+
+def _cross_offdiag(ref, ev) -> float:
+    modes = ev.modes
+    phi_m = modes["shape"].values[:, ref.sensor_index]
+    rigid = np.setdiff1d(np.arange(modes.sizes["mode"]), elastic_index(modes))
+    keep = np.concatenate([rigid, ev.paired])
+    q = serep_coordinates(phi_m[keep].T, ref.shapes.T)                     # eq. 14
+    s = np.abs(cross_orthogonality(q, np.eye(keep.size)))[:, rigid.size:]   # eq. 20, paired block
+    return float(np.max(s - np.diag(np.diag(s)), initial=0.0))
+
+
+def gap_metrics(problem, evaluations) -> dict:
+    """The gap of a model (its evaluations, one per configuration) against the tests."""
+    errors, held = [], []
+    cross, macs = [], []
+    mass_by = {}
+    for ref, ev in zip(problem.refs, evaluations):
+        err = 100.0 * ev.frequency * ref.frequency_sigma                  # eq. 18 in %
+        errors.append(err)
+        held.append(err[~ref.train])
+        if ref.has_shapes:
+            cross.append(_cross_offdiag(ref, ev))
+            phi = ev.modes["shape"].values[ev.paired][:, ref.sensor_index]
+            macs.append(np.diag(mac(ref.shapes.T, phi.T)))                 # eq. 23
+        if ref.measured_mass:
+            cmp = compare_mass_properties(ev.props, ref.measured_mass)
+            mass_by[ref.name] = {str(q): float(v) for q, v in
+                                 zip(cmp["quantity"].values, cmp["relative_error"].values)}
+    allerr, held = np.concatenate(errors), np.concatenate(held)
+    worst = {}
+    for values in mass_by.values():
+        for q, v in values.items():
+            if q not in worst or (np.isfinite(v) and abs(v) > abs(worst[q])):
+                worst[q] = v
+    macs = np.concatenate(macs) if macs else None
+    return {"frequency_rms_held_out": float(np.sqrt(np.mean(held ** 2))) if held.size else None,
+            "frequency_rms": float(np.sqrt(np.mean(allerr ** 2))),
+            "max_cross_orthogonality_offdiag": max(cross) if cross else None,
+            "mac_min": float(macs.min()) if macs is not None else None,
+            "mac_mean": float(macs.mean()) if macs is not None else None,
+            "mass": worst, "mass_by_configuration": mass_by, "flutter_speed": None}
+
+
+def separating_measurement(problem, fit_a, fit_b) -> str:
+    """Where two fitted models' predictions differ most relative to the noise.
+
+    Compares the paired frequencies of every configuration (relative to the frequency scale) and
+    the paired mode shapes at every translational DOF of the model (each shape at unit RMS over
+    the sensors, signs aligned, relative to the shape scale): a DOF that is not measured yet is a
+    sensor to add.
+    """
+    best_f = (0.0, "")
+    best_s = (0.0, "")
+    for i, ref in enumerate(problem.refs):
+        ea, eb = fit_a.evaluations[i], fit_b.evaluations[i]
+        df = np.abs(ea.frequency - eb.frequency)
+        j = int(np.argmax(df))
+        if df[j] > best_f[0]:
+            best_f = (float(df[j]), f"the frequency of test mode {ref.test_mode[j]} in configuration "
+                                    f"{ref.name}")
+        if not ref.has_shapes:
+            continue
+        modes_a, modes_b = ea.modes, eb.modes
+        trans = np.flatnonzero(modes_a["component"].values <= 3)
+        sa = modes_a["shape"].values[ea.paired]
+        sb = modes_b["shape"].values[eb.paired]
+        scale_a = np.sqrt(np.mean(sa[:, ref.sensor_index] ** 2, axis=1, keepdims=True))
+        scale_b = np.sqrt(np.mean(sb[:, ref.sensor_index] ** 2, axis=1, keepdims=True))
+        sa, sb = sa / scale_a, sb / scale_b
+        sign = np.sign(np.sum(sa[:, ref.sensor_index] * sb[:, ref.sensor_index], axis=1))
+        diff = np.abs(sa - sign[:, None] * sb)[:, trans] / ref.shape_sigma[:, None]
+        j, d = np.unravel_index(int(np.argmax(diff)), diff.shape)
+        if diff[j, d] > best_s[0]:
+            dof = trans[d]
+            grid = int(modes_a["grid"].values[dof])
+            comp = int(modes_a["component"].values[dof])
+            best_s = (float(diff[j, d]), f"a sensor at grid {grid} component {comp} in test mode "
+                                         f"{ref.test_mode[j]} of configuration {ref.name}")
+    label_a = fit_a.candidate.label if fit_a.candidate else "nothing missing"
+    label_b = fit_b.candidate.label if fit_b.candidate else "nothing missing"
+    text = (f"to separate {fit_a.candidate.kind} {label_a} from {fit_b.candidate.kind} {label_b}: "
+            f"{best_f[1]} (predictions {best_f[0]:.1f} sigma apart)")
+    if best_s[1]:
+        text += f"; {best_s[1]} ({best_s[0]:.1f} sigma apart)"
+    return text + "."

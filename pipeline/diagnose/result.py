@@ -1,0 +1,144 @@
+"""The result of :func:`pipeline.diagnose.diagnose`: verdict, named effects, ranking, gap.
+
+``to_json()`` gives the issue's schema (plus ``effects`` for every look-again round, ``nominal``
+and ``rounds``); ``to_dataset()`` a netCDF-able Dataset: the first round's candidate table on dim
+``rank`` and the gap metrics on (``metric``, ``when``).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Mapping, NamedTuple
+
+import numpy as np
+import xarray as xr
+
+from structures.common.errors import InputError
+
+VERDICTS = ("effect", "none", "ambiguous", "unexplained")
+#: Scalar gap metrics (keys of ``gap_before`` / ``gap_after``) put in the Dataset.
+GAP_METRICS = ("frequency_rms_held_out", "frequency_rms", "max_cross_orthogonality_offdiag",
+               "mac_min", "mac_mean")
+
+
+class EffectRecord(NamedTuple):
+    """A named effect: the candidate, its fitted parameter values (npar,) and its score
+    (BIC of the runner-up or of "none", whichever is lower, minus the effect's BIC)."""
+
+    candidate: object
+    values: np.ndarray
+    score: float
+
+
+class CandidateScore(NamedTuple):
+    """A ranked candidate of the first round.
+
+    ``score`` is its BIC minus the best BIC (0 for the best); ``refitted`` says whether the BIC
+    comes from the nonlinear refit (else from the linearised fit); ``kind`` "none" is the model
+    with its nominal parameters only.
+    """
+
+    kind: str
+    location: Mapping
+    score: float
+    label: str
+    refitted: bool
+
+
+def _location_dict(location) -> dict:
+    if location is None:
+        return {"grids": [], "elements": [], "properties": []}
+    return location.as_dict() if hasattr(location, "as_dict") else dict(location)
+
+
+def effect_json(record: EffectRecord) -> dict:
+    """{"kind", "location", "parameters", "label", "score"} of a named effect."""
+    cand = record.candidate
+    return {"kind": cand.kind, "location": _location_dict(cand.location),
+            "parameters": {name: float(v) for name, v in zip(cand.parameters, record.values)},
+            "label": cand.label, "score": float(record.score)}
+
+
+def _clean(value):
+    """JSON-safe copy: numpy scalars and arrays to Python, NaN to None."""
+    if isinstance(value, Mapping):
+        return {str(k): _clean(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple, np.ndarray)):
+        return [_clean(v) for v in value]
+    if isinstance(value, (np.floating, float)):
+        return None if not np.isfinite(value) else float(value)
+    if isinstance(value, np.integer):
+        return int(value)
+    return value
+
+
+@dataclass(frozen=True)
+class DiagnoseResult:
+    """What diagnose found.
+
+    Attributes
+    ----------
+    verdict : {"effect", "none", "ambiguous", "unexplained"}
+    effects : tuple of EffectRecord, the named effects in the order they were found.
+    candidates : tuple of CandidateScore, the first round's ranking (best first).
+    gap_before, gap_after : mapping
+        ``frequency_rms_held_out``, ``frequency_rms`` [%], ``max_cross_orthogonality_offdiag``,
+        ``mac_min``, ``mac_mean`` (None without shapes), ``mass`` {quantity: % error of the
+        configuration with the largest |error|}, ``mass_by_configuration``, ``flutter_speed``
+        (None: filled by the pipeline stage). Before: the calibrated model without effects;
+        after: with the named effects, refitted.
+    notes : tuple of str
+    separating_measurement : str or None, for an ambiguous verdict.
+    nominal : mapping {parameter: relative change} of the final model (calibration).
+    rounds : tuple of mapping, per look-again round: its verdict, best and runner-up.
+    """
+
+    verdict: str
+    effects: tuple
+    candidates: tuple
+    gap_before: Mapping
+    gap_after: Mapping
+    notes: tuple = ()
+    separating_measurement: str | None = None
+    nominal: Mapping = field(default_factory=dict)
+    rounds: tuple = ()
+
+    def __post_init__(self):
+        if self.verdict not in VERDICTS:
+            raise InputError(f"diagnose result: verdict {self.verdict!r} is not one of "
+                             f"{list(VERDICTS)}.")
+
+    def to_json(self) -> dict:
+        """The issue's JSON schema (see the module docstring)."""
+        effects = [effect_json(r) for r in self.effects]
+        return _clean({
+            "verdict": self.verdict,
+            "effect": effects[0] if effects and self.verdict == "effect" else None,
+            "effects": effects,
+            "candidates": [{"kind": c.kind, "location": _location_dict(c.location),
+                            "score": c.score, "label": c.label, "refitted": c.refitted}
+                           for c in self.candidates],
+            "gap_before": dict(self.gap_before), "gap_after": dict(self.gap_after),
+            "notes": list(self.notes), "separating_measurement": self.separating_measurement,
+            "nominal": dict(self.nominal), "rounds": list(self.rounds)})
+
+    def to_dataset(self) -> xr.Dataset:
+        """Candidate table on ``rank`` (1 = best) and the gap metrics on (metric, when)."""
+        rank = np.arange(1, len(self.candidates) + 1)
+        gap = np.array([[np.nan if (self.gap_before.get(m) is None) else self.gap_before[m],
+                         np.nan if (self.gap_after.get(m) is None) else self.gap_after[m]]
+                        for m in GAP_METRICS], float)
+        ds = xr.Dataset(
+            {"kind": ("rank", np.array([c.kind for c in self.candidates], dtype=str)),
+             "label": ("rank", np.array([c.label for c in self.candidates], dtype=str)),
+             "score": ("rank", np.array([c.score for c in self.candidates], float),
+                       {"long_name": "BIC minus the best BIC"}),
+             "refitted": ("rank", np.array([c.refitted for c in self.candidates], bool)),
+             "gap": (("metric", "when"), gap,
+                     {"long_name": "gap between model and test", "units":
+                      "% for frequency_rms*, 1 for cross-orthogonality and MAC"})},
+            coords={"rank": rank, "metric": list(GAP_METRICS), "when": ["before", "after"]},
+            attrs={"verdict": self.verdict,
+                   "effects": "; ".join(f"{r.candidate.kind}: {r.candidate.label}"
+                                        for r in self.effects) or "none",
+                   "separating_measurement": self.separating_measurement or ""})
+        return ds

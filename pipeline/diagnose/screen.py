@@ -1,0 +1,244 @@
+"""Screening of candidate effects and the bounded refit of the best.
+
+**Linear signature** of candidate c with parameters x (npar,): s_k = (r(x = h_k e_k) - r0) / h_k,
+h_k = the candidate's ``reference`` size, r the training residual of every configuration
+(:mod:`pipeline.diagnose.evidence`). Two routes:
+
+- *perturbation* (every kind that keeps the model's grids and rigid elements): the change of the
+  g-set matrices dK, dM (:func:`structures.assembly.assemble_g` of the changed model minus the
+  current one), then first-order eigenvalues (Fox & Kapoor 1968)
+  d lambda_j = phi_j^T (dK - lambda_j dM) phi_j and mode shapes by modal expansion over the m
+  computed modes, dphi_j = sum_{k != j} phi_k c_kj - (phi_j^T dM phi_j / 2) phi_j with
+  c_kj = -phi_k^T (dK - lambda_j dM) phi_j / (lambda_k - lambda_j) (Fox & Kapoor 1968, eq. 19
+  truncated), with the pairing of the current model kept; mass properties exactly from the changed
+  mass matrix;
+- *reanalysis* (``joint_flexibility``, which changes the constraints, and any candidate whose
+  model gains grids): modes of the changed model (:func:`structures.modal.compute_modes`), paired
+  again.
+
+**Linear fit**: min |r0 + S x|^2 within the candidate's bounds (``scipy.optimize.lsq_linear``);
+the candidates are ranked by the drop of chi^2.
+
+**Refit**: bounded nonlinear least squares with reanalysis (``scipy.optimize.least_squares``) of
+the effect's parameters together with the nominal parameters (:mod:`pipeline.diagnose.calibrate`),
+started at the linear fit; ranked by BIC = chi^2 + p ln n (Schwarz 1978).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import least_squares, lsq_linear
+
+from pipeline.diagnose.calibrate import CALIBRATION_BOUND, DIFF_STEP, THETA_SCALE, Problem
+from pipeline.diagnose.evidence import bic, chi_square, evaluate, evaluate_modes
+from structures.assembly import assemble_g
+from structures.common.errors import InputError, SolverError
+from structures.massprops import mass_properties
+
+#: Kinds whose signature needs a reanalysis (they change the constraint equations).
+REANALYSIS_KINDS = ("joint_flexibility",)
+#: Eigenvalue gaps below this fraction of the largest computed eigenvalue are treated as
+#: degenerate in the modal expansion (their coupling is left out instead of dividing by ~0).
+DEGENERATE_GAP = 1e-9
+#: Most residual evaluations of one refit (started at the linear fit, a few iterations suffice).
+REFIT_NFEV = 12
+
+
+@dataclass(frozen=True)
+class Screened:
+    """One candidate after the linear screening.
+
+    Attributes
+    ----------
+    candidate : Candidate
+    values : (npar,) best bounded size of the linearised fit.
+    chi2 : float, linearised chi^2 at ``values``.
+    drop : float, chi^2 of the current model minus ``chi2``.
+    signature : (n_data, npar) linear signature S.
+    """
+
+    candidate: object
+    values: np.ndarray
+    chi2: float
+    drop: float
+    signature: np.ndarray
+
+
+@dataclass(frozen=True)
+class Refitted:
+    """One candidate after the nonlinear refit.
+
+    Attributes
+    ----------
+    candidate : Candidate, or None for "none" (the nominal parameters only).
+    values : (npar,) fitted effect parameters.
+    theta : (n_theta,) fitted nominal parameters.
+    chi2, bic : float
+    n_params : int, effect + nominal parameters.
+    evaluations : list of Evaluation at the fit.
+    """
+
+    candidate: object
+    values: np.ndarray
+    theta: np.ndarray
+    chi2: float
+    bic: float
+    n_params: int
+    evaluations: list
+
+
+def _perturbed(ref, model, ev, k0, m0, changed, h):
+    """Residual entries of the first-order perturbation of ``ev`` by changed - current."""
+    k1, m1 = assemble_g(changed)
+    dk, dm = k1 - k0, m1 - m0
+    phi = ev.modes["shape"].values.T                                       # (n_g, m)
+    lam = (2.0 * np.pi * ev.modes["frequency"].values) ** 2
+    g = phi.T @ (dk @ phi)
+    hm = phi.T @ (dm @ phi)
+    dlam = np.diag(g) - lam * np.diag(hm)                                   # Fox & Kapoor 1968
+    freq = np.sqrt(np.clip(lam + dlam, 0.0, None)) / (2.0 * np.pi)
+    shapes = None
+    if ref.has_shapes:
+        j = ev.paired
+        gap = lam[:, None] - lam[None, j]                                   # lambda_k - lambda_j
+        coupling = -(g[:, j] - hm[:, j] * lam[None, j])                     # -phi_k^T (dK - l_j dM) phi_j
+        small = np.abs(gap) <= DEGENERATE_GAP * max(lam.max(), 1.0)
+        c = np.divide(coupling, gap, out=np.zeros_like(coupling), where=~small)
+        c[j, np.arange(j.size)] = -0.5 * hm[j, j]                           # mass normalisation
+        phi_s = ev.modes["shape"].values[:, ref.sensor_index]               # (m, n_dof)
+        shapes = phi_s.copy()
+        shapes[j] = phi_s[j] + c.T @ phi_s
+    props = mass_properties(changed, m_basic=m1)
+    return evaluate_modes(ref, freq, shapes, props, paired=ev.paired)
+
+
+def signatures(problem: Problem, theta, effects, evaluations, candidates, *, progress=None):
+    """Linear signature of every candidate (see the module docstring).
+
+    Parameters
+    ----------
+    problem : Problem
+    theta : (n_theta,) nominal parameters of the current model.
+    effects : sequence of (Candidate, values) already in the model.
+    evaluations : list of Evaluation of the current model.
+    candidates : sequence of Candidate
+    progress : callable(str), optional
+
+    Returns
+    -------
+    r0 : (n_data,) current training residual.
+    list of (Candidate, S (n_data, npar)); candidates that cannot be applied to every
+    configuration are left out (named in ``skipped``).
+    skipped : list of str
+    """
+    from pipeline.diagnose.effects import apply_effect
+
+    models = [problem.model(i, theta, effects) for i in range(len(problem.refs))]
+    mats = [assemble_g(m) for m in models]
+    r0 = problem.vector(evaluations)
+    out, skipped = [], []
+    for n, cand in enumerate(candidates):
+        if progress is not None and n % 50 == 0:
+            progress(f"screening {n}/{len(candidates)}")
+        cols = []
+        try:
+            for k, h in enumerate(cand.reference):
+                step = np.zeros(len(cand.parameters))
+                step[k] = h
+                parts = []
+                for ref, model, ev, (k0, m0) in zip(problem.refs, models, evaluations, mats):
+                    changed = apply_effect(model, cand, step)
+                    if cand.kind in REANALYSIS_KINDS or len(changed.grids) != len(model.grids):
+                        e1 = evaluate(ref, changed)
+                    else:
+                        e1 = _perturbed(ref, model, ev, k0, m0, changed, h)
+                    parts.append(e1.vector(ref.train))
+                cols.append((np.concatenate(parts) - r0) / h)
+        except (InputError, SolverError) as exc:
+            skipped.append(f"{cand.label}: {exc}")
+            continue
+        out.append((cand, np.column_stack(cols)))
+    return r0, out, skipped
+
+
+def linear_fit(r0, signature, lower, upper) -> tuple[np.ndarray, float]:
+    """Bounded linear least squares min |r0 + S x|^2, lower <= x <= upper.
+
+    Returns
+    -------
+    x : (npar,)
+    chi2 : float, |r0 + S x|^2.
+    """
+    s = np.asarray(signature, float)
+    lower, upper = np.asarray(lower, float), np.asarray(upper, float)
+    if not np.any(s):
+        return np.clip(np.zeros(s.shape[1]), lower, upper), chi_square(r0)
+    sol = lsq_linear(s, -np.asarray(r0, float), bounds=(lower, upper), method="bvls")
+    return sol.x, chi_square(np.asarray(r0) + s @ sol.x)
+
+
+def screen(r0, signed) -> list:
+    """Linear fit of every (Candidate, S); list of Screened sorted by decreasing drop."""
+    chi0 = chi_square(r0)
+    rows = []
+    for cand, s in signed:
+        x, chi2 = linear_fit(r0, s, cand.lower, cand.upper)
+        rows.append(Screened(cand, x, chi2, chi0 - chi2, s))
+    rows.sort(key=lambda row: -row.drop)
+    return rows
+
+
+def pick_for_refit(rows, count: int) -> list:
+    """The best screened candidate of every kind, then the next best, ``count`` in all
+    (distinct kinds first, so that the runner-up of another kind is always refitted)."""
+    chosen, kinds = [], set()
+    for row in rows:
+        if row.candidate.kind not in kinds and row.drop > 0:
+            chosen.append(row)
+            kinds.add(row.candidate.kind)
+    chosen = chosen[:count]
+    for row in rows:
+        if len(chosen) >= count:
+            break
+        if row not in chosen and row.drop > 0:
+            chosen.append(row)
+    return chosen
+
+
+def refit(problem: Problem, theta0, effects, row: Screened | None, *, n_data: int) -> Refitted:
+    """Bounded nonlinear least squares of a candidate's parameters and the nominal parameters.
+
+    ``row`` None refits the nominal parameters alone ("none").
+    """
+    cand = None if row is None else row.candidate
+    npar = 0 if cand is None else len(cand.parameters)
+    scale = np.concatenate([np.asarray(cand.reference, float) if cand else np.zeros(0),
+                            np.full(len(theta0), THETA_SCALE)])
+    lo = np.concatenate([np.asarray(cand.lower, float) if cand else np.zeros(0),
+                         np.full(len(theta0), -CALIBRATION_BOUND)]) / scale
+    hi = np.concatenate([np.asarray(cand.upper, float) if cand else np.zeros(0),
+                         np.full(len(theta0), CALIBRATION_BOUND)]) / scale
+    start = np.concatenate([row.values if cand else np.zeros(0), np.asarray(theta0, float)])
+    z0 = np.clip(start / scale, lo, hi)
+
+    def split(z):
+        x = z * scale
+        extra = ((cand, x[:npar]),) if cand else ()
+        return x[npar:], tuple(effects) + extra
+
+    def fun(z):
+        theta, eff = split(z)
+        return problem.vector(problem.evaluate(theta, eff))
+
+    if z0.size:
+        sol = least_squares(fun, z0, bounds=(lo, hi), method="trf", diff_step=DIFF_STEP,
+                            max_nfev=REFIT_NFEV)
+        z = sol.x
+    else:
+        z = z0
+    theta, eff = split(z)
+    evs = problem.evaluate(theta, eff)
+    chi2 = chi_square(problem.vector(evs))
+    p = npar + len(theta0)
+    return Refitted(cand, (z * scale)[:npar], theta, chi2, bic(chi2, p, n_data), p, evs)

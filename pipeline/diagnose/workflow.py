@@ -1,0 +1,345 @@
+"""``diagnose()``: name the effect a model is missing (DESIGN.md section 5, issue 14 steps 1-6).
+
+1. Preflight per configuration (:func:`pipeline.diagnose.evidence.build_reference`): analysis
+   modes (``settings.nmodes`` or 2 x test + 6), pairing (MAC assignment at the sensors, or nearest
+   frequency without shapes), test self-orthogonality with the SEREP analysis mass, shape noise
+   (the test shapes' part outside the analysis modes' span), mass-property residual.
+2. Residual vector with stated scales (:mod:`pipeline.diagnose.evidence`); every
+   ``settings.holdout``-th paired mode is held out and judges the gap only.
+3. Nominal calibration and model-form flags (:mod:`pipeline.diagnose.calibrate`).
+4. Screening of every candidate by its linear signature, 5. refit of the best
+   (:mod:`pipeline.diagnose.screen`) and the verdict (:func:`decide`).
+6. Look again: the named effect is added and steps 4-5 repeat, up to ``settings.max_effects``.
+
+Verdict of a round (:func:`decide`), BIC = chi^2 + p ln n (Schwarz 1978), margins after Kass &
+Raftery (1995, a BIC difference above 10 is very strong evidence):
+
+- ``none``: the calibrated model without a further effect passes the goodness-of-fit test;
+- ``unexplained``: it fails, and no candidate beats it by ``settings.margin``;
+- ``ambiguous``: the best beats "none" but not, by the margin, the best candidate of another kind
+  or at a location that is not its neighbour (:func:`pipeline.diagnose.effects.neighbours`);
+- ``effect``: the best beats both by the margin.
+
+The overall verdict is ``effect`` when at least one effect was named, else the first round's.
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Mapping
+
+import numpy as np
+import xarray as xr
+from threadpoolctl import threadpool_limits
+
+from pipeline.diagnose.calibrate import Problem, calibrate
+from pipeline.diagnose.effects import KINDS, candidates, neighbours
+from pipeline.diagnose.evidence import build_reference, elastic_index, gof_limit
+from pipeline.diagnose.gap import gap_metrics, separating_measurement
+from pipeline.diagnose.result import CandidateScore, DiagnoseResult, EffectRecord
+from pipeline.diagnose.screen import pick_for_refit, refit, screen, signatures
+from structures.common.errors import InputError
+from structures.massprops import check_measured_mass
+from structures.modal import compute_modes
+from structures.model import FEModel
+
+#: Rigid-body modes added to twice the test modes for the default analysis mode count.
+N_RIGID = 6
+
+
+@dataclass(frozen=True)
+class ConfigurationData:
+    """One tested configuration.
+
+    Attributes
+    ----------
+    name : str
+    model : FEModel, the analysis model (nominal).
+    gvt : xarray.Dataset, :mod:`structures.gvt` layout; ``shape`` may be absent (frequency-only).
+    measured_mass : mapping or None, :func:`structures.massprops.read_measured_mass` layout.
+    deck : Path, the deck (messages and :func:`pipeline.diagnose.effects.write_effect_deck`).
+    """
+
+    name: str
+    model: FEModel
+    gvt: xr.Dataset
+    measured_mass: Mapping | None
+    deck: Path
+
+    def __post_init__(self):
+        if not isinstance(self.model, FEModel):
+            raise InputError(f"diagnose: configuration {self.name!r}: model is a "
+                             f"{type(self.model).__name__}, not an FEModel. Fix: read the deck "
+                             "with structures.bdf.read_model.")
+        if not isinstance(self.gvt, xr.Dataset) or "frequency" not in self.gvt:
+            raise InputError(f"diagnose: configuration {self.name!r}: the GVT data has no "
+                             "frequency(mode). Fix: load it with structures.gvt.load_gvt.")
+        if self.measured_mass is not None:
+            object.__setattr__(self, "measured_mass", check_measured_mass(
+                self.measured_mass, f"configuration {self.name} measured mass"))
+        object.__setattr__(self, "deck", Path(self.deck))
+
+
+@dataclass(frozen=True)
+class DiagnoseSettings:
+    """Settings of :func:`diagnose`.
+
+    Attributes
+    ----------
+    kinds : effect kinds screened (:data:`pipeline.diagnose.effects.KINDS`).
+    max_effects : look-again rounds (effects named at most).
+    frequency_noise : test frequency standard deviation (fraction).
+    shape_noise : test shape noise per DOF relative to the shape's RMS; None: estimated.
+    holdout : every holdout-th paired mode (frequency order) of each configuration is held out.
+    margin : BIC margin to name one candidate over the runner-up and over "none".
+    refit : candidates refitted after the screening.
+    nmodes : analysis modes (None: 2 x test modes + 6).
+    model_scatter : relative scatter of the nominal section and mass properties that the few
+        nominal parameters cannot follow (element by element); it widens the residual scales
+        (frequency by model_scatter / 2, f ~ sqrt(k / m); shapes by model_scatter per DOF).
+    """
+
+    kinds: tuple = KINDS
+    max_effects: int = 3
+    frequency_noise: float = 0.01
+    shape_noise: float | None = None
+    holdout: int = 3
+    margin: float = 10.0
+    refit: int = 6
+    nmodes: int | None = None
+    model_scatter: float = 0.03
+
+    def __post_init__(self):
+        kinds = (self.kinds,) if isinstance(self.kinds, str) else tuple(self.kinds)
+        bad = [k for k in kinds if k not in KINDS]
+        if bad or not kinds:
+            raise InputError(f"diagnose: kinds {bad or '[]'} not in {list(KINDS)}. Fix: list some "
+                             "of them.")
+        object.__setattr__(self, "kinds", kinds)
+        for name, low in (("max_effects", 1), ("holdout", 2), ("refit", 1)):
+            value = getattr(self, name)
+            if not isinstance(value, (int, np.integer)) or value < low:
+                raise InputError(f"diagnose: {name} = {value!r} must be an integer >= {low}.")
+        for name in ("frequency_noise", "margin"):
+            value = getattr(self, name)
+            if not (isinstance(value, (int, float)) and np.isfinite(value) and value > 0):
+                raise InputError(f"diagnose: {name} = {value!r} must be a positive number.")
+        for name in ("shape_noise",):
+            value = getattr(self, name)
+            if value is not None and not (np.isfinite(value) and value > 0):
+                raise InputError(f"diagnose: {name} = {value!r} must be positive or None.")
+        if not (np.isfinite(self.model_scatter) and self.model_scatter >= 0):
+            raise InputError(f"diagnose: model_scatter = {self.model_scatter!r} must be >= 0.")
+        if self.nmodes is not None and not (isinstance(self.nmodes, (int, np.integer))
+                                            and self.nmodes > 0):
+            raise InputError(f"diagnose: nmodes = {self.nmodes!r} must be a positive integer.")
+
+
+# ----------------------------------------------------------------------------------- verdict
+def _overlaps(a, b) -> bool:
+    return bool(set(a.grids) & set(b.grids) or set(a.elements) & set(b.elements)
+                or set(a.properties) & set(b.properties))
+
+
+def decide(none_bic: float, none_chi2: float, none_dof: int, fits, margin: float,
+           near) -> tuple[str, int | None, int | None]:
+    """Verdict of one round from its score table.
+
+    Parameters
+    ----------
+    none_bic, none_chi2 : float, of the model without a further effect.
+    none_dof : int, its degrees of freedom (training residuals - nominal parameters).
+    fits : sequence of (kind, location, bic)
+        Refitted candidates.
+    margin : float
+    near : callable(location_a, location_b) -> bool
+        True when b is a's neighbour (one element layer).
+
+    Returns
+    -------
+    verdict : str
+    best : int or None, index into ``fits``.
+    runner : int or None, index of the runner-up (another kind or a location that is not a
+        neighbour of the best's).
+    """
+    if none_chi2 <= gof_limit(none_dof):
+        return "none", None, None
+    if not fits:
+        return "unexplained", None, None
+    scores = np.array([f[2] for f in fits], float)
+    best = int(np.argmin(scores))
+    kind, loc = fits[best][0], fits[best][1]
+    rivals = [i for i, f in enumerate(fits)
+              if i != best and (f[0] != kind or not near(loc, f[1]))]
+    runner = min(rivals, key=lambda i: scores[i]) if rivals else None
+    if not scores[best] + margin < none_bic:
+        return "unexplained", best, runner
+    if runner is not None and not scores[best] + margin < scores[runner]:
+        return "ambiguous", best, runner
+    return "effect", best, runner
+
+
+# ------------------------------------------------------------------------------------ diagnose
+def _say(progress, text: str) -> None:
+    if progress is not None:
+        progress(text)
+
+
+def _preflight(configurations, settings: DiagnoseSettings, notes: list):
+    refs = []
+    for data in configurations:
+        n_test = data.gvt.sizes["mode"]
+        nmodes = settings.nmodes or 2 * n_test + N_RIGID
+        modes = compute_modes(data.model, nmodes)
+        if elastic_index(modes).size < n_test:
+            raise InputError(f"diagnose: configuration {data.name}: {n_test} test modes but only "
+                             f"{elastic_index(modes).size} elastic analysis modes. Fix: raise "
+                             "[diagnose] nmodes.")
+        ref, facts = build_reference(
+            data.name, data.gvt, data.measured_mass, modes, frequency_noise=settings.frequency_noise,
+            shape_noise_value=settings.shape_noise, model_scatter=settings.model_scatter,
+            holdout=settings.holdout, nmodes=nmodes, wtmass=data.model.wtmass)
+        refs.append(ref)
+        if ref.has_shapes:
+            notes.append(f"{data.name}: {n_test} test modes, {ref.sensor_index.size} sensor DOFs, "
+                         f"shape noise {100 * facts['shape_noise']:.1f} % of the RMS (median), "
+                         f"test self-orthogonality largest off-diagonal "
+                         f"{facts['self_orthogonality'] if facts['self_orthogonality'] is None else round(facts['self_orthogonality'], 3)}, "
+                         f"paired MAC min {min(facts['mac']):.2f}.")
+            if facts["self_orthogonality"] is not None and \
+                    facts["self_orthogonality"] > 0.2:
+                notes.append(f"{data.name}: the test modes are not orthogonal in the analysis mass "
+                             f"(largest off-diagonal {facts['self_orthogonality']:.2f}): noisy or "
+                             "aliased shapes, or a mass distribution the model lacks.")
+        else:
+            notes.append(f"{data.name}: frequency-only data ({n_test} modes): paired by nearest "
+                         "frequency; the shapes cannot tell where along a symmetric structure, "
+                         "nor a member from a joint at one spot.")
+        if not ref.mass_scale:
+            notes.append(f"{data.name}: no measured mass properties: a missing mass is seen only "
+                         "through the frequencies.")
+    return refs
+
+
+def _table(rows, refits, none, n_data: int, n_theta: int) -> tuple:
+    """The first round's ranked candidates (refitted ones by their BIC, the rest linearised)."""
+    scored = [(fit.bic, fit.candidate, True) for fit in refits]
+    done = {id(fit.candidate) for fit in refits}
+    for row in rows:
+        if id(row.candidate) not in done:
+            p = len(row.candidate.parameters) + n_theta
+            scored.append((row.chi2 + p * np.log(n_data), row.candidate, False))
+    scored.append((none.bic, None, True))
+    scored.sort(key=lambda s: s[0])
+    best = scored[0][0]
+    return tuple(CandidateScore(c.kind if c else "none", c.location.as_dict() if c else
+                                {"grids": [], "elements": [], "properties": []}, float(b - best),
+                                c.label if c else "nothing missing", refitted)
+                 for b, c, refitted in scored)
+
+
+def diagnose(configurations, settings: DiagnoseSettings = DiagnoseSettings(), *,
+             progress=None) -> DiagnoseResult:
+    """Name the effect(s) the model is missing (module docstring).
+
+    Parameters
+    ----------
+    configurations : sequence of ConfigurationData
+        The tested configurations (one structure in several loadings).
+    settings : DiagnoseSettings
+    progress : callable(str), optional
+        Receives progress notes.
+
+    Returns
+    -------
+    DiagnoseResult
+    """
+    configurations = tuple(configurations)
+    if not configurations:
+        raise InputError("diagnose: no configurations. Fix: give at least one ConfigurationData.")
+    names = [c.name for c in configurations]
+    if len(set(names)) != len(names):
+        raise InputError(f"diagnose: configuration names {names} repeat. Fix: name each once.")
+    if not isinstance(settings, DiagnoseSettings):
+        raise InputError("diagnose: settings must be a DiagnoseSettings.")
+    t0 = time.perf_counter()
+    notes: list = []
+    with threadpool_limits(limits=1):
+        refs = _preflight(configurations, settings, notes)
+        problem = Problem.build(refs, [c.model for c in configurations])
+        _say(progress, "calibrating the nominal parameters")
+        cal = calibrate(problem)
+        n_data = cal.n_data
+        notes += [f"calibration: {name} {100 * t:+.1f} %" for name, t in zip(problem.names, cal.theta)]
+        notes += list(cal.flags)
+        gap_before = gap_metrics(problem, cal.evaluations)
+        effects, records, rounds = [], [], []
+        theta, none_chi2, none_evs = cal.theta, cal.chi2, cal.evaluations
+        table, separating, first = (), None, None
+        for k in range(settings.max_effects):
+            _say(progress, f"round {k + 1}: screening")
+            model0 = problem.model(0, theta, effects)
+            cands = candidates(model0, settings.kinds)
+            r0, signed, skipped = signatures(problem, theta, effects, none_evs, cands,
+                                             progress=progress)
+            if skipped:
+                notes.append(f"round {k + 1}: {len(skipped)} candidates could not be applied to "
+                             f"every configuration (first: {skipped[0]}).")
+            rows = screen(r0, signed)
+            _say(progress, f"round {k + 1}: refitting")
+            none = refit(problem, theta, effects, None, n_data=n_data) if k else \
+                _none_fit(problem, cal, n_data)
+            fits = [refit(problem, theta, effects, row, n_data=n_data)
+                    for row in pick_for_refit(rows, settings.refit)]
+            model_k = model0
+
+            def near(a, b):
+                return _overlaps(neighbours(model_k, a), b)
+
+            verdict, best, runner = decide(none.bic, none.chi2, n_data - len(theta),
+                                           [(f.candidate.kind, f.candidate.location, f.bic)
+                                            for f in fits], settings.margin, near)
+            rounds.append(_round_record(k, verdict, fits, best, runner, none))
+            if k == 0:
+                first = verdict
+                table = _table(rows, fits, none, n_data, len(theta))
+            if verdict == "ambiguous" and not effects:
+                separating = separating_measurement(problem, fits[best], fits[runner])
+            if verdict != "effect":
+                break
+            chosen = fits[best]
+            rival = min(none.bic, fits[runner].bic if runner is not None else np.inf)
+            records.append(EffectRecord(chosen.candidate, chosen.values, float(rival - chosen.bic)))
+            effects.append((chosen.candidate, chosen.values))
+            theta, none_evs = chosen.theta, chosen.evaluations
+        after_evs = none_evs
+        gap_after = gap_metrics(problem, after_evs)
+    verdict = "effect" if records else first
+    notes.append(f"diagnose took {time.perf_counter() - t0:.1f} s "
+                 f"({len(rounds)} round{'s' if len(rounds) > 1 else ''}).")
+    return DiagnoseResult(verdict=verdict, effects=tuple(records), candidates=table,
+                          gap_before=gap_before, gap_after=gap_after, notes=tuple(notes),
+                          separating_measurement=separating,
+                          nominal={n: float(t) for n, t in zip(problem.names, theta)},
+                          rounds=tuple(rounds))
+
+
+def _none_fit(problem: Problem, cal, n_data: int):
+    from pipeline.diagnose.evidence import bic
+    from pipeline.diagnose.screen import Refitted
+
+    return Refitted(None, np.zeros(0), cal.theta, cal.chi2, bic(cal.chi2, len(cal.theta), n_data),
+                    len(cal.theta), cal.evaluations)
+
+
+def _round_record(k: int, verdict: str, fits, best, runner, none) -> dict:
+    def entry(i):
+        if i is None:
+            return None
+        f = fits[i]
+        return {"kind": f.candidate.kind, "label": f.candidate.label, "bic": f.bic,
+                "chi2": f.chi2, "parameters": dict(zip(f.candidate.parameters,
+                                                       map(float, f.values)))}
+    return {"round": k + 1, "verdict": verdict, "none_bic": none.bic, "none_chi2": none.chi2,
+            "best": entry(best), "runner_up": entry(runner)}
