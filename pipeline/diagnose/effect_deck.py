@@ -1,0 +1,182 @@
+"""Bulk-data cards of a model change, and a deck patched with them.
+
+An effect of :mod:`pipeline.diagnose.effects` is defined by the model it makes; its cards are read
+off the difference between the model before and after (new CONM2s, CBUSH/PBUSH springs, new or
+changed CBAR/CBEAM and PBAR/PBEAM cards, removed rigid elements), so that the written deck and
+:func:`pipeline.diagnose.effects.apply_effect` cannot disagree. Cards are field lists: rendered as
+small-field text with :mod:`structures.bulk_text` (MYSTRAN-readable), or added to a pyNastran deck
+and written in large field (the precision of the model's numbers).
+"""
+from __future__ import annotations
+
+import io
+from pathlib import Path
+
+import numpy as np
+
+from structures.bulk_text import card as card_text
+from structures.common.errors import InputError, card_message
+from structures.common.files import write_text
+from structures.common.nastran import read_pynastran
+from structures.model import FEModel
+
+#: Element families an effect may add or change (others are never touched).
+CHANGED_FAMILIES = ("CBAR", "CBEAM", "CBUSH")
+
+
+def _components(mask: int):
+    """Nastran component string of a bit mask as an integer field (None when no component)."""
+    text = "".join(str(c + 1) for c in range(6) if int(mask) >> c & 1)
+    return int(text) if text else None
+
+
+def _line_card(es, i: int) -> list:
+    data = es.data
+    if data["g0"][i]:
+        orient = [int(data["g0"][i]), None, None]
+    else:
+        orient = [float(x) + 0.0 for x in data["v"][i]]
+    fields = [es.card, int(es.eids[i]), int(es.pids[i]), int(es.nodes[i, 0]), int(es.nodes[i, 1]),
+              *orient, str(data["offt"][i]), _components(data["pa"][i]),
+              _components(data["pb"][i]), *[float(x) + 0.0 for x in data["wa"][i]],
+              *[float(x) + 0.0 for x in data["wb"][i]]]
+    return fields
+
+
+def _bush_card(es, i: int) -> list:
+    if int(es.data["cid"][i]) != 0:
+        raise InputError(card_message("only CBUSHes in the basic frame (CID = 0) are written.",
+                                      card="CBUSH", card_id=int(es.eids[i]),
+                                      fix="report this: diagnose effects use CID = 0."))
+    gb = int(es.nodes[i, 1])
+    return ["CBUSH", int(es.eids[i]), int(es.pids[i]), int(es.nodes[i, 0]), gb or None,
+            None, None, None, 0, float(es.data["s"][i])]
+
+
+def _property_card(prop) -> list:
+    f = prop.fields
+
+    def val(name):
+        value = f.get(name)
+        return None if value is None else float(value)
+
+    tail = [val("K1"), val("K2")] + ([val("I12") or None] if prop.card == "PBAR" else [])
+    stress = [0.0] * 8 if any(v is not None for v in tail) else []
+    if prop.card == "PBAR":
+        fields = ["PBAR", prop.pid, int(f["MID"]), val("A"), val("I1"), val("I2"), val("J"),
+                  val("NSM"), None, *stress, *tail]
+    elif prop.card == "PBEAM":
+        fields = ["PBEAM", prop.pid, int(f["MID"]), val("A"), val("I1"), val("I2"), val("I12"),
+                  val("J"), val("NSM"), *stress, *tail]
+    else:
+        fields = []
+    while fields and fields[-1] is None:
+        fields.pop()
+    if fields:
+        return fields
+    if prop.card == "PBUSH":
+        return ["PBUSH", prop.pid, "K", *[float(f.get(f"K{i}", 0.0) or 0.0) for i in range(1, 7)]]
+    raise InputError(card_message(f"a changed {prop.card} cannot be written by diagnose.",
+                                  card=prop.card, card_id=prop.pid,
+                                  fix="report this: effects change PBAR, PBEAM and PBUSH only."))
+
+
+#: CONM2 I11, I21, I22, I31, I32, I33 as (row, column, sign) of the basic inertia tensor.
+_CONM2_INERTIA = ((0, 0, 1.0), (1, 0, -1.0), (1, 1, 1.0), (2, 0, -1.0), (2, 1, -1.0), (2, 2, 1.0))
+
+
+def _conm2_card(masses, i: int) -> list:
+    t = masses.inertia[i]
+    return ["CONM2", int(masses.eids[i]), int(masses.grid[i]), 0, float(masses.mass[i]),
+            *[float(x) for x in masses.offset[i]], None,
+            *[float(sign * t[r, c]) + 0.0 for r, c, sign in _CONM2_INERTIA]]
+
+
+def _row_changed(old_es, new_es, j_old: int, j_new: int) -> bool:
+    if old_es.pids[j_old] != new_es.pids[j_new]:
+        return True
+    if np.any(old_es.nodes[j_old] != new_es.nodes[j_new]):
+        return True
+    for key, arr in new_es.data.items():
+        if np.any(np.asarray(old_es.data[key][j_old]) != np.asarray(arr[j_new])):
+            return True
+    return False
+
+
+def model_changes(old: FEModel, new: FEModel) -> tuple[dict, list]:
+    """The cards that turn ``old`` into ``new``.
+
+    Parameters
+    ----------
+    old, new : FEModel
+        ``new`` made from ``old`` by diagnose effects (elements and properties added or changed in
+        the families of :data:`CHANGED_FAMILIES`, CONM2s added, rigid elements removed).
+
+    Returns
+    -------
+    removed : dict with ``rigid``, ``elements``, ``properties``: sorted ids of cards to delete
+        (changed cards are deleted and written again).
+    cards : list of field lists (card name first), in the order properties, elements, masses.
+    """
+    new_rigid = {r.eid for r in new.rigid}
+    removed = {"rigid": sorted(r.eid for r in old.rigid if r.eid not in new_rigid),
+               "elements": [], "properties": []}
+    prop_cards, elem_cards, mass_cards = [], [], []
+    for pid in sorted(new.properties):
+        prop = new.properties[pid]
+        if pid in old.properties and old.properties[pid] == prop:
+            continue
+        if pid in old.properties:
+            removed["properties"].append(pid)
+        prop_cards.append(_property_card(prop))
+    for kind in CHANGED_FAMILIES:
+        es = new.elements.get(kind)
+        if es is None:
+            continue
+        before = old.elements.get(kind)
+        index = {} if before is None else {int(e): j for j, e in enumerate(before.eids)}
+        write = _bush_card if kind == "CBUSH" else _line_card
+        for i, eid in enumerate(es.eids.tolist()):
+            if eid in index:
+                if not _row_changed(before, es, index[eid], i):
+                    continue
+                removed["elements"].append(eid)
+            elem_cards.append(write(es, i))
+    known = set(old.masses.eids.tolist())
+    mass_cards = [_conm2_card(new.masses, i) for i, eid in enumerate(new.masses.eids.tolist())
+                  if eid not in known]
+    return removed, prop_cards + elem_cards + mass_cards
+
+
+def small_field_text(removed: dict, cards: list, header: str = "") -> str:
+    """Small-field bulk-data text of the cards, removals stated as comments."""
+    lines = [f"$ {line}" for line in header.splitlines()]
+    for key, name in (("rigid", "rigid element"), ("elements", "element"),
+                      ("properties", "property")):
+        if removed[key]:
+            lines.append(f"$ replaces or removes {name} " + " ".join(map(str, removed[key])))
+    lines.extend(card_text(*fields) for fields in cards)
+    return "\n".join(lines) + "\n"
+
+
+def write_patched_deck(deck_in, deck_out, changes) -> Path:
+    """Write ``deck_in`` with the changes applied, large field, INCLUDEs merged.
+
+    Parameters
+    ----------
+    deck_in, deck_out : path-like
+    changes : sequence of (removed, cards) from :func:`model_changes`, applied in order.
+    """
+    bdf = read_pynastran(deck_in)
+    for removed, cards in changes:
+        for eid in removed["rigid"]:
+            bdf.rigid_elements.pop(eid, None)
+        for eid in removed["elements"]:
+            bdf.elements.pop(eid, None)
+        for pid in removed["properties"]:
+            bdf.properties.pop(pid, None)
+        for fields in cards:
+            bdf.add_card(list(fields), fields[0], is_list=True)
+    text = io.StringIO()
+    bdf.write_bdf(text, size=16, is_double=False, close=False)
+    return write_text(text.getvalue(), Path(deck_out))

@@ -1,0 +1,547 @@
+"""The library of candidate effects: small parametrised changes a model may be missing.
+
+Each candidate is one kind of effect at one location with a few parameters, each defined so that
+0 means "no effect" (all-zero values give a model with the same K and M) and relative to a stated
+scale of the model (so that bounds do not depend on units):
+
+``lumped_mass`` at a grid, parameter ``mass``
+    A CONM2 (no offset, no inertia) of ``mass`` times the model's total mass (deck mass units,
+    before PARAM WTMASS); bounds [0, 0.10]. One candidate per grid that carries structure
+    (referenced by an element, a rigid element or a CONM2) and whose translations are not all
+    constrained.
+``joint_flexibility`` of a rigid element, parameter ``compliance`` = k_ref / k
+    An RBE2, or an RBAR with all six independent components on one grid, is removed and every
+    dependent grid is tied to the independent grid by a CBUSH (basic axes, CID = 0, at mid-length)
+    of translational stiffness k_ref,t / compliance and rotational stiffness k_ref,r / compliance
+    on the rigid element's dependent components. k_ref is the median over the CBAR/CBEAM elements
+    touching the element's grids (all beams of the model when none touch them) of
+    k_ref,t = 12 E I / L^3 and k_ref,r = E I / L with I = (I1 + I2) / 2: at compliance 1 the joint
+    is about as flexible as one adjacent element (transverse tip and end-rotation stiffness of a
+    beam element, Przemieniecki 1968 sec. 4.3). Bounds [0, 20]; compliance 0 keeps the rigid
+    element. Skipped: rigid elements whose partial dependent components are not in basic axes.
+``member_taper`` of a member (:mod:`pipeline.diagnose.members`), parameters ``scale``, ``taper``
+    Each element's A times (1 + scale) (1 + taper (xi - 1/2))^2 and I1, I2, I12, J times
+    (1 + scale) (1 + taper (xi - 1/2))^4 at its mid-length xi: a solid section scaled in size s
+    (A ~ s^2, I ~ s^4) linearly along the member. Bounds scale [-0.3, 0.3], taper [-0.8, 0.8].
+    A one-element member has ``scale`` only (the taper has no effect at xi = 1/2). A member keeps
+    its PID when it is the PID's only element; otherwise its elements get new PIDs (copies of the
+    property, numbered from the model's largest PID + 1).
+``member_curvature`` of a member, parameters ``bow_1``, ``bow_2``
+    A parabolic bow: the member's middle is offset laterally by bow_1 L along each element's y axis
+    (plane 1) and bow_2 L along its z axis (plane 2), L the member's length, by element end
+    offsets w(xi) = 4 bow L xi (1 - xi) added to WA/WB (a one-element member: its mid-length value
+    bow L at both ends), so bending couples with axial and torsion. Bounds [-0.15, 0.15].
+``boundary_stiffness`` at a grid in basic direction x, y or z, parameter ``k_<direction>``
+    A grounded CBUSH (CID = 0) of stiffness k times m_total (2 pi f_1)^2, f_1 the model's lowest
+    elastic frequency and m_total its total mass (consistent units): at k = 1 the spring alone
+    would carry the whole mass at f_1. Bounds [0, 1]. One candidate per grid of ``lumped_mass``
+    and unconstrained basic direction.
+
+New elements take ids from the model's largest element, CONM2 or rigid-element id + 1; new
+properties from its largest PID + 1.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import numpy as np
+
+from pipeline.diagnose.effect_deck import model_changes, small_field_text, write_patched_deck
+from pipeline.diagnose.members import Member, find_members
+from structures.assembly import _line_offsets
+from structures.common.errors import InputError, card_message
+from structures.elements.beam import beam_axes
+from structures.massprops import mass_properties
+from structures.model import ElementSet, FEModel, Property
+
+KINDS = ("lumped_mass", "joint_flexibility", "member_taper", "member_curvature",
+         "boundary_stiffness")
+VERDICT_KINDS = KINDS + ("none",)
+DIRECTIONS = ("x", "y", "z")
+
+#: (lower, upper, reference) of each parameter, by kind and parameter name.
+PARAMETER_RANGES = {
+    "lumped_mass": {"mass": (0.0, 0.10, 0.02)},
+    "joint_flexibility": {"compliance": (0.0, 20.0, 4.0)},
+    "member_taper": {"scale": (-0.3, 0.3, 0.1), "taper": (-0.8, 0.8, 0.3)},
+    "member_curvature": {"bow_1": (-0.15, 0.15, 0.05), "bow_2": (-0.15, 0.15, 0.05)},
+    "boundary_stiffness": {f"k_{d}": (0.0, 1.0, 0.1) for d in DIRECTIONS},
+}
+#: Exponent n of the section fields scaled by s^n in ``member_taper``.
+TAPER_EXPONENTS = {"A": 2, "I1": 4, "I2": 4, "I12": 4, "J": 4}
+
+
+def _check_kinds(kinds) -> tuple:
+    kinds = (kinds,) if isinstance(kinds, str) else tuple(kinds)
+    bad = [k for k in kinds if k not in KINDS]
+    if bad:
+        raise InputError(f"unknown effect kind(s) {bad}. Fix: use some of {', '.join(KINDS)}.")
+    return kinds
+
+
+@dataclass(frozen=True)
+class Location:
+    """Where an effect acts: grid, element (or rigid element) and property ids, sorted."""
+
+    grids: tuple = ()
+    elements: tuple = ()
+    properties: tuple = ()
+
+    def __post_init__(self):
+        for name in ("grids", "elements", "properties"):
+            object.__setattr__(self, name, tuple(sorted({int(i) for i in getattr(self, name)})))
+
+    def as_dict(self) -> dict:
+        """``{"grids": [...], "elements": [...], "properties": [...]}``."""
+        return {"grids": list(self.grids), "elements": list(self.elements),
+                "properties": list(self.properties)}
+
+
+@dataclass(frozen=True)
+class Candidate:
+    """One candidate effect: a kind at a location, with bounded parameters.
+
+    Attributes
+    ----------
+    kind : str, one of :data:`KINDS`.
+    location : Location
+    label : str, human text (``"RBE2 7501 (5011-5021)"``, ``"grid 3005 z"``).
+    parameters : tuple of str, parameter names.
+    lower, upper : tuple of float, bounds of each parameter (0 inside).
+    reference : tuple of float, a plausible, clearly visible size (the screening step).
+    detail : tuple of (key, value) pairs the kind needs (scales, direction, member geometry).
+    """
+
+    kind: str
+    location: Location
+    label: str
+    parameters: tuple
+    lower: tuple
+    upper: tuple
+    reference: tuple
+    detail: tuple = ()
+
+    def __post_init__(self):
+        _check_kinds(self.kind)
+        for name in ("parameters", "lower", "upper", "reference"):
+            object.__setattr__(self, name, tuple(getattr(self, name)))
+        n = len(self.parameters)
+        if not n or not len(self.lower) == len(self.upper) == len(self.reference) == n:
+            raise InputError(f"candidate {self.label!r}: {n} parameters but {len(self.lower)} "
+                             f"lower, {len(self.upper)} upper and {len(self.reference)} reference "
+                             "values. Fix: give one of each per parameter.")
+        lo, hi, ref = (np.array(v, float) for v in (self.lower, self.upper, self.reference))
+        if not (np.all(lo <= 0.0) and np.all(hi >= 0.0) and np.all((lo <= ref) & (ref <= hi))
+                and np.all(lo < hi)):
+            raise InputError(f"candidate {self.label!r}: bounds {self.lower}..{self.upper} must "
+                             f"contain 0 and the reference {self.reference}. Fix: widen them.")
+
+    def get(self, key: str, default=None):
+        """The value of ``key`` in :attr:`detail`."""
+        return dict(self.detail).get(key, default)
+
+
+def _candidate(kind, location, label, names, detail=()) -> Candidate:
+    ranges = [PARAMETER_RANGES[kind][n] for n in names]
+    return Candidate(kind, location, label, tuple(names), tuple(r[0] for r in ranges),
+                     tuple(r[1] for r in ranges), tuple(r[2] for r in ranges), tuple(detail))
+
+
+# ----------------------------------------------------------------------------------- model scans
+def _element_grids(model: FEModel) -> np.ndarray:
+    """Grid ids referenced by elements, rigid elements and CONM2s."""
+    parts = [es.nodes.ravel() for es in model.elements.values()]
+    parts.append(np.asarray(model.masses.grid, np.int64))
+    parts.extend(np.array([g for g, _ in r.independent + r.dependent], np.int64)
+                 for r in model.rigid)
+    ids = np.unique(np.concatenate(parts)) if parts else np.zeros(0, np.int64)
+    return ids[ids > 0]
+
+
+def _fixed_masks(model: FEModel) -> np.ndarray:
+    """(ng,) constrained-component bit masks (SPC and GRID PS) per grid row."""
+    masks = np.array(model.grids.ps, np.int64)
+    if model.spc:
+        gids, bits = zip(*model.spc)
+        np.bitwise_or.at(masks, model.grids.index(list(gids), card="SPC",
+                                                   filename=model.filename), list(bits))
+    return masks
+
+
+def _beam_stiffness(model: FEModel):
+    """Per CBAR/CBEAM element: (eids, nodes, 12 E I / L^3, E I / L) with I = (I1 + I2) / 2."""
+    out = []
+    for card in ("CBAR", "CBEAM"):
+        es = model.elements.get(card)
+        if es is None:
+            continue
+        gi = model.grids.index(es.nodes, card=card, filename=model.filename)
+        length = np.linalg.norm(model.grids.xyz[gi[:, 1]] - model.grids.xyz[gi[:, 0]], axis=1)
+        ei = np.zeros(len(es))
+        for pid in np.unique(es.pids):
+            sel = es.pids == pid
+            prop = model.property(pid, card=card, eid=int(es.eids[sel][0]))
+            e_mod = model.material(prop.get("MID"), card=prop.card, pid=pid).isotropic()[0]
+            ei[sel] = e_mod * 0.5 * (prop.get("I1") + prop.get("I2"))
+        out.append((es.eids, es.nodes, 12.0 * ei / length ** 3, ei / length))
+    if not out:
+        return None
+    return tuple(np.concatenate(parts) for parts in zip(*out))
+
+
+def _joint_grids(rigid) -> tuple | None:
+    """(independent grid, ((dependent grid, components), ...)) of a rigid joint, else None."""
+    if rigid.card not in ("RBE2", "RBAR") or len(rigid.independent) != 1:
+        return None
+    grid, comps = rigid.independent[0]
+    if sorted(str(comps)) != list("123456"):
+        return None
+    return int(grid), tuple((int(g), str(c)) for g, c in rigid.dependent)
+
+
+def _lowest_elastic_frequency(model: FEModel) -> float:
+    from structures.modal import compute_modes
+    ds = compute_modes(model, 8)
+    elastic = ds["frequency"].values[(ds["rigid_motion"].values == "")
+                                     & (ds["frequency"].values > 0)]
+    if not elastic.size:
+        raise InputError(card_message("no elastic mode among the 8 lowest modes, so the boundary "
+                                      "stiffness scale cannot be set.", filename=model.filename,
+                                      fix="pass frequency= (Hz) to candidates()."))
+    return float(elastic[0])
+
+
+def candidates(model: FEModel, kinds=KINDS, *, frequency: float | None = None
+               ) -> tuple[Candidate, ...]:
+    """Every candidate effect of the given kinds on the model.
+
+    Parameters
+    ----------
+    model : FEModel
+    kinds : sequence of str, some of :data:`KINDS`.
+    frequency : float, optional
+        The model's lowest elastic frequency [Hz] for the ``boundary_stiffness`` scale; computed
+        (8 lowest modes) when not given and that kind is asked for.
+
+    Returns
+    -------
+    tuple of Candidate, grouped by kind in the order of ``kinds``.
+    """
+    kinds = _check_kinds(kinds)
+    out = []
+    grids = _element_grids(model)
+    fixed = _fixed_masks(model)[model.grids.index(grids)] if grids.size else np.zeros(0, int)
+    basic = model.grids.cd[model.grids.index(grids)] == 0 if grids.size else np.zeros(0, bool)
+    free_grids = grids[(fixed & 7) != 7]
+    props = mass_properties(model) if {"lumped_mass", "boundary_stiffness"} & set(kinds) else None
+    members = find_members(model) if {"member_taper", "member_curvature"} & set(kinds) else ()
+    for kind in kinds:
+        if kind == "lumped_mass":
+            detail = (("total_mass", props.weight),)
+            out += [_candidate(kind, Location(grids=(g,)), f"grid {g}", ("mass",), detail)
+                    for g in free_grids.tolist()]
+        elif kind == "boundary_stiffness":
+            f1 = _lowest_elastic_frequency(model) if frequency is None else float(frequency)
+            k_ref = props.mass * (2.0 * np.pi * f1) ** 2
+            for g, mask, is_basic in zip(grids.tolist(), fixed.tolist(), basic.tolist()):
+                for c, d in enumerate(DIRECTIONS):
+                    if is_basic and mask >> c & 1:
+                        continue
+                    out.append(_candidate(kind, Location(grids=(g,)), f"grid {g} {d}", (f"k_{d}",),
+                                          (("direction", d), ("k_ref", k_ref))))
+        elif kind == "joint_flexibility":
+            out += _joint_candidates(model)
+        else:
+            for m in members:
+                names = PARAMETER_RANGES[kind] if kind == "member_curvature" or len(m.eids) > 1 \
+                    else ("scale",)
+                label = (f"member PID {m.pid} ({m.card} {m.eids[0]}" +
+                         (f"..{m.eids[-1]}, grids {m.grids[0]}-{m.grids[-1]})"
+                          if len(m.eids) > 1 else f", grids {m.grids[0]}-{m.grids[-1]})"))
+                out.append(_candidate(kind, Location(grids=m.grids, elements=m.eids,
+                                                     properties=(m.pid,)),
+                                      label, tuple(names), (("member", m),)))
+    return tuple(out)
+
+
+def _joint_candidates(model: FEModel) -> list:
+    beams = _beam_stiffness(model)
+    if beams is None:
+        return []
+    eids, nodes, k_t, k_r = beams
+    out = []
+    for rigid in model.rigid:
+        joint = _joint_grids(rigid)
+        if joint is None:
+            continue
+        indep, deps = joint
+        partial = [g for g, c in deps if sorted(c) != list("123456")]
+        if partial and np.any(model.grids.cd[model.grids.index(partial)] != 0):
+            continue
+        mine = [indep] + [g for g, _ in deps]
+        near = np.isin(nodes, mine).any(axis=1)
+        if not near.any():
+            near[:] = True
+        detail = (("k_translation", float(np.median(k_t[near]))),
+                  ("k_rotation", float(np.median(k_r[near]))))
+        label = f"{rigid.card} {rigid.eid} ({indep}-{'/'.join(str(g) for g, _ in deps)})"
+        out.append(_candidate("joint_flexibility",
+                              Location(grids=mine, elements=(rigid.eid,)), label,
+                              ("compliance",), detail))
+    return out
+
+
+def neighbours(model: FEModel, location: Location) -> Location:
+    """The location grown by one element layer.
+
+    The location's grids are its own and those of its elements; the grown location adds every
+    element (rigid elements included) touching one of them and every grid of those elements;
+    properties are those of the location and of the added elements.
+
+    Parameters
+    ----------
+    model : FEModel
+    location : Location
+
+    Returns
+    -------
+    Location
+    """
+    conn = [(es.eids, es.nodes, es.pids) for es in model.elements.values()]
+    if model.rigid:
+        rigid_grids = [[gid for gid, _ in r.independent + r.dependent] for r in model.rigid]
+        nodes = np.zeros((len(rigid_grids), max(map(len, rigid_grids))), np.int64)
+        for i, g in enumerate(rigid_grids):
+            nodes[i, :len(g)] = g
+        conn.append((np.array([r.eid for r in model.rigid]), nodes,
+                     np.zeros(len(rigid_grids), np.int64)))
+    seeds = set(location.grids)
+    for eids, nodes, _ in conn:
+        seeds.update(nodes[np.isin(eids, location.elements)].ravel().tolist())
+    grids, elements, props = set(seeds), set(location.elements), set(location.properties)
+    for eids, nodes, pids in conn:
+        touch = np.isin(nodes, list(seeds)).any(axis=1)
+        grids.update(nodes[touch].ravel().tolist())
+        elements.update(eids[touch].tolist())
+        props.update(pids[touch & (pids > 0)].tolist())
+    grids.discard(0)
+    return Location(grids=tuple(grids), elements=tuple(elements), properties=tuple(props))
+
+
+# ---------------------------------------------------------------------------------- application
+def _check_values(candidate: Candidate, values) -> np.ndarray:
+    x = np.atleast_1d(np.asarray(values, float))
+    if x.shape != (len(candidate.parameters),) or not np.all(np.isfinite(x)):
+        raise InputError(f"candidate {candidate.label!r}: values {np.asarray(values).tolist()} must "
+                         f"be {len(candidate.parameters)} finite numbers "
+                         f"({', '.join(candidate.parameters)}). Fix: give one value per parameter.")
+    lo, hi = np.array(candidate.lower), np.array(candidate.upper)
+    tol = 1e-12 * (hi - lo)
+    bad = np.flatnonzero((x < lo - tol) | (x > hi + tol))
+    if bad.size:
+        i = bad[0]
+        raise InputError(f"candidate {candidate.label!r}: {candidate.parameters[i]} = {x[i]:.6g} "
+                         f"is outside its bounds [{lo[i]:.6g}, {hi[i]:.6g}]. Fix: keep the "
+                         "parameter inside its bounds.")
+    return x
+
+
+def _next_eid(model: FEModel) -> int:
+    ids = [0, *model.masses.eids.tolist(), *(r.eid for r in model.rigid)]
+    ids += [int(es.eids.max()) for es in model.elements.values() if len(es)]
+    return max(ids) + 1
+
+
+def _next_pid(model: FEModel) -> int:
+    return max([0, *model.properties]) + 1
+
+
+def _append_elements(model: FEModel, card: str, eids, pids, nodes, data) -> dict:
+    elements = dict(model.elements)
+    old = elements.get(card)
+    if old is not None:
+        eids = np.concatenate([old.eids, eids])
+        pids = np.concatenate([old.pids, pids])
+        nodes = np.concatenate([old.nodes, nodes])
+        data = {k: np.concatenate([np.asarray(old.data[k]), np.asarray(v)]) for k, v in data.items()}
+    elements[card] = ElementSet(card, eids, pids, nodes, data)
+    return elements
+
+
+def _add_bushes(model: FEModel, pairs, stiffness) -> FEModel:
+    """CBUSHes (CID 0, S 0.5) on (GA, GB) grid pairs (GB 0: grounded), one PBUSH each."""
+    n = len(pairs)
+    eid0, pid0 = _next_eid(model), _next_pid(model)
+    props = dict(model.properties)
+    for i, k in enumerate(stiffness):
+        props[pid0 + i] = Property(pid0 + i, "PBUSH", {f"K{c + 1}": float(k[c]) for c in range(6)})
+    elements = _append_elements(
+        model, "CBUSH", np.arange(eid0, eid0 + n), np.arange(pid0, pid0 + n), np.array(pairs),
+        {"v": np.zeros((n, 3)), "g0": np.zeros(n, np.int64), "cid": np.zeros(n, np.int64),
+         "s": np.full(n, 0.5)})
+    return replace(model, elements=elements, properties=props)
+
+
+def _lumped_mass(model, candidate, x):
+    total = candidate.get("total_mass")
+    if total is None:
+        total = mass_properties(model).weight
+    cm = model.masses
+    masses = replace(cm, eids=np.append(cm.eids, _next_eid(model)),
+                     grid=np.append(cm.grid, candidate.location.grids[0]),
+                     mass=np.append(cm.mass, x[0] * total),
+                     offset=np.concatenate([cm.offset, np.zeros((1, 3))]),
+                     inertia=np.concatenate([cm.inertia, np.zeros((1, 3, 3))]))
+    return replace(model, masses=masses)
+
+
+def _boundary(model, candidate, x):
+    k = np.zeros(6)
+    k[DIRECTIONS.index(candidate.get("direction"))] = x[0] * candidate.get("k_ref")
+    return _add_bushes(model, [(candidate.location.grids[0], 0)], [k])
+
+
+def _joint(model, candidate, x):
+    eid = candidate.location.elements[0]
+    rigid = next((r for r in model.rigid if r.eid == eid), None)
+    joint = None if rigid is None else _joint_grids(rigid)
+    if joint is None:
+        raise InputError(card_message("no rigid joint (RBE2, or RBAR independent on one grid) with "
+                                      "this id in the model.", card="RBE2/RBAR", card_id=eid,
+                                      filename=model.filename,
+                                      fix="build the candidate with candidates() on this model."))
+    indep, deps = joint
+    kt, kr = candidate.get("k_translation") / x[0], candidate.get("k_rotation") / x[0]
+    stiffness = [[(kt if c < 3 else kr) if str(c + 1) in comps else 0.0 for c in range(6)]
+                 for _, comps in deps]
+    model = replace(model, rigid=tuple(r for r in model.rigid if r.eid != eid))
+    return _add_bushes(model, [(indep, g) for g, _ in deps], stiffness)
+
+
+def _member_rows(model: FEModel, member: Member):
+    es = model.elements[member.card]
+    pos = {int(e): i for i, e in enumerate(es.eids)}
+    return es, np.array([pos[e] for e in member.eids])
+
+
+def _taper(model, candidate, x):
+    member = candidate.get("member")
+    scale, taper = x[0], (x[1] if len(x) > 1 else 0.0)
+    es, rows = _member_rows(model, member)
+    s = 1.0 + taper * (member.xi_mid - 0.5)
+    base = model.property(member.pid, card=member.card, eid=member.eids[0])
+    own = np.count_nonzero(es.pids == member.pid) == 1
+    pids = np.array(es.pids)
+    props = dict(model.properties)
+    new_pid = member.pid if own else _next_pid(model)
+    for i, row in enumerate(rows):
+        fields = {k: (None if base.fields.get(k) is None else
+                      base.fields[k] * (1.0 + scale) * s[i] ** n)
+                  for k, n in TAPER_EXPONENTS.items()}
+        props[new_pid + i] = Property(new_pid + i, base.card, {**base.fields, **fields})
+        pids[row] = new_pid + i
+    elements = dict(model.elements)
+    elements[member.card] = replace(es, pids=pids)
+    return replace(model, properties=props, elements=elements)
+
+
+def _curvature(model, candidate, x):
+    member = candidate.get("member")
+    es, rows = _member_rows(model, member)
+    sub = ElementSet(es.card, es.eids[rows], es.pids[rows], es.nodes[rows],
+                     {k: np.asarray(v)[rows] for k, v in es.data.items()})
+    gi = model.grids.index(sub.nodes, card=es.card, filename=model.filename)
+    v, wa, wb = _line_offsets(model, sub, gi, model.filename)
+    xyz = model.grids.xyz
+    axes, _ = beam_axes(xyz[gi[:, 0]] + wa, xyz[gi[:, 1]] + wb, v)
+    lateral = x[0] * axes[:, 1] + x[1] * axes[:, 2]
+    if len(rows) == 1:
+        xi = np.array([[0.5, 0.5]])
+    else:
+        xi = np.stack([member.xi_a, member.xi_b], axis=1)
+    shift = 4.0 * member.length * (xi * (1.0 - xi))[:, :, None] * lateral[:, None, :]
+    offt = np.array(es.data["offt"]).astype("<U3")
+    w = {0: np.array(es.data["wa"], float), 1: np.array(es.data["wb"], float)}
+    for i, row in enumerate(rows):
+        flag = list(offt[row])
+        for end in (0, 1):
+            if flag[1 + end] == "O":
+                flag[1 + end] = "B"
+            d = shift[i, end]
+            if flag[1 + end] == "G":
+                d = model.grids.cd_axes[gi[i, end]].T @ d
+            w[end][row] = w[end][row] + d
+        offt[row] = "".join(flag)
+    elements = dict(model.elements)
+    elements[es.card] = replace(es, data={**es.data, "wa": w[0], "wb": w[1], "offt": offt})
+    return replace(model, elements=elements)
+
+
+_APPLY = {"lumped_mass": _lumped_mass, "boundary_stiffness": _boundary, "joint_flexibility": _joint,
+          "member_taper": _taper, "member_curvature": _curvature}
+
+
+def apply_effect(model: FEModel, candidate: Candidate, values) -> FEModel:
+    """The model with the candidate effect of the given size added.
+
+    Parameters
+    ----------
+    model : FEModel
+        The model the candidate was built on (or one with other effects already added).
+    candidate : Candidate
+    values : (npar,) parameter values inside the candidate's bounds; all zero returns ``model``.
+
+    Returns
+    -------
+    FEModel
+    """
+    x = _check_values(candidate, values)
+    if not np.any(x):
+        return model
+    return _APPLY[candidate.kind](model, candidate, x)
+
+
+def effect_cards(model: FEModel, candidate: Candidate, values) -> str:
+    """Small-field bulk-data text of the effect: cards added or replacing ones of the deck.
+
+    Removed rigid elements and replaced cards are named in ``$`` comment lines.
+
+    Parameters
+    ----------
+    model : FEModel
+    candidate : Candidate
+    values : (npar,)
+
+    Returns
+    -------
+    str
+    """
+    x = _check_values(candidate, values)
+    removed, cards = model_changes(model, apply_effect(model, candidate, x))
+    header = (f"diagnose effect {candidate.kind}: {candidate.label}; " +
+              ", ".join(f"{n} = {v:.6g}" for n, v in zip(candidate.parameters, x)))
+    return small_field_text(removed, cards, header)
+
+
+def write_effect_deck(deck_in, deck_out, model: FEModel, effects) -> Path:
+    """Write ``deck_in`` with effects added (large field, INCLUDEs merged into one file).
+
+    Parameters
+    ----------
+    deck_in, deck_out : path-like
+        ``model`` must be ``read_model(deck_in)``.
+    model : FEModel
+    effects : sequence of (Candidate, values), applied in order.
+
+    Returns
+    -------
+    Path of the written deck; :func:`structures.bdf.read_model` reads it back to the K and M of
+    the model with the effects applied.
+    """
+    changes = []
+    for candidate, values in effects:
+        new = apply_effect(model, candidate, values)
+        changes.append(model_changes(model, new))
+        model = new
+    return write_patched_deck(deck_in, deck_out, changes)

@@ -1,0 +1,309 @@
+"""The candidate-effect library of diagnose: analytic spring-mass and beam references, hand
+computations, the rigid-joint limit and the written deck read back."""
+from pathlib import Path
+
+import numpy as np
+import pytest
+import scipy.sparse.linalg as spla
+from scipy.integrate import solve_ivp
+from scipy.optimize import brentq
+
+from pipeline.diagnose.effects import (KINDS, Candidate, Location, apply_effect, candidates,
+                                       effect_cards, neighbours, write_effect_deck)
+from pipeline.diagnose.members import find_members
+from structures.assembly import assemble
+from structures.bdf import read_model
+from structures.bulk_text import card
+from structures.common.errors import InputError
+from structures.massprops import mass_properties
+from structures.modal import compute_modes
+
+X56 = Path(__file__).resolve().parents[3] / "data" / "x56_like" / "x56_efew.bdf"
+
+
+@pytest.fixture(scope="module")
+def x56():
+    return read_model(X56)
+
+
+@pytest.fixture(scope="module")
+def x56_candidates(x56):
+    return candidates(x56)
+
+
+def _deck(tmp_path, name, cards, params=()):
+    text = "SOL 103\nCEND\nBEGIN BULK\n" + "".join(p + "\n" for p in params)
+    text += "\n".join(card(*c) for c in cards) + "\nENDDATA\n"
+    path = tmp_path / name
+    path.write_text(text)
+    return path
+
+
+def _elastic(model, n):
+    ds = compute_modes(model, n)
+    f = ds["frequency"].values
+    return f[ds["rigid_motion"].values == ""]
+
+
+def _pick(cands, kind, label_part=""):
+    return next(c for c in cands if c.kind == kind and label_part in c.label)
+
+
+def _quadratic_frequencies(k, m):
+    """Frequencies [Hz] of a 2-DOF system by the closed-form roots of det(K - lam M) = 0."""
+    a = m[0] * m[1]
+    b = -(k[0][0] * m[1] + k[1][1] * m[0])
+    c = k[0][0] * k[1][1] - k[0][1] ** 2
+    disc = np.sqrt(b * b - 4 * a * c)
+    lam = np.array([(-b - disc) / (2 * a), (-b + disc) / (2 * a)])
+    return np.sqrt(np.clip(lam, 0, None)) / (2 * np.pi)
+
+
+# --------------------------------------------------------------------------- spring-mass decks
+def test_lumped_mass_on_one_and_two_dof_spring_mass(tmp_path):
+    k1, k2, m1, m2 = 4.0e3, 2.5e3, 2.0, 3.0
+    one = read_model(_deck(tmp_path, "one.bdf", [
+        ("GRID", 1, None, 0.0, 0.0, 0.0, None, 12456), ("CELAS2", 11, k1, 1, 3),
+        ("CONM2", 21, 1, None, m1)]))
+    cand = _pick(candidates(one, ["lumped_mass"]), "lumped_mass", "grid 1")
+    f = _elastic(apply_effect(one, cand, [0.05]), 1)
+    assert f[0] == pytest.approx(np.sqrt(k1 / (1.05 * m1)) / (2 * np.pi), rel=1e-10)
+
+    two = read_model(_deck(tmp_path, "two.bdf", [
+        ("GRID", 1, None, 0.0, 0.0, 0.0, None, 12456), ("GRID", 2, None, 1.0, 0.0, 0.0, None, 12456),
+        ("CELAS2", 11, k1, 1, 3), ("CELAS2", 12, k2, 1, 3, 2, 3),
+        ("CONM2", 21, 1, None, m1), ("CONM2", 22, 2, None, m2)]))
+    cand = _pick(candidates(two, ["lumped_mass"]), "lumped_mass", "grid 2")
+    p = 0.08
+    f = _elastic(apply_effect(two, cand, [p]), 2)
+    expected = _quadratic_frequencies([[k1 + k2, -k2], [-k2, k2]], [m1, m2 + p * (m1 + m2)])
+    np.testing.assert_allclose(f, expected, rtol=1e-10)
+
+
+def test_grounded_spring_on_free_free_two_masses(tmp_path):
+    k, m1, m2 = 1.0e4, 2.0, 5.0
+    model = read_model(_deck(tmp_path, "free.bdf", [
+        ("GRID", 1, None, 0.0, 0.0, 0.0, None, 12456), ("GRID", 2, None, 1.0, 0.0, 0.0, None, 12456),
+        ("CELAS2", 12, k, 1, 3, 2, 3), ("CONM2", 21, 1, None, m1), ("CONM2", 22, 2, None, m2)]))
+    f_elastic = np.sqrt(k * (m1 + m2) / (m1 * m2)) / (2 * np.pi)
+    assert _elastic(model, 2)[0] == pytest.approx(f_elastic, rel=1e-10)
+    cands = candidates(model, ["boundary_stiffness"])
+    assert sorted(c.label for c in cands) == ["grid 1 z", "grid 2 z"]   # x, y fixed by PS
+    p = 0.3
+    k_ground = p * (m1 + m2) * (2 * np.pi * f_elastic) ** 2    # the documented scale
+    f = compute_modes(apply_effect(model, _pick(cands, "boundary_stiffness", "grid 1 z"), [p]),
+                      2)["frequency"].values
+    np.testing.assert_allclose(f, _quadratic_frequencies([[k + k_ground, -k], [-k, k]], [m1, m2]),
+                               rtol=1e-9)
+
+
+def test_total_mass_and_cg_follow_the_added_mass(x56, x56_candidates):
+    before = mass_properties(x56)
+    cand = _pick(x56_candidates, "lumped_mass", "grid 3005")
+    p = 0.037
+    after = mass_properties(apply_effect(x56, cand, [p]))
+    assert after.mass - before.mass == pytest.approx(p * before.mass, rel=1e-12)
+    x_grid = x56.grids.xyz[x56.grids.index([3005])[0]]
+    np.testing.assert_allclose(after.cg, (before.cg + p * x_grid) / (1 + p), rtol=1e-12)
+
+
+# ------------------------------------------------------------------------------------ members
+def test_members_of_x56(x56):
+    members = {(m.pid, m.eids[0]): m for m in find_members(x56)}
+    fuselage = members[(101, 1003)]
+    # PID 101: the fuselage 1001..1007 runs straight through grid 1006, where the two pylon
+    # elements (also PID 101) branch off and are members of their own.
+    assert fuselage.grids == (1001, 1002, 1003, 1004, 1005, 1006, 1007)
+    assert fuselage.eids == (1003, 1004, 1005, 1006, 1007, 1008)
+    assert fuselage.length == pytest.approx(72.0)
+    np.testing.assert_allclose(fuselage.xi_mid, (np.arange(6) + 0.5) / 6)
+    assert members[(101, 5001)].grids == (1006, 5001)
+    assert members[(102, 1002)].grids == (1001, 1102, 1101)
+
+
+def test_taper_copies_a_shared_property(x56, x56_candidates):
+    cand = _pick(x56_candidates, "member_taper", "PID 101 (CBAR 1003")
+    new = apply_effect(x56, cand, [0.1, 0.5])
+    es = new.elements["CBAR"]
+    pids = dict(zip(es.eids.tolist(), es.pids.tolist()))
+    assert pids[5001] == pids[5101] == 101 and new.properties[101] == x56.properties[101]
+    fresh = [pids[e] for e in (1003, 1004, 1005, 1006, 1007, 1008)]
+    assert len(set(fresh)) == 6 and min(fresh) > max(x56.properties)
+    base = x56.properties[101].fields
+    xi = (np.arange(6) + 0.5) / 6
+    size = 1 + 0.5 * (xi - 0.5)
+    np.testing.assert_allclose([new.properties[p].fields["A"] for p in fresh],
+                               1.1 * base["A"] * size ** 2, rtol=1e-14)
+    np.testing.assert_allclose([new.properties[p].fields["I2"] for p in fresh],
+                               1.1 * base["I2"] * size ** 4, rtol=1e-14)
+
+
+def _cantilever(tmp_path, n, length, props):
+    """n CBARs of one PID; I2 = J = 100 I1, so the two lowest modes bend in plane 1."""
+    e_mod, rho, area, inertia = props
+    cards = [("GRID", i + 1, None, length * i / n, 0.0, 0.0, None, 123456 if i == 0 else None)
+             for i in range(n + 1)]
+    cards += [("CBAR", 100 + i, 7, i + 1, i + 2, 0.0, 1.0, 0.0) for i in range(n)]
+    cards += [("PBAR", 7, 1, area, inertia, 100 * inertia, 100 * inertia),
+              ("MAT1", 1, e_mod, None, 0.3, rho)]
+    return read_model(_deck(tmp_path, f"cantilever{n}.bdf", cards, ["PARAM,COUPMASS,1"]))
+
+
+def _tapered_cantilever_frequencies(length, props, taper, count):
+    """Shooting on (E I w'')'' = rho A omega^2 w, clamped at x = 0, free at x = L, with
+    A ~ s^2, I ~ s^4, s = 1 + taper (x / L - 1/2): an independent continuous reference."""
+    e_mod, rho, area, inertia = props
+
+    def tip(omega):
+        def rhs(x, y):
+            s = 1 + taper * (x / length - 0.5)
+            ei, ra = e_mod * inertia * s ** 4, rho * area * s ** 2
+            w, dw, moment, shear = y
+            return [dw, moment / ei, shear, ra * omega ** 2 * w]
+        ends = [solve_ivp(rhs, (0, length), y0, rtol=1e-10, atol=1e-13).y[2:, -1]
+                for y0 in ([0, 0, 1, 0], [0, 0, 0, 1])]
+        return np.linalg.det(np.array(ends).T)
+
+    omega_1 = 1.8751 ** 2 * np.sqrt(e_mod * inertia / (rho * area)) / length ** 2
+    grid = omega_1 * np.linspace(0.3, 10.0, 60)
+    values = [tip(w) for w in grid]
+    roots = [brentq(tip, a, b) for a, b, fa, fb in zip(grid, grid[1:], values, values[1:])
+             if fa * fb < 0]
+    return np.array(roots[:count]) / (2 * np.pi)
+
+
+def test_tapered_cantilever_against_the_continuous_beam(tmp_path):
+    length, props = 10.0, (1.0e3, 1.0, 1.0, 0.005)
+    model = _cantilever(tmp_path, 40, length, props)
+    cand = _pick(candidates(model, ["member_taper"]), "member_taper")
+    assert cand.parameters == ("scale", "taper")
+    taper = 0.6
+    bending = compute_modes(apply_effect(model, cand, [0.0, taper]), 2)["frequency"].values
+    reference = _tapered_cantilever_frequencies(length, props, taper, 2)
+    np.testing.assert_allclose(bending, reference, rtol=2e-3)
+    uniform = _tapered_cantilever_frequencies(length, props, 0.0, 1)[0]
+    assert bending[0] / uniform == pytest.approx(reference[0] / uniform, rel=2e-3)
+    assert abs(bending[0] / uniform - 1) > 0.05      # the taper is clearly visible
+
+
+def test_offset_bow_couples_axial_load_and_bending_by_hand(tmp_path):
+    """One-element member bowed by b in plane 1: its axis is offset e = b L along element y
+    from both grids. Axial P at the free grid gives the beam end a moment M_z = e P, so the grid
+    moves u_x = P L / EA + e^2 P L / E I1 and u_y = e P L^2 / (2 E I1)."""
+    e_mod, area, i1, i2, length, p, bow = 2.0e5, 3.0, 0.7, 1.3, 4.0, 10.0, 0.05
+    model = read_model(_deck(tmp_path, "offset.bdf", [
+        ("GRID", 1, None, 0.0, 0.0, 0.0, None, 123456), ("GRID", 2, None, length, 0.0, 0.0),
+        ("CBAR", 10, 7, 1, 2, 0.0, 1.0, 0.0), ("PBAR", 7, 1, area, i1, i2, 1.0),
+        ("MAT1", 1, e_mod, None, 0.3, 1.0)]))
+    cand = _pick(candidates(model, ["member_curvature"]), "member_curvature")
+    bowed = apply_effect(model, cand, [bow, 0.0])
+    np.testing.assert_allclose(bowed.elements["CBAR"].data["wa"][0], [0.0, bow * length, 0.0])
+    system = assemble(bowed)
+    force = np.zeros(system.K.shape[0])
+    force[np.flatnonzero(system.a_dofs == 6 * 1 + 0)] = p
+    u = system.T @ spla.spsolve(system.K.tocsc(), force)
+    e = bow * length
+    np.testing.assert_allclose(u[6:8], [p * length / (e_mod * area) + e ** 2 * p * length /
+                                        (e_mod * i1), e * p * length ** 2 / (2 * e_mod * i1)],
+                               rtol=1e-10)
+
+
+# ------------------------------------------------------------------------------- rigid joints
+@pytest.mark.parametrize("label, compliance", [("RBE2 7501", 1e-6), ("RBE2 7601", 1e-6),
+                                               ("RBE2 7005", 1e-5)])
+def test_joint_compliance_tends_to_the_rigid_joint(x56, x56_candidates, label, compliance):
+    """The engine mounts at compliance 1e-6; the wing-rib joint 7005 at 1e-5, because at 1e-6
+    its spring (1e6 x the spar's E I / L) leaves round-off of 2e-6 x the first elastic eigenvalue
+    in the rigid-body ones, which structures.modal rejects (limit 1e-6)."""
+    cand = _pick(x56_candidates, "joint_flexibility", label)
+    rigid = _elastic(x56, 20)
+    stiff = _elastic(apply_effect(x56, cand, [compliance]), 20)
+    np.testing.assert_allclose(stiff, rigid, rtol=1e-4)
+    soft = _elastic(apply_effect(x56, cand, [cand.upper[0]]), 20)
+    assert np.all(soft <= rigid * (1 + 1e-9))      # a released constraint never stiffens
+    if label != "RBE2 7005":
+        assert np.max(1 - soft / rigid) > 0.05      # the engine mount is clearly visible
+
+
+def test_zero_values_leave_k_and_m_and_small_values_are_continuous(x56, x56_candidates):
+    base = assemble(x56, warn=False)
+    picks = {"lumped_mass": "grid 3005", "joint_flexibility": "RBE2 7501",
+             "member_taper": "PID 101 (CBAR 1003", "member_curvature": "PID 101 (CBAR 1003",
+             "boundary_stiffness": "grid 3005 z"}
+    for kind in KINDS:
+        cand = _pick(x56_candidates, kind, picks[kind])
+        same = assemble(apply_effect(x56, cand, np.zeros(len(cand.parameters))), warn=False)
+        assert (same.K != base.K).nnz == 0 and (same.M != base.M).nnz == 0
+        if kind == "joint_flexibility":
+            continue
+        near = assemble(apply_effect(x56, cand, 1e-9 * np.array(cand.upper)), warn=False)
+        for a, b in ((near.K, base.K), (near.M, base.M)):
+            assert abs(a - b).max() <= 1e-7 * abs(b).max()
+
+
+# ----------------------------------------------------------------------------- written decks
+def test_written_deck_reads_back_to_the_same_modes(x56, x56_candidates, tmp_path):
+    picks = [("lumped_mass", "grid 5021"), ("joint_flexibility", "RBE2 7501"),
+             ("member_taper", "PID 101 (CBAR 1003"), ("member_curvature", "PID 101 (CBAR 1003"),
+             ("member_curvature", "PID 132"), ("boundary_stiffness", "grid 1004 z")]
+    effects = []
+    for kind, label in picks:
+        cand = _pick(x56_candidates, kind, label)
+        values = np.array(cand.reference) * 1.7
+        effects.append((cand, values))
+        expected = _elastic(apply_effect(x56, cand, values), 20)
+        path = write_effect_deck(X56, tmp_path / f"{kind}.bdf", x56, [(cand, values)])
+        np.testing.assert_allclose(_elastic(read_model(path), 20), expected, rtol=1e-8)
+    combined = x56
+    for cand, values in effects:
+        combined = apply_effect(combined, cand, values)
+    path = write_effect_deck(X56, tmp_path / "all.bdf", x56, effects)
+    np.testing.assert_allclose(_elastic(read_model(path), 20), _elastic(combined, 20), rtol=1e-8)
+
+
+def test_effect_cards_are_readable_small_field_bulk_data(x56, x56_candidates, tmp_path):
+    """Additive effects: the original deck plus the small-field cards gives the effect's modes
+    (to the 8-character precision of the fields)."""
+    for kind, label in (("lumped_mass", "grid 5021"), ("boundary_stiffness", "grid 1004 z")):
+        cand = _pick(x56_candidates, kind, label)
+        text = effect_cards(x56, cand, cand.reference)
+        assert text.startswith("$ diagnose effect")
+        assert all(len(line) <= 72 for line in text.splitlines() if not line.startswith("$"))
+        deck = X56.read_text().replace("ENDDATA", text + "ENDDATA")
+        (tmp_path / "structure_x56.inc").write_text((X56.parent / "structure_x56.inc").read_text())
+        for inc in ("masses_efew.inc", "aero_x56.inc"):
+            (tmp_path / inc).write_text((X56.parent / inc).read_text())
+        path = tmp_path / f"{kind}_cards.bdf"
+        path.write_text(deck)
+        np.testing.assert_allclose(_elastic(read_model(path), 20),
+                                   _elastic(apply_effect(x56, cand, cand.reference), 20),
+                                   rtol=1e-5)
+
+
+# --------------------------------------------------------------------------- library & errors
+def test_candidates_of_x56_and_neighbours(x56, x56_candidates):
+    counts = {k: sum(c.kind == k for c in x56_candidates) for k in KINDS}
+    assert counts["joint_flexibility"] == 28          # 28 RBE2 in structure_x56.inc
+    assert counts["lumped_mass"] == len(x56.grids)     # every grid carries structure, none fixed
+    assert counts["boundary_stiffness"] == 3 * len(x56.grids)
+    assert counts["member_taper"] == counts["member_curvature"] == len(find_members(x56))
+    grown = neighbours(x56, Location(grids=(3005,)))
+    assert grown.grids == (3004, 3005, 3006, 3105, 3205)
+    assert grown.elements == (3004, 3005, 7005)
+    assert grown.properties == (114, 115)
+    bar = neighbours(x56, Location(elements=(3005,)))      # CBAR 3005: grids 3005-3006
+    assert bar.elements == (3004, 3005, 3006, 7005, 7006)
+    assert bar.grids == (3004, 3005, 3006, 3007, 3105, 3106, 3205, 3206)
+
+
+def test_bad_kinds_and_values_raise(x56, x56_candidates):
+    with pytest.raises(InputError, match="lumped_mass"):
+        candidates(x56, ["cable_mass"])
+    with pytest.raises(InputError):
+        Candidate("cable_mass", Location(grids=(1,)), "x", ("m",), (0.0,), (1.0,), (0.1,))
+    with pytest.raises(InputError, match="bounds"):
+        Candidate("lumped_mass", Location(grids=(1,)), "x", ("mass",), (0.1,), (1.0,), (0.2,))
+    cand = _pick(x56_candidates, "lumped_mass", "grid 3005")
+    for bad in ([0.5], [-0.01], [np.nan], [0.01, 0.02]):
+        with pytest.raises(InputError, match="grid 3005"):
+            apply_effect(x56, cand, bad)
