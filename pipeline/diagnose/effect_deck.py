@@ -1,9 +1,9 @@
 """Bulk-data cards of a model change, and a deck patched with them.
 
 An effect of :mod:`pipeline.diagnose.effects` is defined by the model it makes; its cards are read
-off the difference between the model before and after (new CONM2s, CBUSH/PBUSH springs, new or
-changed CBAR/CBEAM and PBAR/PBEAM cards, removed rigid elements), so that the written deck and
-:func:`pipeline.diagnose.effects.apply_effect` cannot disagree. Cards are field lists: rendered as
+off the difference between the model before and after (new CONM2s, CBUSH/PBUSH and CELAS2
+springs, new or changed CBAR/CBEAM and PBAR/PBEAM cards, removed rigid elements), so that the
+written deck and :func:`pipeline.diagnose.effects.apply_effect` cannot disagree. Cards are field lists: rendered as
 small-field text with :mod:`structures.bulk_text` (MYSTRAN-readable), or added to a pyNastran deck
 and written in large field (the precision of the model's numbers).
 """
@@ -21,7 +21,7 @@ from structures.common.nastran import read_pynastran
 from structures.model import FEModel
 
 #: Element families an effect may add or change (others are never touched).
-CHANGED_FAMILIES = ("CBAR", "CBEAM", "CBUSH")
+CHANGED_FAMILIES = ("CBAR", "CBEAM", "CBUSH", "CELAS")
 
 
 def _components(mask: int):
@@ -43,13 +43,22 @@ def _line_card(es, i: int) -> list:
     return fields
 
 
+def _spring_card(es, i: int) -> list:
+    k = float(es.data["k"][i])
+    if np.isnan(k):
+        raise InputError(card_message("a changed CELAS1 cannot be written by diagnose.",
+                                      card="CELAS1", card_id=int(es.eids[i]),
+                                      fix="report this: effects add CELAS2 springs only."))
+    return ["CELAS2", int(es.eids[i]), k, int(es.nodes[i, 0]), int(es.data["c1"][i]) or None,
+            int(es.nodes[i, 1]) or None, int(es.data["c2"][i]) or None]
+
+
 def _bush_card(es, i: int) -> list:
     if int(es.data["cid"][i]) != 0:
         raise InputError(card_message("only CBUSHes in the basic frame (CID = 0) are written.",
                                       card="CBUSH", card_id=int(es.eids[i]),
                                       fix="report this: diagnose effects use CID = 0."))
-    gb = int(es.nodes[i, 1])
-    return ["CBUSH", int(es.eids[i]), int(es.pids[i]), int(es.nodes[i, 0]), gb or None,
+    return ["CBUSH", int(es.eids[i]), int(es.pids[i]), int(es.nodes[i, 0]), int(es.nodes[i, 1]),
             None, None, None, 0, float(es.data["s"][i])]
 
 
@@ -135,7 +144,7 @@ def model_changes(old: FEModel, new: FEModel) -> tuple[dict, list]:
             continue
         before = old.elements.get(kind)
         index = {} if before is None else {int(e): j for j, e in enumerate(before.eids)}
-        write = _bush_card if kind == "CBUSH" else _line_card
+        write = {"CBUSH": _bush_card, "CELAS": _spring_card}.get(kind, _line_card)
         for i, eid in enumerate(es.eids.tolist()):
             if eid in index:
                 if not _row_changed(before, es, index[eid], i):

@@ -31,11 +31,12 @@ scale of the model (so that bounds do not depend on units):
     (plane 1) and bow_2 L along its z axis (plane 2), L the member's length, by element end
     offsets w(xi) = 4 bow L xi (1 - xi) added to WA/WB (a one-element member: its mid-length value
     bow L at both ends), so bending couples with axial and torsion. Bounds [-0.15, 0.15].
-``boundary_stiffness`` at a grid in basic direction x, y or z, parameter ``k_<direction>``
-    A grounded CBUSH (CID = 0) of stiffness k times m_total (2 pi f_1)^2, f_1 the model's lowest
-    elastic frequency and m_total its total mass (consistent units): at k = 1 the spring alone
-    would carry the whole mass at f_1. Bounds [0, 1]. One candidate per grid of ``lumped_mass``
-    and unconstrained basic direction.
+``boundary_stiffness`` at a grid in direction x, y or z, parameter ``k_<direction>``
+    A grounded CELAS2 of stiffness k times m_total (2 pi f_1)^2, f_1 the model's lowest elastic
+    frequency and m_total its total mass (consistent units): at k = 1 the spring alone would carry
+    the whole mass at f_1. Bounds [0, 1]. x, y, z are the grid's displacement-frame axes 1, 2, 3
+    (basic axes when CD = 0; a grounded CELAS2 rather than a CBUSH, which MYSTRAN cannot ground).
+    One candidate per grid of ``lumped_mass`` and unconstrained direction.
 
 New elements take ids from the model's largest element, CONM2 or rigid-element id + 1; new
 properties from its largest PID + 1.
@@ -232,7 +233,6 @@ def candidates(model: FEModel, kinds=KINDS, *, frequency: float | None = None
     out = []
     grids = _element_grids(model)
     fixed = _fixed_masks(model)[model.grids.index(grids)] if grids.size else np.zeros(0, int)
-    basic = model.grids.cd[model.grids.index(grids)] == 0 if grids.size else np.zeros(0, bool)
     free_grids = grids[(fixed & 7) != 7]
     props = mass_properties(model) if {"lumped_mass", "boundary_stiffness"} & set(kinds) else None
     members = find_members(model) if {"member_taper", "member_curvature"} & set(kinds) else ()
@@ -244,9 +244,9 @@ def candidates(model: FEModel, kinds=KINDS, *, frequency: float | None = None
         elif kind == "boundary_stiffness":
             f1 = _lowest_elastic_frequency(model) if frequency is None else float(frequency)
             k_ref = props.mass * (2.0 * np.pi * f1) ** 2
-            for g, mask, is_basic in zip(grids.tolist(), fixed.tolist(), basic.tolist()):
+            for g, mask in zip(grids.tolist(), fixed.tolist()):
                 for c, d in enumerate(DIRECTIONS):
-                    if is_basic and mask >> c & 1:
+                    if mask >> c & 1:
                         continue
                     out.append(_candidate(kind, Location(grids=(g,)), f"grid {g} {d}", (f"k_{d}",),
                                           (("direction", d), ("k_ref", k_ref))))
@@ -370,7 +370,7 @@ def _append_elements(model: FEModel, card: str, eids, pids, nodes, data) -> dict
 
 
 def _add_bushes(model: FEModel, pairs, stiffness) -> FEModel:
-    """CBUSHes (CID 0, S 0.5) on (GA, GB) grid pairs (GB 0: grounded), one PBUSH each."""
+    """CBUSHes (CID 0, S 0.5) on (GA, GB) grid pairs, one PBUSH each."""
     n = len(pairs)
     eid0, pid0 = _next_eid(model), _next_pid(model)
     props = dict(model.properties)
@@ -397,9 +397,13 @@ def _lumped_mass(model, candidate, x):
 
 
 def _boundary(model, candidate, x):
-    k = np.zeros(6)
-    k[DIRECTIONS.index(candidate.get("direction"))] = x[0] * candidate.get("k_ref")
-    return _add_bushes(model, [(candidate.location.grids[0], 0)], [k])
+    eid = _next_eid(model)
+    elements = _append_elements(
+        model, "CELAS", np.array([eid]), np.zeros(1, np.int64),
+        np.array([[candidate.location.grids[0], 0]]),
+        {"c1": np.array([DIRECTIONS.index(candidate.get("direction")) + 1]),
+         "c2": np.zeros(1, np.int64), "k": np.array([x[0] * candidate.get("k_ref")])})
+    return replace(model, elements=elements)
 
 
 def _joint(model, candidate, x):
