@@ -8,7 +8,7 @@ configuration of a structure. Nuisance scatter (``scatter``) is applied before t
 | kind | truth (this module) |
 |---|---|
 | lumped_mass | 1-5 % of the total CONM2 mass, spread over 1-3 adjacent grids, each a CONM2 with the inertia of a box of random size |
-| joint_flexibility | an RBE2 carrying mass or structure on its dependent side, whose link is really six CELAS2 springs of random stiffness: either the whole RBE2 hangs on a new grid at its independent grid, or one dependent grid is detached and hangs on a new grid at its place |
+| joint_flexibility | an RBE2 carrying mass on its dependent side, whose link is really six CELAS2 springs of random stiffness: either the whole RBE2 hangs on a new grid at its independent grid, or one dependent grid is detached and hangs on a new grid at its place |
 | member_taper | a member (CBAR chain of one PBAR, or one CBAR) re-meshed in 4-8 segments, section size r from ``root`` (0.95-1.15) down to ``root * tip`` (tip/root 0.5-0.8), A ~ r^2, I1, I2, J ~ r^4 |
 | member_curvature | the member re-meshed in 4-8 segments, its grids bowed sideways by ``bow * L * sin(pi s)`` (bow 5-15 %) in a random direction normal to it |
 | boundary_stiffness | grounded CELAS2 (a bungee) at a grid in z, y, x or y and z |
@@ -16,10 +16,10 @@ configuration of a structure. Nuisance scatter (``scatter``) is applied before t
 | none | nothing |
 
 Stiffness scales (the draw multiplies them by log-uniform factors; ``make_case`` re-draws until
-the effect shifts some measured mode by a few %): a joint's springs from the stiffest CBAR at its
-independent grid (E A / L translations, E max(I1, I2) / L rotations); a bungee from the total
-mass times (2 pi f_1)^2 (f_1 the first elastic frequency); a brace from E A of the bars at its
-ends.
+the effect shifts some measured mode by a few %): a joint's springs put the mass hung on it
+(CONM2s of its dependent grids; their largest moment of inertia about the joint) at a local
+frequency of 3-20 x f_1 (f_1 the first elastic frequency), each spring x exp(U(-0.5, 0.5)); a
+bungee from the total mass times (2 pi f_1)^2; a brace from E A of the bars at its ends.
 """
 from __future__ import annotations
 
@@ -51,7 +51,7 @@ class Effect:
 
 #: What ``Effect.size`` is, per kind.
 SIZE = {"lumped_mass": "added mass / total mass", "joint_flexibility":
-        "geometric mean of k_ref / k over the six springs",
+        "local joint frequency / first elastic frequency",
         "member_taper": "1 - tip / root section size", "member_curvature": "bow / member length",
         "boundary_stiffness": "sum of k / (total mass (2 pi f_1)^2)",
         "outside": "E A of the brace / E A of the stiffest bar at its ends", "none": "0"}
@@ -178,6 +178,19 @@ def _loguniform(rng, lo: float, hi: float) -> float:
     return float(math.exp(rng.uniform(math.log(lo), math.log(hi))))
 
 
+def _hung(bdf, topo: Topology, pivot: int, grids) -> tuple[float, float]:
+    """(mass, largest moment of inertia about ``pivot``) of the CONM2s at ``grids`` (x WTMASS)."""
+    mass, inertia = 0.0, 0.0
+    for m in bdf.masses.values():
+        if m.type == "CONM2" and int(m.nid) in grids:
+            r = topo.xyz[int(m.nid)] + np.asarray(m.X, float) - topo.xyz[pivot]
+            own = np.asarray(m.I, float)[[0, 2, 5]]
+            mass += m.mass
+            inertia += float(np.max(m.mass * (r @ r - r ** 2) + own))
+    floor = 1e-3 * mass * topo.size ** 2
+    return mass * topo.wtmass, max(inertia, floor) * topo.wtmass
+
+
 def _bar_stiffness(bdf, eid: int) -> tuple[float, float]:
     """(E A / L, E max(I1, I2) / L) of a CBAR."""
     e = bdf.elements[eid]
@@ -217,16 +230,15 @@ def draw(kind: str, bdf, topo: Topology, rng: np.random.Generator, f1: float) ->
     if kind == "joint_flexibility":
         ge = topo.grid_elements
         eid = int(rng.choice([r for r, (_, dep) in sorted(topo.rigid.items())
-                              if any(g in topo.massive or len(ge[g]) > 1 for g in dep)]))
+                              if any(g in topo.massive for g in dep)]))
         gn, dep = topo.rigid[eid]
-        bars = [e for e in topo.grid_elements[gn] if e in topo.bars]
-        ref = max((_bar_stiffness(bdf, e) for e in bars), default=(1.0, 1.0))
-        level = rng.uniform(math.log(3.0), math.log(300.0))
-        compliance = np.exp(level + rng.uniform(-0.7, 0.7, 6))
-        k = [ref[0] / c for c in compliance[:3]] + [ref[1] / c for c in compliance[3:]]
         detach = None if len(dep) == 1 or rng.random() < 0.5 else int(rng.choice(dep))
-        return Effect(kind, grids=tuple(sorted((gn, *dep))), elements=(eid,),
-                      size=float(np.exp(np.log(compliance).mean())),
+        mass, inertia = _hung(bdf, topo, gn, dep if detach is None else (detach,))
+        ratio = _loguniform(rng, 3.0, 20.0)
+        omega2 = (2.0 * math.pi * ratio * f1) ** 2
+        jitter = np.exp(rng.uniform(-0.5, 0.5, 6))
+        k = [mass * omega2 * j for j in jitter[:3]] + [inertia * omega2 * j for j in jitter[3:]]
+        return Effect(kind, grids=tuple(sorted((gn, *dep))), elements=(eid,), size=ratio,
                       params={"rbe2": eid, "k": k, "detach": detach})
     if kind in ("member_taper", "member_curvature"):
         mem = members(topo)

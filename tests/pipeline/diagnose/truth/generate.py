@@ -13,8 +13,9 @@ The GVT follows ``data/x56_like/truth/make_truth.py``: the truth's elastic modes
 RMS)^2) per DOF, damping zeta uniform 1-2 %; UFF 15 + 55. The weighing is the truth's exact
 weight, CG and inertia about the CG (``make_truth.measured_mass``).
 
-Random streams, all ``numpy.random.default_rng((seed, structure, kind, stream))``: 0 scatter,
-1 effect, 2 + i the noise of configuration i.
+Random streams: the scatter ``numpy.random.default_rng((seed, structure))`` (the same aircraft for
+every kind of one seed, so cases differ by their effect alone), the effect and the noise of
+configuration i ``default_rng((seed, structure, kind, 1))`` and ``(..., 2 + i)``.
 """
 from __future__ import annotations
 
@@ -43,7 +44,7 @@ TRUTH_KINDS = KINDS + ("none", "outside")
 STRUCTURES = ("x56", "frame")
 N_RIGID = 6
 SHIFT_RANGE = (0.03, 0.15)
-ATTEMPTS = 12
+ATTEMPTS = 30
 FREQUENCY_NOISE, SHAPE_NOISE, DAMPING = 0.01, 0.05, (0.01, 0.02)
 #: The sixth (suspension) mode must stay below this fraction of the first elastic one.
 SUSPENSION_RATIO = 0.8
@@ -60,7 +61,8 @@ def _structure(structure: str, folder: Path, work: Path):
 
 
 def _truth_modes(start: Path, work: Path, effect, rng_seed, n_test: int):
-    """Scatter + effect on the start deck: (modes, mass properties)."""
+    """Scatter + effect on the start deck, written to ``work / truth_<start>``: (modes, mass
+    properties)."""
     bdf = read_pynastran(start)
     effects.scatter(bdf, np.random.default_rng(rng_seed))
     if effect is not None:
@@ -121,7 +123,7 @@ def _case_toml(name: str, units: str, configurations) -> str:
     return "\n".join(lines) + "\n"
 
 
-def make_case(structure: str, kind: str, seed: int, out) -> Path:
+def make_case(structure: str, kind: str, seed: int, out, *, decks=None) -> Path:
     """Write a blind-study case into ``out``; returns the path of its ``case.toml``.
 
     Parameters
@@ -130,6 +132,8 @@ def make_case(structure: str, kind: str, seed: int, out) -> Path:
     kind : one of ``TRUTH_KINDS``
     seed : int, every random draw (deterministic)
     out : folder (created)
+    decks : folder, optional
+        Keep the truth decks there (``truth_<start deck>.bdf``, one per configuration).
 
     Returns
     -------
@@ -147,20 +151,22 @@ def make_case(structure: str, kind: str, seed: int, out) -> Path:
     out.mkdir(parents=True, exist_ok=True)
     streams = (int(seed), STRUCTURES.index(structure), TRUTH_KINDS.index(kind))
     with tempfile.TemporaryDirectory() as tmp:
-        work = Path(tmp)
-        units, n_test, sensors, decks, starts = _structure(structure, out, work)
+        work = Path(tmp) if decks is None else Path(decks)
+        work.mkdir(parents=True, exist_ok=True)
+        units, n_test, sensors, analysis_decks, starts = _structure(structure, out, work)
         first = next(iter(starts))
         analysis = read_pynastran(starts[first])
         topo = effects.topology(analysis)
-        base, _ = _truth_modes(starts[first], work, None, (*streams, 0), n_test)
-        f_base = base["frequency"].values[N_RIGID:N_RIGID + n_test]
+        scatter = streams[:2]
+        base = _truth_modes(starts[first], work, None, scatter, n_test)
+        f_base = base[0]["frequency"].values[N_RIGID:N_RIGID + n_test]
         rng = np.random.default_rng((*streams, 1))
-        chosen, shift, truth = effects.Effect("none"), 0.0, {first: None}
+        chosen, shift, truth = effects.Effect("none"), 0.0, {first: base}
         if kind != "none":
             best = None
             for _ in range(ATTEMPTS):
                 effect = effects.draw(kind, analysis, topo, rng, float(f_base[0]))
-                modes = _truth_modes(starts[first], work, effect, (*streams, 0), n_test)
+                modes = _truth_modes(starts[first], work, effect, scatter, n_test)
                 s = _shift(f_base, modes[0], n_test) if _suspended(modes[0]) else np.inf
                 miss = max(SHIFT_RANGE[0] - s, s - SHIFT_RANGE[1], 0.0)
                 if best is None or miss < best[0]:
@@ -168,22 +174,23 @@ def make_case(structure: str, kind: str, seed: int, out) -> Path:
                 if miss == 0.0:
                     break
             _, chosen, shift, truth[first] = best
+            if decks is not None:           # the kept deck must be the chosen draw's
+                truth = {}
         written = {}
         for i, (c, start) in enumerate(starts.items()):
-            modes, props = truth.get(c) or _truth_modes(start, work, None if kind == "none"
-                                                         else chosen, (*streams, 0), n_test)
+            modes, props = truth.get(c) or _truth_modes(start, work, chosen, scatter, n_test)
             xyz = effects.topology(read_pynastran(start)).xyz if c != first else topo.xyz
             gvt = _gvt(modes, sensors, {g: tuple(float(v) for v in p) for g, p in xyz.items()},
                        n_test, np.random.default_rng((*streams, 2 + i)), units,
                        f"blind-study truth {structure} {kind} seed {seed}, {c}")
             write_uff(gvt, out / f"gvt_{c}.unv", title=f"{structure} {c} GVT")
             write_json(x56.measured_mass(props), out / f"mass_{c}.json")
-            written[c] = decks[c]
+            written[c] = analysis_decks[c]
     grids, els = effects.neighbours(topo, chosen.grids, chosen.elements)
     record = {"kind": kind, "structure": structure, "seed": int(seed),
               "grids": list(chosen.grids), "elements": list(chosen.elements),
               "properties": list(chosen.properties), "size": float(chosen.size),
-              "size_meaning": effects.SIZE[kind] if kind in effects.SIZE else "",
+              "size_meaning": effects.SIZE[kind],
               "neighbours": {"grids": grids, "elements": els} if kind != "none" else
               {"grids": [], "elements": []},
               "max_frequency_shift": shift, "parameters": _jsonable(chosen.params)}
