@@ -10,6 +10,7 @@ and written in large field (the precision of the model's numbers).
 from __future__ import annotations
 
 import io
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -18,7 +19,7 @@ from structures.bulk_text import card as card_text
 from structures.common.errors import InputError, card_message
 from structures.common.files import write_text
 from structures.common.nastran import read_pynastran
-from structures.model import FEModel
+from structures.model import ElementSet, FEModel
 
 #: Element families an effect may add or change (others are never touched).
 CHANGED_FAMILIES = ("CBAR", "CBEAM", "CBUSH", "CELAS")
@@ -101,15 +102,54 @@ def _conm2_card(masses, i: int) -> list:
             *[float(sign * t[r, c]) + 0.0 for r, c, sign in _CONM2_INERTIA]]
 
 
-def _row_changed(old_es, new_es, j_old: int, j_new: int) -> bool:
-    if old_es.pids[j_old] != new_es.pids[j_new]:
-        return True
-    if np.any(old_es.nodes[j_old] != new_es.nodes[j_new]):
-        return True
-    for key, arr in new_es.data.items():
-        if np.any(np.asarray(old_es.data[key][j_old]) != np.asarray(arr[j_new])):
-            return True
-    return False
+def _differs(a, b) -> np.ndarray:
+    """Row-wise inequality of two arrays (NaN equal to NaN): (n,) bool."""
+    a, b = np.asarray(a).reshape(len(a), -1), np.asarray(b).reshape(len(b), -1)
+    out = a != b
+    if a.dtype.kind == "f":
+        out &= ~(np.isnan(a) & np.isnan(b))
+    return out.any(axis=1)
+
+
+def _match(old_ids, new_ids) -> np.ndarray:
+    """Row of each new id among the old ids, -1 where absent."""
+    if len(old_ids) == 0:
+        return -np.ones(len(new_ids), np.int64)
+    order = np.argsort(old_ids)
+    j = order[np.clip(np.searchsorted(old_ids, new_ids, sorter=order), 0, len(order) - 1)]
+    return np.where(old_ids[j] == new_ids, j, -1)
+
+
+def _row_diff(before, es, changed_pids=()):
+    """Rows of ``es`` that are new, rows of ``es`` that differ from ``before`` (same element id,
+    or a property in ``changed_pids``), their rows in ``before``, and rows of ``before`` gone."""
+    if before is None:
+        return np.arange(len(es)), *(np.zeros(0, np.int64),) * 3
+    j = _match(before.eids, es.eids)
+    rows, j = np.flatnonzero(j >= 0), j[j >= 0]
+    diff = (_differs(before.pids[j], es.pids[rows]) | _differs(before.nodes[j], es.nodes[rows])
+            | np.isin(es.pids[rows], list(changed_pids)))
+    for key, arr in es.data.items():
+        diff |= _differs(np.asarray(before.data[key])[j], np.asarray(arr)[rows])
+    gone = np.flatnonzero(~np.isin(before.eids, es.eids))
+    return np.setdiff1d(np.arange(len(es)), rows), rows[diff], j[diff], gone
+
+
+def _mass_diff(om, cm):
+    """Rows of the old and of the new CONM2s that are gone / new or whose values differ."""
+    j = _match(om.eids, cm.eids)
+    rows, j = np.flatnonzero(j >= 0), j[j >= 0]
+    diff = np.zeros(len(rows), bool)
+    for name in ("grid", "mass", "offset", "inertia"):
+        diff |= _differs(getattr(om, name)[j], getattr(cm, name)[rows])
+    new_rows = np.concatenate([np.setdiff1d(np.arange(len(cm)), rows), rows[diff]])
+    old_rows = np.concatenate([j[diff], np.flatnonzero(~np.isin(om.eids, cm.eids))])
+    return old_rows, new_rows
+
+
+def _mass_rows(masses, rows):
+    return replace(masses, eids=masses.eids[rows], grid=masses.grid[rows], mass=masses.mass[rows],
+                   offset=masses.offset[rows], inertia=masses.inertia[rows])
 
 
 def model_changes(old: FEModel, new: FEModel) -> tuple[dict, list]:
@@ -142,19 +182,53 @@ def model_changes(old: FEModel, new: FEModel) -> tuple[dict, list]:
         es = new.elements.get(kind)
         if es is None:
             continue
-        before = old.elements.get(kind)
-        index = {} if before is None else {int(e): j for j, e in enumerate(before.eids)}
+        added, changed, _, _ = _row_diff(old.elements.get(kind), es)
         write = {"CBUSH": _bush_card, "CELAS": _spring_card}.get(kind, _line_card)
-        for i, eid in enumerate(es.eids.tolist()):
-            if eid in index:
-                if not _row_changed(before, es, index[eid], i):
-                    continue
-                removed["elements"].append(eid)
-            elem_cards.append(write(es, i))
+        removed["elements"].extend(es.eids[changed].tolist())
+        elem_cards.extend(write(es, i) for i in np.sort(np.concatenate([added, changed])))
     known = set(old.masses.eids.tolist())
     mass_cards = [_conm2_card(new.masses, i) for i, eid in enumerate(new.masses.eids.tolist())
                   if eid not in known]
     return removed, prop_cards + elem_cards + mass_cards
+
+
+def changed_parts(old: FEModel, new: FEModel) -> tuple[FEModel, FEModel]:
+    """The elements and CONM2s in which two models with the same grids and rigid elements differ.
+
+    Parameters
+    ----------
+    old, new : FEModel
+
+    Returns
+    -------
+    old_part, new_part : FEModel
+        ``old`` restricted to its changed and removed elements and CONM2s, ``new`` to its changed
+        and added ones; elements whose property changed count as changed. ``K(new) - K(old) = K(new_part) - K(old_part)`` for every assembled matrix.
+    """
+    if [r.eid for r in old.rigid] != [r.eid for r in new.rigid] or \
+            not np.array_equal(old.grids.ids, new.grids.ids):
+        raise InputError("the two models differ in their grids or rigid elements, so their "
+                         "difference is not a sum of element matrices. Fix: reassemble both.")
+    changed_pids = [pid for pid, prop in new.properties.items()
+                    if pid in old.properties and old.properties[pid] != prop]
+    parts = ({}, {})
+    for kind in sorted(set(old.elements) | set(new.elements)):
+        es, before = new.elements.get(kind), old.elements.get(kind)
+        if es is None:
+            rows_new, rows_old = np.zeros(0, np.int64), np.arange(len(before))
+        elif es is before and not changed_pids:
+            continue
+        else:
+            added, changed, was, gone = _row_diff(before, es, changed_pids)
+            rows_new, rows_old = np.concatenate([added, changed]), np.concatenate([was, gone])
+        for side, source, rows in ((0, before, rows_old), (1, es, rows_new)):
+            if len(rows):
+                parts[side][kind] = ElementSet(kind, source.eids[rows], source.pids[rows],
+                                               source.nodes[rows],
+                                               {k: np.asarray(v)[rows] for k, v in source.data.items()})
+    old_rows, new_rows = _mass_diff(old.masses, new.masses)
+    return (replace(old, elements=parts[0], masses=_mass_rows(old.masses, old_rows)),
+            replace(new, elements=parts[1], masses=_mass_rows(new.masses, new_rows)))
 
 
 def small_field_text(removed: dict, cards: list, header: str = "") -> str:

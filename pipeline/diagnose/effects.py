@@ -48,9 +48,10 @@ from pathlib import Path
 
 import numpy as np
 
-from pipeline.diagnose.effect_deck import model_changes, small_field_text, write_patched_deck
+from pipeline.diagnose.effect_deck import (changed_parts, model_changes, small_field_text,
+                                           write_patched_deck)
 from pipeline.diagnose.members import Member, find_members
-from structures.assembly import _line_offsets
+from structures.assembly import _line_offsets, assemble_g
 from structures.common.errors import InputError, card_message
 from structures.elements.beam import beam_axes
 from structures.massprops import mass_properties
@@ -504,6 +505,32 @@ def apply_effect(model: FEModel, candidate: Candidate, values) -> FEModel:
     if not np.any(x):
         return model
     return _APPLY[candidate.kind](model, candidate, x)
+
+
+def effect_matrices(model: FEModel, candidate: Candidate, values, *, mass: str = "deck"):
+    """Change of the g-set stiffness and mass (basic axes) made by an effect.
+
+    Only the changed and added elements and CONM2s are assembled, so this is much cheaper than
+    assembling the changed model (for eigenvalue-sensitivity screening).
+
+    Parameters
+    ----------
+    model : FEModel
+    candidate : Candidate, not ``joint_flexibility`` (it changes the constraint equations).
+    values : (npar,)
+    mass : {'deck', 'consistent', 'lumped'}, as in :func:`structures.assembly.assemble_g`.
+
+    Returns
+    -------
+    dK, dM : scipy.sparse.csr_matrix (6 n_grids, 6 n_grids), ``assemble_g(new) - assemble_g(model)``.
+    """
+    if candidate.kind == "joint_flexibility":
+        raise InputError(f"candidate {candidate.label!r}: a joint flexibility changes the rigid "
+                         "elements, not only element matrices. Fix: assemble the changed model.")
+    old_part, new_part = changed_parts(model, apply_effect(model, candidate, values))
+    k1, m1 = assemble_g(new_part, mass)
+    k0, m0 = assemble_g(old_part, mass)
+    return (k1 - k0).tocsr(), (m1 - m0).tocsr()
 
 
 def effect_cards(model: FEModel, candidate: Candidate, values) -> str:

@@ -11,7 +11,8 @@ from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
 from pipeline.diagnose.effects import (KINDS, Candidate, Location, apply_effect, candidates,
-                                       effect_cards, neighbours, write_effect_deck)
+                                       effect_cards, effect_matrices, neighbours,
+                                       write_effect_deck)
 from pipeline.diagnose.members import find_members
 from structures.assembly import assemble, assemble_g
 from structures.bdf import read_model
@@ -242,6 +243,25 @@ def test_zero_values_leave_k_and_m_and_small_values_are_continuous(x56, x56_cand
         near = assemble(apply_effect(x56, cand, 1e-9 * np.array(cand.upper)), warn=False)
         for a, b in ((near.K, base.K), (near.M, base.M)):
             assert abs(a - b).max() <= 1e-7 * abs(b).max()
+
+
+def test_effect_matrices_equal_the_difference_of_assembled_models(x56, x56_candidates):
+    picks = {"lumped_mass": "grid 3005", "member_taper": "PID 101 (CBAR 1003",
+             "member_curvature": "PID 132", "boundary_stiffness": "grid 3005 z"}
+    k0, m0 = assemble_g(x56)
+    for kind, label in picks.items():
+        cand = _pick(x56_candidates, kind, label)
+        dk, dm = effect_matrices(x56, cand, cand.reference)
+        k1, m1 = assemble_g(apply_effect(x56, cand, cand.reference))
+        for got, want, base in ((dk, k1 - k0, k0), (dm, m1 - m0, m0)):
+            assert abs(got - want).max() <= 1e-13 * abs(base).max()
+        assert abs(dk).max() + abs(dm).max() > 0
+    own = _pick(x56_candidates, "member_taper", "PID 115")      # the PID's only element: in place
+    dk, _ = effect_matrices(x56, own, own.reference)
+    k1, _ = assemble_g(apply_effect(x56, own, own.reference))
+    assert abs(dk - (k1 - k0)).max() <= 1e-13 * abs(k0).max() and abs(dk).max() > 0
+    with pytest.raises(InputError, match="rigid"):
+        effect_matrices(x56, _pick(x56_candidates, "joint_flexibility", "RBE2 7501"), [1.0])
 
 
 # ----------------------------------------------------------------------------- written decks
