@@ -133,9 +133,8 @@ class Candidate:
             raise InputError(f"candidate {self.label!r}: {n} parameters but {len(self.lower)} "
                              f"lower, {len(self.upper)} upper and {len(self.reference)} reference "
                              "values. Fix: give one of each per parameter.")
-        lo, hi, ref = (np.array(v, float) for v in (self.lower, self.upper, self.reference))
-        if not (np.all(lo <= 0.0) and np.all(hi >= 0.0) and np.all((lo <= ref) & (ref <= hi))
-                and np.all(lo < hi)):
+        if not all(lo <= 0.0 <= hi and lo <= ref <= hi and lo < hi
+                   for lo, hi, ref in zip(self.lower, self.upper, self.reference)):
             raise InputError(f"candidate {self.label!r}: bounds {self.lower}..{self.upper} must "
                              f"contain 0 and the reference {self.reference}. Fix: widen them.")
 

@@ -290,6 +290,31 @@ def test_written_deck_reads_back_to_the_same_model(x56, x56_candidates, tmp_path
     np.testing.assert_allclose(_elastic(back, 20), _elastic(combined, 20), rtol=1e-7)
 
 
+def test_cbeam_members_round_trip(tmp_path):
+    """CBEAM/PBEAM (shear factors K1, K2) through taper and curvature, both written forms."""
+    cards = [("GRID", i + 1, None, 2.0 * i, 0.3 * i, 0.0, None, 123456 if i == 0 else None)
+             for i in range(5)]
+    cards += [("CBEAM", 20 + i, 8, i + 1, i + 2, 0.0, 0.0, 1.0) for i in range(4)]
+    cards += [("PBEAM", 8, 1, 2.0, 0.4, 0.9, 0.05, 0.6, 0.1, *[0.0] * 8, 0.85, 0.8),
+              ("MAT1", 1, 7.0e4, None, 0.33, 2.7e-3)]
+    deck = _deck(tmp_path, "beams.bdf", cards)
+    model = read_model(deck)
+    cands = candidates(model, ["member_taper", "member_curvature"])
+    assert [c.location.elements for c in cands] == [(20, 21, 22, 23)] * 2
+    effects = [(cands[0], [-0.1, 0.4]), (cands[1], [0.08, -0.05])]
+    combined = apply_effect(apply_effect(model, *effects[0]), *effects[1])
+    back = read_model(write_effect_deck(deck, tmp_path / "beams_out.bdf", model, effects))
+    for got, want in zip(assemble_g(back), assemble_g(combined)):
+        assert abs(got - want).max() <= 1e-12 * abs(want).max()
+    text = effect_cards(model, *effects[0])
+    assert "replaces or removes element 20 21 22 23" in text
+    path = _deck(tmp_path, "beams_small.bdf", [c for c in cards if c[0] != "CBEAM"])
+    path.write_text(path.read_text().replace("ENDDATA", text + "ENDDATA"))
+    np.testing.assert_allclose(compute_modes(read_model(path), 6)["frequency"].values,
+                               compute_modes(apply_effect(model, *effects[0]), 6)
+                               ["frequency"].values, rtol=1e-5)
+
+
 def test_effect_cards_are_readable_small_field_bulk_data(x56, x56_candidates, tmp_path):
     """Additive effects: the original deck plus the small-field cards gives the effect's modes
     (to the 8-character precision of the fields)."""
