@@ -31,6 +31,7 @@ def run(args) -> int:
     from pipeline.diagnose.outputs import FOLDER, verdict_summary
     from pipeline.run import run_case
     from structures.common.files import check_output, write_json
+    from structures.units import unit_labels
 
     case, out = case_and_run_folder(args)
     if args.json:
@@ -40,7 +41,7 @@ def run(args) -> int:
     configurations_from_case(case)      # every deck and GVT file read before any computation
     run_case(case, out, diagnose_only=True)
     record = json.loads((out / FOLDER / "diagnose.json").read_text())
-    print(verdict_summary(record))
+    print(verdict_summary(record, unit_labels(case.units).velocity))
     print(f"\ndiagnosis written to {out / FOLDER}")
     if args.json:
         write_json(record, Path(args.json))

@@ -12,14 +12,11 @@ import html
 import json
 from pathlib import Path
 
-from pipeline.diagnose.outputs import flat_gap
+from pipeline.diagnose.outputs import flat_gap, gap_unit
 from pipeline.report_figures import png_data_uri
 from pipeline.report_tables import fmt, note, table
 from structures.units import UnitLabels
 
-#: Unit of each scalar gap metric (``flutter_speed``: the unit system's velocity).
-GAP_UNITS = {"frequency_rms_held_out": "%", "frequency_rms": "%",
-             "max_cross_orthogonality_offdiag": "-", "mac_min": "-", "mac_mean": "-"}
 #: Candidates listed in the table.
 TOP = 10
 
@@ -33,15 +30,9 @@ def _location(location: dict) -> str:
                      for k, v in (location or {}).items() if v) or "\u2013"
 
 
-def _unit(key: str, labels: UnitLabels) -> str:
-    if key == "flutter_speed":
-        return labels.velocity
-    return "%" if key.startswith("mass") else GAP_UNITS.get(key, "")
-
-
 def _gap_rows(before: dict, after: dict, labels: UnitLabels) -> list:
     before, after = flat_gap(before), flat_gap(after)
-    return [(key, _unit(key, labels), _value(before.get(key)), _value(after.get(key)))
+    return [(key, gap_unit(key, labels.velocity), _value(before.get(key)), _value(after.get(key)))
             for key in sorted(set(before) | set(after))]
 
 

@@ -26,6 +26,10 @@ from structures.units import unit_labels
 
 #: The stage's folder in the run folder.
 FOLDER = "diagnose"
+#: Unit of each scalar gap metric (mass-property errors are in %; ``flutter_speed`` in the unit
+#: system's velocity).
+GAP_UNITS = {"frequency_rms_held_out": "%", "frequency_rms": "%",
+             "max_cross_orthogonality_offdiag": "-", "mac_min": "-", "mac_mean": "-"}
 
 
 def lowest_flutter_speed(summaries) -> float | None:
@@ -121,7 +125,7 @@ def write_diagnosis(case, folder, run_dir, aero: dict | None = None, progress=No
     write_dataset(dataset, folder / FOLDER / "diagnose.nc")
     plot_candidates(record).savefig(folder / FOLDER / "candidates.png", dpi=90,
                                     metadata={"Software": None})
-    plot_gap(record).savefig(folder / FOLDER / "gap.png", dpi=90, metadata={"Software": None})
+    plot_gap(record, unit_labels(case.units).velocity).savefig(folder / FOLDER / "gap.png", dpi=90, metadata={"Software": None})
     return result
 
 
@@ -133,6 +137,13 @@ def flat_gap(gap: dict, prefix: str = "") -> dict:
         name = f"{prefix}{key}"
         out.update(flat_gap(value, f"{name} ") if isinstance(value, dict) else {name: value})
     return out
+
+
+def gap_unit(key: str, velocity: str) -> str:
+    """Unit of a :func:`flat_gap` key; ``velocity`` is the unit system's velocity label."""
+    if key == "flutter_speed":
+        return velocity
+    return "%" if key.startswith("mass") else GAP_UNITS.get(key, "")
 
 
 def _number(value, fmt: str = ".3g") -> str:
@@ -147,9 +158,10 @@ def _parameters(parameters: dict) -> str:
     return ", ".join(f"{k} = {_number(v, '.4g')}" for k, v in (parameters or {}).items())
 
 
-def verdict_summary(record: dict, top: int = 5) -> str:
+def verdict_summary(record: dict, velocity: str = "model units", top: int = 5) -> str:
     """A few lines of a diagnosis' JSON record: the verdict, each named effect with its location
-    and parameters, the ``top`` candidates and the gap before -> after."""
+    and parameters, the ``top`` candidates and the gap before -> after (``velocity``: the unit
+    of the flutter speed)."""
     lines = [f"verdict: {record['verdict']}"]
     for i, effect in enumerate(record.get("effects") or [], 1):
         lines.append(f"  effect {i}: {effect['kind']} at {_location(effect.get('location'))}: "
@@ -163,8 +175,9 @@ def verdict_summary(record: dict, top: int = 5) -> str:
                   for i, c in enumerate(candidates, 1)]
     before, after = (flat_gap(record.get(k) or {}) for k in ("gap_before", "gap_after"))
     lines.append("gap before -> after:")
-    lines += [f"  {key}: {_number(before.get(key))} -> {_number(after.get(key))}"
-              for key in sorted(set(before) | set(after))]
+    lines += [f"  {key} [{gap_unit(key, velocity)}]: {_number(before.get(key))} -> "
+              f"{_number(after.get(key))}" for key in sorted(set(before) | set(after))
+              if not key.startswith("mass_by_configuration")]   # the worst is "mass"
     lines += [f"note: {n}" for n in record.get("notes") or []]
     if record.get("separating_measurement"):
         lines.append(f"separating measurement: {record['separating_measurement']}")

@@ -45,7 +45,8 @@ def plot_candidates(record: dict, top: int = 12, *, ax=None) -> Figure:
     Returns
     -------
     matplotlib.figure.Figure
-        Bars coloured by kind (:data:`KIND_COLOURS`), best at the top.
+        Bars coloured by kind (:data:`KIND_COLOURS`), a dot at each bar's end (the best's score
+        is 0), best at the top; room on the right for the legend.
     """
     entries = list(record.get("candidates") or [])[:top]
     fig = ax.figure if ax is not None else Figure(figsize=(8.0, 1.0 + 0.35 * max(len(entries), 2)))
@@ -59,6 +60,9 @@ def plot_candidates(record: dict, top: int = 12, *, ax=None) -> Figure:
     scores = np.array([np.nan if e.get("score") is None else float(e["score"]) for e in entries])
     colours = [KIND_COLOURS.get(e["kind"], "k") for e in entries]
     ax.barh(y, scores, color=colours)
+    ax.scatter(scores, y, color=colours, edgecolors="k", zorder=3)   # a zero score shows too
+    high = np.nanmax(np.abs(scores)) if np.isfinite(scores).any() else 0.0
+    ax.set_xlim(min(0.0, np.nanmin(scores)) if high else -1.0, 1.4 * high if high else 1.0)
     ax.set_yticks(y, [candidate_label(e) for e in entries], fontsize=8)
     ax.set_xlabel("score (BIC difference to the best candidate; lower is better)")
     ax.set_title(f"Candidate ranking (verdict: {record.get('verdict', '?')})")
@@ -74,7 +78,7 @@ def _value(gap: dict, key: str) -> float:
     return np.nan if value is None or isinstance(value, dict) else float(value)
 
 
-def plot_gap(record: dict) -> Figure:
+def plot_gap(record: dict, velocity: str = "model units") -> Figure:
     """The test-analysis gap before and after the named effects, as grouped bars per metric.
 
     Parameters
@@ -83,6 +87,8 @@ def plot_gap(record: dict) -> Figure:
         A diagnosis' JSON record: ``gap_before`` and ``gap_after`` with the frequency RMS errors
         (%), the largest cross-orthogonality off-diagonal, the smallest MAC, the mass-property
         errors ``mass`` (quantity -> %) and ``flutter_speed`` (model units, or null).
+    velocity : str
+        The flutter speed's unit (axis label).
 
     Returns
     -------
@@ -99,9 +105,10 @@ def plot_gap(record: dict) -> Figure:
             (q, _value(before.get("mass"), q), _value(after.get("mass"), q)) for q in mass]))
     speeds = (_value(before, "flutter_speed"), _value(after, "flutter_speed"))
     if not np.isnan(speeds).all():
-        panels.append(("flutter", "speed (model units)", [("lowest flutter speed", *speeds)]))
-    fig = Figure(figsize=(3.2 * len(panels) + 1.0, 3.6))
-    axes = fig.subplots(1, len(panels), squeeze=False)[0]
+        panels.append(("flutter", f"speed [{velocity}]", [("lowest flutter speed", *speeds)]))
+    widths = [max(2, len(rows)) for _, _, rows in panels]
+    fig = Figure(figsize=(min(0.9 * sum(widths) + 2.0, 16.0), 3.6))
+    axes = fig.subplots(1, len(panels), squeeze=False, width_ratios=widths)[0]
     width = 0.38
     for ax, (title, unit, rows) in zip(axes, panels):
         x = np.arange(len(rows))
