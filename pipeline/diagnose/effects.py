@@ -23,9 +23,10 @@ scale of the model (so that bounds do not depend on units):
     Each element's A times (1 + scale) (1 + taper (xi - 1/2))^2 and I1, I2, I12, J times
     (1 + scale) (1 + taper (xi - 1/2))^4 at its mid-length xi: a solid section scaled in size s
     (A ~ s^2, I ~ s^4) linearly along the member. Bounds scale [-0.3, 0.3], taper [-0.8, 0.8].
-    A one-element member has ``scale`` only (the taper has no effect at xi = 1/2). A member keeps
-    its PID when it is the PID's only element; otherwise its elements get new PIDs (copies of the
-    property, numbered from the model's largest PID + 1).
+    A one-element member has ``scale`` only (the taper has no effect at xi = 1/2). An element
+    keeps its PID when it is the PID's only element; otherwise it gets a new PID (a scaled copy
+    of its property, numbered from the model's largest PID + 1). Applied again, the factors
+    multiply (each element's current property is scaled).
 ``member_curvature`` of a member, parameters ``bow_1``, ``bow_2``
     A parabolic bow: the member's middle is offset laterally by bow_1 L along each element's y axis
     (plane 1) and bow_2 L along its z axis (plane 2), L the member's length, by element end
@@ -434,17 +435,17 @@ def _taper(model, candidate, x):
     scale, taper = x[0], (x[1] if len(x) > 1 else 0.0)
     es, rows = _member_rows(model, member)
     s = 1.0 + taper * (member.xi_mid - 0.5)
-    base = model.property(member.pid, card=member.card, eid=member.eids[0])
-    own = np.count_nonzero(es.pids == member.pid) == 1
     pids = np.array(es.pids)
     props = dict(model.properties)
-    new_pid = member.pid if own else _next_pid(model)
+    new_pid = _next_pid(model)
     for i, row in enumerate(rows):
+        base = model.property(es.pids[row], card=es.card, eid=es.eids[row])
+        if np.count_nonzero(es.pids == base.pid) > 1:
+            pids[row], new_pid = new_pid, new_pid + 1
         fields = {k: (None if base.fields.get(k) is None else
                       base.fields[k] * (1.0 + scale) * s[i] ** n)
                   for k, n in TAPER_EXPONENTS.items()}
-        props[new_pid + i] = Property(new_pid + i, base.card, {**base.fields, **fields})
-        pids[row] = new_pid + i
+        props[int(pids[row])] = Property(int(pids[row]), base.card, {**base.fields, **fields})
     elements = dict(model.elements)
     elements[member.card] = replace(es, pids=pids)
     return replace(model, properties=props, elements=elements)

@@ -140,6 +140,11 @@ def test_taper_copies_a_shared_property(x56, x56_candidates):
                                1.1 * base["A"] * size ** 2, rtol=1e-14)
     np.testing.assert_allclose([new.properties[p].fields["I2"] for p in fresh],
                                1.1 * base["I2"] * size ** 4, rtol=1e-14)
+    again = apply_effect(new, cand, [0.1, 0.0])                # a second taper multiplies
+    es2 = again.elements["CBAR"]
+    assert es2.pids.tolist() == es.pids.tolist()              # the copies are now the only users
+    np.testing.assert_allclose([again.properties[p].fields["A"] for p in fresh],
+                               1.21 * base["A"] * size ** 2, rtol=1e-14)
 
 
 def _cantilever(tmp_path, n, length, props):
