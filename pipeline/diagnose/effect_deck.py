@@ -3,9 +3,9 @@
 An effect of :mod:`pipeline.diagnose.effects` is defined by the model it makes; its cards are read
 off the difference between the model before and after (new CONM2s, CBUSH/PBUSH and CELAS2
 springs, new or changed CBAR/CBEAM and PBAR/PBEAM cards, removed rigid elements), so that the
-written deck and :func:`pipeline.diagnose.effects.apply_effect` cannot disagree. Cards are field lists: rendered as
-small-field text with :mod:`structures.bulk_text` (MYSTRAN-readable), or added to a pyNastran deck
-and written in large field (the precision of the model's numbers).
+written deck and :func:`pipeline.diagnose.effects.apply_effect` cannot disagree. Cards are field
+lists: rendered as small-field text with :mod:`structures.bulk_text` (MYSTRAN-readable), or added
+to a pyNastran deck and written in large field (the precision of the model's numbers).
 """
 from __future__ import annotations
 
@@ -203,7 +203,8 @@ def changed_parts(old: FEModel, new: FEModel) -> tuple[FEModel, FEModel]:
     -------
     old_part, new_part : FEModel
         ``old`` restricted to its changed and removed elements and CONM2s, ``new`` to its changed
-        and added ones; elements whose property changed count as changed. ``K(new) - K(old) = K(new_part) - K(old_part)`` for every assembled matrix.
+        and added ones; elements whose property changed count as changed.
+        ``K(new) - K(old) = K(new_part) - K(old_part)`` for every assembled matrix.
     """
     if [r.eid for r in old.rigid] != [r.eid for r in new.rigid] or \
             not np.array_equal(old.grids.ids, new.grids.ids):
@@ -223,9 +224,9 @@ def changed_parts(old: FEModel, new: FEModel) -> tuple[FEModel, FEModel]:
             rows_new, rows_old = np.concatenate([added, changed]), np.concatenate([was, gone])
         for side, source, rows in ((0, before, rows_old), (1, es, rows_new)):
             if len(rows):
+                data = {k: np.asarray(v)[rows] for k, v in source.data.items()}
                 parts[side][kind] = ElementSet(kind, source.eids[rows], source.pids[rows],
-                                               source.nodes[rows],
-                                               {k: np.asarray(v)[rows] for k, v in source.data.items()})
+                                               source.nodes[rows], data)
     old_rows, new_rows = _mass_diff(old.masses, new.masses)
     return (replace(old, elements=parts[0], masses=_mass_rows(old.masses, old_rows)),
             replace(new, elements=parts[1], masses=_mass_rows(new.masses, new_rows)))

@@ -15,10 +15,13 @@ scale of the model (so that bounds do not depend on units):
     of translational stiffness k_ref,t / compliance and rotational stiffness k_ref,r / compliance
     on the rigid element's dependent components. k_ref is the median over the CBAR/CBEAM elements
     touching the element's grids (all beams of the model when none touch them) of
-    k_ref,t = 12 E I / L^3 and k_ref,r = E I / L with I = (I1 + I2) / 2: at compliance 1 the joint
-    is about as flexible as one adjacent element (transverse tip and end-rotation stiffness of a
-    beam element, Przemieniecki 1968 sec. 4.3). Bounds [0, 20]; compliance 0 keeps the rigid
-    element. Skipped: rigid elements whose partial dependent components are not in basic axes.
+    k_ref,t = 12 E I / L^3 (the transverse stiffness term of the beam element) and
+    k_ref,r = E I / L (its bending stiffness per radian over its length), I = (I1 + I2) / 2: at
+    compliance 1 the joint is about as flexible as one adjacent element. Bounds [0, 20];
+    compliance 0 keeps the rigid element. Skipped: rigid elements whose partial dependent
+    components are not in basic axes. Very small compliances make K ill-conditioned: at 1e-6 on
+    the X-56 wing ribs the rigid-body eigenvalues carry round-off of 2e-6 of the first elastic
+    one, which :mod:`structures.modal` rejects; 1e-5 is fine there.
 ``member_taper`` of a member (:mod:`pipeline.diagnose.members`), parameters ``scale``, ``taper``
     Each element's A times (1 + scale) (1 + taper (xi - 1/2))^2 and I1, I2, I12, J times
     (1 + scale) (1 + taper (xi - 1/2))^4 at its mid-length xi: a solid section scaled in size s
@@ -39,6 +42,8 @@ scale of the model (so that bounds do not depend on units):
     (basic axes when CD = 0; a grounded CELAS2 rather than a CBUSH, which MYSTRAN cannot ground).
     One candidate per grid of ``lumped_mass`` and unconstrained direction.
 
+The screening step of each parameter (:attr:`Candidate.reference`, :data:`PARAMETER_RANGES`) is
+a plausible, clearly visible size: mass 0.02, compliance 4, scale 0.1, taper 0.3, bow 0.05, k 0.1.
 New elements take ids from the model's largest element, CONM2 or rigid-element id + 1; new
 properties from its largest PID + 1.
 """
@@ -51,7 +56,7 @@ import numpy as np
 
 from pipeline.diagnose.effect_deck import (changed_parts, model_changes, small_field_text,
                                            write_patched_deck)
-from pipeline.diagnose.members import Member, find_members
+from pipeline.diagnose.members import Member, find_members, grow
 from structures.assembly import _line_offsets, assemble_g
 from structures.common.errors import InputError, card_message
 from structures.elements.beam import beam_axes
@@ -309,24 +314,7 @@ def neighbours(model: FEModel, location: Location) -> Location:
     -------
     Location
     """
-    conn = [(es.eids, es.nodes, es.pids) for es in model.elements.values()]
-    if model.rigid:
-        rigid_grids = [[gid for gid, _ in r.independent + r.dependent] for r in model.rigid]
-        nodes = np.zeros((len(rigid_grids), max(map(len, rigid_grids))), np.int64)
-        for i, g in enumerate(rigid_grids):
-            nodes[i, :len(g)] = g
-        conn.append((np.array([r.eid for r in model.rigid]), nodes,
-                     np.zeros(len(rigid_grids), np.int64)))
-    seeds = set(location.grids)
-    for eids, nodes, _ in conn:
-        seeds.update(nodes[np.isin(eids, location.elements)].ravel().tolist())
-    grids, elements, props = set(seeds), set(location.elements), set(location.properties)
-    for eids, nodes, pids in conn:
-        touch = np.isin(nodes, list(seeds)).any(axis=1)
-        grids.update(nodes[touch].ravel().tolist())
-        elements.update(eids[touch].tolist())
-        props.update(pids[touch & (pids > 0)].tolist())
-    grids.discard(0)
+    grids, elements, props = grow(model, location.grids, location.elements, location.properties)
     return Location(grids=tuple(grids), elements=tuple(elements), properties=tuple(props))
 
 
@@ -334,7 +322,8 @@ def neighbours(model: FEModel, location: Location) -> Location:
 def _check_values(candidate: Candidate, values) -> np.ndarray:
     x = np.atleast_1d(np.asarray(values, float))
     if x.shape != (len(candidate.parameters),) or not np.all(np.isfinite(x)):
-        raise InputError(f"candidate {candidate.label!r}: values {np.asarray(values).tolist()} must "
+        given = np.asarray(values).tolist()
+        raise InputError(f"candidate {candidate.label!r}: values {given} must "
                          f"be {len(candidate.parameters)} finite numbers "
                          f"({', '.join(candidate.parameters)}). Fix: give one value per parameter.")
     lo, hi = np.array(candidate.lower), np.array(candidate.upper)
@@ -365,7 +354,8 @@ def _append_elements(model: FEModel, card: str, eids, pids, nodes, data) -> dict
         eids = np.concatenate([old.eids, eids])
         pids = np.concatenate([old.pids, pids])
         nodes = np.concatenate([old.nodes, nodes])
-        data = {k: np.concatenate([np.asarray(old.data[k]), np.asarray(v)]) for k, v in data.items()}
+        data = {k: np.concatenate([np.asarray(old.data[k]), np.asarray(v)])
+                for k, v in data.items()}
     elements[card] = ElementSet(card, eids, pids, nodes, data)
     return elements
 
@@ -522,7 +512,8 @@ def effect_matrices(model: FEModel, candidate: Candidate, values, *, mass: str =
 
     Returns
     -------
-    dK, dM : scipy.sparse.csr_matrix (6 n_grids, 6 n_grids), ``assemble_g(new) - assemble_g(model)``.
+    dK, dM : scipy.sparse.csr_matrix (6 n_grids, 6 n_grids),
+        ``assemble_g(new) - assemble_g(model)``.
     """
     if candidate.kind == "joint_flexibility":
         raise InputError(f"candidate {candidate.label!r}: a joint flexibility changes the rigid "

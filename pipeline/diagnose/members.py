@@ -1,4 +1,5 @@
-"""Members of a beam model: chains of CBAR/CBEAM elements with one property, end to end.
+"""Members of a beam model (chains of CBAR/CBEAM elements with one property, end to end) and
+neighbourhoods of grids and elements.
 
 A member is what an engineer idealises as one uniform, straight beam (a spar between two ribs, a
 fuselage segment, a pylon): the taper and curvature candidates of :mod:`pipeline.diagnose.effects`
@@ -137,3 +138,46 @@ def find_members(model: FEModel) -> tuple[Member, ...]:
                                       tuple(grids), tuple(xi_a.tolist()), tuple(xi_b.tolist()),
                                       float(seg.sum())))
     return tuple(sorted(members, key=lambda m: (m.card, m.pid, min(m.eids))))
+
+
+def _connectivity(model: FEModel) -> list:
+    """(eids, nodes (ne, nn), 0-padded, pids) of every element family and the rigid elements."""
+    conn = [(es.eids, es.nodes, es.pids) for es in model.elements.values()]
+    if model.rigid:
+        rigid_grids = [[gid for gid, _ in r.independent + r.dependent] for r in model.rigid]
+        nodes = np.zeros((len(rigid_grids), max(map(len, rigid_grids))), np.int64)
+        for i, g in enumerate(rigid_grids):
+            nodes[i, :len(g)] = g
+        conn.append((np.array([r.eid for r in model.rigid]), nodes,
+                     np.zeros(len(rigid_grids), np.int64)))
+    return conn
+
+
+def grow(model: FEModel, grids, elements, properties) -> tuple[set, set, set]:
+    """Grids, elements and properties grown by one element layer.
+
+    The seed grids are ``grids`` and those of ``elements``; every element (rigid elements
+    included) touching a seed grid joins, with its grids and property.
+
+    Parameters
+    ----------
+    model : FEModel
+    grids, elements, properties : iterables of ids.
+
+    Returns
+    -------
+    (grids, elements, properties) : sets of ids.
+    """
+    conn = _connectivity(model)
+    elements = set(elements)
+    seeds = set(grids)
+    for eids, nodes, _ in conn:
+        seeds.update(nodes[np.isin(eids, list(elements))].ravel().tolist())
+    out_grids, props = set(seeds), set(properties)
+    for eids, nodes, pids in conn:
+        touch = np.isin(nodes, list(seeds)).any(axis=1)
+        out_grids.update(nodes[touch].ravel().tolist())
+        elements.update(eids[touch].tolist())
+        props.update(pids[touch & (pids > 0)].tolist())
+    out_grids.discard(0)
+    return out_grids, elements, props

@@ -74,7 +74,8 @@ def test_lumped_mass_on_one_and_two_dof_spring_mass(tmp_path):
     assert f[0] == pytest.approx(np.sqrt(k1 / (1.05 * m1)) / (2 * np.pi), rel=1e-10)
 
     two = read_model(_deck(tmp_path, "two.bdf", [
-        ("GRID", 1, None, 0.0, 0.0, 0.0, None, 12456), ("GRID", 2, None, 1.0, 0.0, 0.0, None, 12456),
+        ("GRID", 1, None, 0.0, 0.0, 0.0, None, 12456),
+        ("GRID", 2, None, 1.0, 0.0, 0.0, None, 12456),
         ("CELAS2", 11, k1, 1, 3), ("CELAS2", 12, k2, 1, 3, 2, 3),
         ("CONM2", 21, 1, None, m1), ("CONM2", 22, 2, None, m2)]))
     cand = _pick(candidates(two, ["lumped_mass"]), "lumped_mass", "grid 2")
@@ -87,7 +88,8 @@ def test_lumped_mass_on_one_and_two_dof_spring_mass(tmp_path):
 def test_grounded_spring_on_free_free_two_masses(tmp_path):
     k, m1, m2 = 1.0e4, 2.0, 5.0
     model = read_model(_deck(tmp_path, "free.bdf", [
-        ("GRID", 1, None, 0.0, 0.0, 0.0, None, 12456), ("GRID", 2, None, 1.0, 0.0, 0.0, None, 12456),
+        ("GRID", 1, None, 0.0, 0.0, 0.0, None, 12456),
+        ("GRID", 2, None, 1.0, 0.0, 0.0, None, 12456),
         ("CELAS2", 12, k, 1, 3, 2, 3), ("CONM2", 21, 1, None, m1), ("CONM2", 22, 2, None, m2)]))
     f_elastic = np.sqrt(k * (m1 + m2) / (m1 * m2)) / (2 * np.pi)
     assert _elastic(model, 2)[0] == pytest.approx(f_elastic, rel=1e-10)
