@@ -473,6 +473,10 @@ def _curvature(model, candidate, x):
     return replace(model, elements=elements)
 
 
+#: The :attr:`Candidate.detail` keys each kind needs (set by :func:`candidates`).
+_DETAIL = {"lumped_mass": (), "boundary_stiffness": ("direction", "k_ref"),
+           "joint_flexibility": ("k_translation", "k_rotation"), "member_taper": ("member",),
+           "member_curvature": ("member",)}
 _APPLY = {"lumped_mass": _lumped_mass, "boundary_stiffness": _boundary, "joint_flexibility": _joint,
           "member_taper": _taper, "member_curvature": _curvature}
 
@@ -492,6 +496,10 @@ def apply_effect(model: FEModel, candidate: Candidate, values) -> FEModel:
     FEModel
     """
     x = _check_values(candidate, values)
+    missing = [key for key in _DETAIL[candidate.kind] if candidate.get(key) is None]
+    if missing:
+        raise InputError(f"candidate {candidate.label!r} lacks the detail {missing} of a "
+                         f"{candidate.kind}. Fix: build candidates with candidates(model).")
     if not np.any(x):
         return model
     return _APPLY[candidate.kind](model, candidate, x)

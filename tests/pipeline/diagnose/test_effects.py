@@ -417,6 +417,10 @@ def test_bad_kinds_and_values_raise(x56, x56_candidates):
         Candidate("cable_mass", Location(grids=(1,)), "x", ("m",), (0.0,), (1.0,), (0.1,))
     with pytest.raises(InputError, match="bounds"):
         Candidate("lumped_mass", Location(grids=(1,)), "x", ("mass",), (0.1,), (1.0,), (0.2,))
+    bare = Candidate("boundary_stiffness", Location(grids=(3005,)), "grid 3005 z", ("k_z",),
+                     (0.0,), (1.0,), (0.1,))
+    with pytest.raises(InputError, match="candidates"):
+        apply_effect(x56, bare, [0.1])
     cand = _pick(x56_candidates, "lumped_mass", "grid 3005")
     for bad in ([0.5], [-0.01], [np.nan], [0.01, 0.02]):
         with pytest.raises(InputError, match="grid 3005"):
