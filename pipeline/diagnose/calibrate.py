@@ -139,14 +139,6 @@ class Problem:
         """Training residual vector over the configurations."""
         return np.concatenate([ev.vector(ref.train) for ev, ref in zip(evaluations, self.refs)])
 
-    def n_data(self) -> int:
-        """Number of training residuals."""
-        n = 0
-        for ref in self.refs:
-            per_mode = 1 + (ref.basis.shape[1] if ref.has_shapes else 0)
-            n += int(ref.train.sum()) * per_mode + len(ref.mass_scale)
-        return n
-
 
 @dataclass(frozen=True)
 class Calibration:
@@ -160,6 +152,7 @@ class Calibration:
     evaluations : list of Evaluation at theta.
     flags : tuple of str, model-form warnings (empty when the fit is clean).
     per_configuration : {configuration: (n_theta,) estimates} from one Gauss-Newton step each.
+    jacobian : (n_data, n_theta) d r / d theta at the solution (reused by the refits).
     """
 
     theta: np.ndarray
@@ -168,6 +161,7 @@ class Calibration:
     evaluations: list
     flags: tuple
     per_configuration: dict
+    jacobian: np.ndarray
 
 
 def calibrate(problem: Problem, effects=()) -> Calibration:
@@ -176,7 +170,7 @@ def calibrate(problem: Problem, effects=()) -> Calibration:
     if n == 0:
         evs = problem.evaluate(np.zeros(0), effects)
         r = problem.vector(evs)
-        return Calibration(np.zeros(0), chi_square(r), r.size, evs, (), {})
+        return Calibration(np.zeros(0), chi_square(r), r.size, evs, (), {}, np.zeros((r.size, 0)))
     bound = CALIBRATION_BOUND / THETA_SCALE
 
     def fun(z):
@@ -205,7 +199,7 @@ def calibrate(problem: Problem, effects=()) -> Calibration:
             flags.append(f"configuration {ref.name}: the frequency errors run in long stretches "
                          f"of one sign along the modes (runs test p = {p:.1e}): a structured "
                          "residual.")
-    return Calibration(theta, chi2, r.size, evs, tuple(flags), per_conf)
+    return Calibration(theta, chi2, r.size, evs, tuple(flags), per_conf, jac)
 
 
 def _per_configuration(problem: Problem, evs, jac, theta, flags: list) -> dict:

@@ -4,19 +4,21 @@ The residual of one configuration is a vector whose entries are (nearly) indepen
 variance when the model is right (the ``Reference`` fixes how it is built, once per configuration,
 from the nominal model):
 
-- **frequency** of every paired mode j: (f_j - f_jG) / f_jG / sigma_f (paper eq. 18 without the
-  100), sigma_f^2 = frequency_noise^2 + (model_scatter / 2)^2: the test's own scatter plus the
-  frequency scatter the nominal section and mass properties leave (f ~ sqrt(k / m) halves it);
+- **frequency** of every paired mode j: (f_j - f_jG) / f_jG / sigma_fj (paper eq. 18 without the
+  100), sigma_fj^2 = frequency_noise^2 + the variance the nominal scatter causes
+  (:func:`scatter_scales`: every property and CONM2 scattering independently by model_scatter);
 - **shape** of every paired mode j (when the test has shapes): the test shape t_j scaled to unit
   RMS over the sensors, minus the least-squares fit of the analysis shape a_j,
-  d_j = t_j - (a_j . t_j / a_j . a_j) a_j, written in the orthonormal basis Q0 (QR) of the nominal
-  model's rigid and paired modes at the sensors: r_j = Q0^T d_j / sigma_sj. A first-order change
-  of any mode is a combination of the analysis modes (modal expansion of dphi, Fox & Kapoor 1968),
-  so Q0 keeps what a model change can explain; with white sensor noise the entries of Q0^T d_j are
-  independent with the noise's variance. d_j is orthogonal to a_j, so the sign of a shape does not
-  matter. It is the paper's cross-orthogonality off-diagonal (eq. 20) on the sensors' metric.
-  sigma_sj^2 = noise_j^2 + model_scatter^2, noise_j the shape noise (settings or
-  :func:`shape_noise`);
+  d_j = t_j - (a_j . t_j / a_j . a_j) a_j, written in the nominal model's modal coordinates at the
+  sensors, q_j = A0^+ d_j (A0: the nominal rigid and paired modes at the sensors, each at unit
+  RMS; SEREP, paper eq. 14; q_kj is the cross-orthogonality off-diagonal S_jk of eq. 20 in the
+  sensors' metric). Entry k of q_j is divided by its standard deviation: sensor noise,
+  sigma_nj^2 (A0^+ A0^+T)_kk, plus the mixing the nominal scatter causes: by first-order
+  perturbation (modal expansion, Fox & Kapoor 1968) the coefficient of mode k in mode j is
+  c_kj = -phi_k^T (dK - lambda_j dM) phi_j / (lambda_k - lambda_j) (:func:`scatter_scales`),
+  times rho_k / rho_j for the unit-RMS scaling, capped at ``MIXING_CAP`` (close modes mix
+  freely: the data cannot tell their combination from a model error). The own coordinate k = j is left out. d_j is orthogonal to a_j, so the sign of a shape
+  does not matter;
 - **mass** properties present in the measured mass (the paper's J1..J10, eqs. 1-10): weight and
   inertias relative to the measured value, CG relative to the radius of gyration, each divided by
   its stated accuracy (``WEIGHT_ACCURACY``, ``CG_ACCURACY``, ``INERTIA_ACCURACY``).
@@ -37,7 +39,9 @@ import xarray as xr
 from scipy.optimize import linear_sum_assignment
 
 from structures.common.errors import InputError
-from structures.correlation import mac, measured_dof_index, orthogonality, serep_coordinates
+from structures.correlation import (mac, measured_dof_index, orthogonality, serep_coordinates,
+                                    serep_pseudo_inverse)
+from structures.assembly import element_matrices
 from structures.massprops import MassProperties, mass_properties
 from structures.modal import compute_modes
 from structures.model import FEModel
@@ -50,9 +54,15 @@ CG_ACCURACY = 0.005
 #: Accuracy of measured moments and products of inertia (pendulum / swing tests, 2 % of the
 #: principal moments).
 INERTIA_ACCURACY = 0.02
+#: Largest standard deviation of a mixing coefficient (unit-RMS shapes): two modes closer than
+#: the nominal scatter can mix in any proportion.
+MIXING_CAP = 1.0
 #: Goodness-of-fit quantile: chi^2 above the 99.9 % chi-square quantile is a misfit (1 false alarm
 #: in 1000 fits of a right model).
 GOF_QUANTILE = 0.999
+#: A test mode whose part outside the analysis modes' span is this many times the median (the
+#: pooled noise) has no counterpart in the model.
+UNMATCHED_NOISE = 3.0
 #: Fewest sensor DOFs outside the analysis modes' span for the out-of-span noise estimate.
 MIN_NOISE_DOF = 5
 #: Largest off-diagonal of the test-mode orthogonality (SEREP, analysis mass) before the data
@@ -153,27 +163,95 @@ def shape_noise(phi_m, shapes) -> np.ndarray:
     return np.sqrt(np.sum(outside ** 2, axis=0) / (n_dof - m))
 
 
-def shape_residual(basis, test_shapes, analysis_shapes, sigma) -> np.ndarray:
-    """Shape residual per mode: Q0^T (t_j - alpha_j a_j) / sigma_j, alpha_j the least-squares scale.
+def shape_residual(projector, test_shapes, analysis_shapes, scale, keep) -> np.ndarray:
+    """Shape residual per mode: (A0^+ (t_j - alpha_j a_j))_k / scale_kj over the kept k.
 
     Parameters
     ----------
-    basis : array_like, shape (n_dof, n_b)
-        Orthonormal columns Q0.
+    projector : array_like, shape (m, n_dof)
+        A0^+ (paper eq. 13 on the sensors).
     test_shapes : array_like, shape (n_mode, n_dof)
         Test shapes at unit RMS.
     analysis_shapes : array_like, shape (n_mode, n_dof)
         Paired analysis shapes at the same DOFs (any scaling, any sign).
-    sigma : array_like, shape (n_mode,)
+    scale : array_like, shape (n_mode, m)
+        Standard deviation of every coordinate.
+    keep : array_like of bool, shape (n_mode, m)
+        Coordinates kept (the same number per mode).
 
     Returns
     -------
-    ndarray, shape (n_mode, n_b)
+    ndarray, shape (n_mode, n_keep)
     """
     t, a = np.asarray(test_shapes, float), np.asarray(analysis_shapes, float)
     alpha = np.sum(a * t, axis=1) / np.sum(a * a, axis=1)                   # least-squares scale
     d = t - alpha[:, None] * a
-    return (d @ np.asarray(basis, float)) / np.asarray(sigma, float)[:, None]
+    q = d @ np.asarray(projector, float).T / np.asarray(scale, float)       # eq. 14 coordinates
+    keep = np.asarray(keep, bool)
+    return q[keep].reshape(q.shape[0], -1)
+
+
+_STIFFNESS_FAMILIES = ("CBAR", "CBEAM", "CROD", "CELAS", "CMASS2", "CBUSH", "CQUAD4", "CTRIA3")
+
+
+def _scatter_energies(model: FEModel, phi) -> tuple[np.ndarray, np.ndarray]:
+    """sum over scattered groups of (phi_k^T K_g phi_j)^2 and (phi_k^T M_g phi_j)^2, (m, m) each.
+
+    A group is a property (every element of one PID scatters together: one card, one
+    specification) or a CONM2; ``phi`` (6 n_grid, m) holds g-set basic-frame shapes.
+    """
+    m = phi.shape[1]
+    shapes = phi.reshape(-1, 6, m)
+    sum_k, sum_m = np.zeros((m, m)), np.zeros((m, m))
+    families = [es for kind, es in model.elements.items() if kind in _STIFFNESS_FAMILIES]
+    pids = [es.pids for es in families] + [model.masses.eids + 10 ** 12]
+    for (gi, k_e, m_e), group in zip(element_matrices(model), pids):
+        phi_e = shapes[gi].reshape(gi.shape[0], -1, m)                    # (ne, nd, m)
+        for mat, total in ((k_e, sum_k), (m_e, sum_m)):
+            if mat is None:
+                continue
+            energy = np.einsum("eak,eab,ebj->ekj", phi_e, mat, phi_e)     # phi_k^T X_e phi_j
+            uniq, inverse = np.unique(group, return_inverse=True)
+            summed = np.zeros((uniq.size, m, m))
+            np.add.at(summed, inverse, energy)
+            total += np.sum(summed ** 2, axis=0)
+    return sum_k, sum_m * model.wtmass ** 2
+
+
+def scatter_scales(model: FEModel, phi, lam, own, rho, scatter: float) -> tuple:
+    """Standard deviations the nominal scatter causes in frequencies and mode mixing.
+
+    Every property (all elements of one PID) and every CONM2 scatters independently with
+    relative standard deviation s = ``scatter``, so phi_k^T dK phi_j has the variance
+    s^2 sum_p (phi_k^T K_p phi_j)^2 and phi_k^T dM phi_j likewise. First-order perturbation
+    (Fox & Kapoor 1968): d lambda_j = phi_j^T (dK - lambda_j dM) phi_j, mixing coefficient
+    c_kj = -phi_k^T (dK - lambda_j dM) phi_j / (lambda_k - lambda_j).
+
+    Parameters
+    ----------
+    model : FEModel
+    phi : (6 n_grid, m) g-set basic shapes of the basis modes (mass-normalised).
+    lam : (m,) their eigenvalues.
+    own : (n,) position in the basis of every paired mode.
+    rho : (m,) RMS of the basis modes at the sensors.
+    scatter : float
+
+    Returns
+    -------
+    frequency : (n,) standard deviation of df_j / f_j = d lambda_j / (2 lambda_j).
+    mixing : (n, m) standard deviation of the coefficient of mode k in unit-RMS mode j (capped at
+        ``MIXING_CAP``).
+    """
+    sk, sm = _scatter_energies(model, np.asarray(phi, float))
+    lam = np.asarray(lam, float)
+    lam_j = lam[own]
+    var = scatter ** 2 * (sk[:, own] + lam_j[None, :] ** 2 * sm[:, own])   # var(phi_k^T (dK - l_j dM) phi_j)
+    freq = np.sqrt(var[own, np.arange(own.size)]) / (2.0 * lam_j)         # Fox & Kapoor 1968
+    gap = np.abs(lam[:, None] - lam_j[None, :])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        c = np.where(gap > 0, np.sqrt(var) / gap, np.inf)
+    c = (c * np.asarray(rho, float)[:, None] / np.asarray(rho, float)[own][None, :]).T
+    return freq, np.minimum(c, MIXING_CAP)
 
 
 def mass_scales(measured: Mapping, wtmass: float = 1.0) -> dict:
@@ -249,9 +327,11 @@ class Reference:
     shapes : (n_test, n_dof) test shapes at unit RMS, or None (frequency-only data).
     sensor_index : (n_dof,) position of every measured DOF along the modes Dataset's ``dof``.
     sensor_grid, sensor_component : (n_dof,) the measured DOFs.
-    basis : (n_dof, n_b) orthonormal Q0 (nominal rigid + paired modes at the sensors), or None.
-    frequency_sigma : float, relative.
-    shape_sigma : (n_test,) relative to the shape's RMS, or None.
+    projector : (m, n_dof) A0^+ (nominal rigid + paired modes at the sensors, unit RMS), or None.
+    shape_scale : (n_test, m) standard deviation of every modal coordinate of the shape residual.
+    shape_keep : (n_test, m) bool, coordinates kept (all but the mode's own).
+    frequency_sigma : (n_test,) relative standard deviation of every frequency.
+    shape_sigma : (n_test,) sensor noise per DOF relative to the shape's RMS, or None.
     train : (n_test,) bool, modes used to fit (the others judge the gap only).
     measured_mass : {quantity: value}
     mass_scale : {quantity: standard deviation}
@@ -265,8 +345,10 @@ class Reference:
     sensor_index: np.ndarray | None
     sensor_grid: np.ndarray | None
     sensor_component: np.ndarray | None
-    basis: np.ndarray | None
-    frequency_sigma: float
+    projector: np.ndarray | None
+    shape_scale: np.ndarray | None
+    shape_keep: np.ndarray | None
+    frequency_sigma: np.ndarray
     shape_sigma: np.ndarray | None
     train: np.ndarray
     measured_mass: Mapping
@@ -354,7 +436,8 @@ def evaluate_modes(ref: Reference, frequency, sensor_shapes, props: MassProperti
     f_err = (frequency[paired] - ref.test_frequency) / ref.test_frequency   # paper eq. 18 / 100
     r_f = f_err / ref.frequency_sigma
     if ref.has_shapes:
-        r_s = shape_residual(ref.basis, ref.shapes, np.asarray(sensor_shapes)[paired], ref.shape_sigma)
+        r_s = shape_residual(ref.projector, ref.shapes, np.asarray(sensor_shapes)[paired],
+                             ref.shape_scale, ref.shape_keep)
     else:
         r_s = np.zeros((ref.test_frequency.size, 0))
     r_m = mass_residual(props, ref.measured_mass, ref.mass_scale)
@@ -362,7 +445,8 @@ def evaluate_modes(ref: Reference, frequency, sensor_shapes, props: MassProperti
                       props=props)
 
 
-def build_reference(name: str, gvt: xr.Dataset, measured_mass: Mapping | None, modes: xr.Dataset, *,
+def build_reference(name: str, model: FEModel, gvt: xr.Dataset, measured_mass: Mapping | None,
+                    modes: xr.Dataset, *,
                     frequency_noise: float, shape_noise_value: float | None, model_scatter: float,
                     holdout: int, nmodes: int, wtmass: float = 1.0) -> tuple[Reference, dict]:
     """Preflight of one configuration: pairing on the nominal modes, noise, training split.
@@ -372,7 +456,9 @@ def build_reference(name: str, gvt: xr.Dataset, measured_mass: Mapping | None, m
     Reference
     dict
         Preflight facts: ``self_orthogonality`` (largest off-diagonal or None), ``shape_noise``
-        (median estimate or None), ``paired_fe_mode``, ``mac`` (paired MAC or None).
+        (pooled: median of the modes' estimates, or None), ``unmatched`` (test modes whose shape
+        lies mostly outside the analysis modes' span), ``paired_fe_mode``, ``mac`` (paired MAC
+        or None).
     """
     order = np.argsort(gvt["frequency"].values, kind="stable")
     gvt = gvt.isel(mode=order)
@@ -383,8 +469,8 @@ def build_reference(name: str, gvt: xr.Dataset, measured_mass: Mapping | None, m
                          "pairs elastic modes only. Fix: drop the rigid-body modes from the GVT data.")
     has_shapes = "shape" in gvt
     measured = dict(measured_mass or {})
-    facts = {"self_orthogonality": None, "shape_noise": None, "mac": None}
-    sensor_index = grid = comp = shapes = basis = sigma_s = None
+    facts = {"self_orthogonality": None, "shape_noise": None, "mac": None, "unmatched": []}
+    sensor_index = grid = comp = shapes = noise = None
     if has_shapes:
         sensor_index = measured_dof_index(modes, gvt)
         grid, comp = gvt["grid"].values, gvt["component"].values
@@ -396,27 +482,42 @@ def build_reference(name: str, gvt: xr.Dataset, measured_mass: Mapping | None, m
                 raise InputError(f"configuration {name}: {phi_all.shape[0]} measured DOFs are too "
                                  f"few to estimate the shape noise of {f_test.size} modes. Fix: give "
                                  "[diagnose] shape_noise.")
-            noise = shape_noise(phi_all[:, :m_noise], shapes)
+            per_mode = shape_noise(phi_all[:, :m_noise], shapes)
+            # pooled: a test mode the model lacks altogether (a local mode) would otherwise count
+            # as all noise and hide its own residual
+            noise = np.full(f_test.size, float(np.median(per_mode)))
+            facts["unmatched"] = gvt["mode"].values[per_mode > UNMATCHED_NOISE * noise].tolist()
         else:
             noise = np.full(f_test.size, float(shape_noise_value))
         facts["shape_noise"] = float(np.median(noise))
-        sigma_s = np.sqrt(noise ** 2 + model_scatter ** 2)
     ref = Reference(name=name, test_mode=gvt["mode"].values, test_frequency=f_test, shapes=shapes,
-                    sensor_index=sensor_index, sensor_grid=grid, sensor_component=comp, basis=None,
-                    frequency_sigma=float(np.hypot(frequency_noise, model_scatter / 2.0)),
-                    shape_sigma=sigma_s, train=~holdout_mask(f_test.size, holdout),
+                    sensor_index=sensor_index, sensor_grid=grid, sensor_component=comp,
+                    projector=None, shape_scale=None, shape_keep=None,
+                    frequency_sigma=np.full(f_test.size, float(frequency_noise)),
+                    shape_sigma=noise, train=~holdout_mask(f_test.size, holdout),
                     measured_mass=measured, mass_scale=mass_scales(measured, wtmass), nmodes=nmodes)
     paired = pair(ref, modes)
     facts["paired_fe_mode"] = modes["mode"].values[paired].tolist()
+    rigid = np.setdiff1d(np.arange(modes.sizes["mode"]), elastic_index(modes))
+    keep = np.concatenate([rigid, paired])
+    own = np.arange(rigid.size, keep.size)
+    lam = (2.0 * np.pi * modes["frequency"].values[keep]) ** 2
+    phi_m = modes["shape"].values[:, sensor_index] if has_shapes else None
+    rho = np.sqrt(np.mean(phi_m[keep] ** 2, axis=1)) if has_shapes else np.ones(keep.size)
+    freq_sd, mixing_sd = scatter_scales(model, modes["shape"].values[keep].T, lam, own, rho,
+                                        model_scatter)
+    ref = replace(ref, frequency_sigma=np.hypot(frequency_noise, freq_sd))
     if has_shapes:
-        phi_m = modes["shape"].values[:, sensor_index]
-        rigid = np.setdiff1d(np.arange(modes.sizes["mode"]), elastic_index(modes))
-        keep = np.concatenate([rigid, paired])
-        basis, _ = np.linalg.qr(phi_m[keep].T)
+        a0 = phi_m[keep].T / rho                                            # unit RMS columns
+        projector = serep_pseudo_inverse(a0, what="Phi_M (rigid and paired modes)")  # eq. 13
+        noise_sd = noise[:, None] * np.sqrt(np.sum(projector ** 2, axis=1))[None, :]
+        scale = np.sqrt(noise_sd ** 2 + mixing_sd ** 2)
+        keep_mask = np.ones(scale.shape, bool)
+        keep_mask[np.arange(own.size), own] = False
         facts["mac"] = np.diag(mac(shapes.T, phi_m[paired].T)).tolist()
         try:
-            facts["self_orthogonality"] = self_orthogonality(phi_m[keep].T, shapes)
+            facts["self_orthogonality"] = self_orthogonality(a0, shapes)
         except InputError:
             facts["self_orthogonality"] = None
-        ref = replace(ref, basis=basis)
+        ref = replace(ref, projector=projector, shape_scale=scale, shape_keep=keep_mask)
     return ref, facts

@@ -30,7 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import least_squares, lsq_linear
 
-from pipeline.diagnose.calibrate import CALIBRATION_BOUND, DIFF_STEP, THETA_SCALE, Problem
+from pipeline.diagnose.calibrate import CALIBRATION_BOUND, THETA_SCALE, Problem
 from pipeline.diagnose.evidence import bic, chi_square, evaluate, evaluate_modes
 from structures.assembly import assemble_g
 from structures.common.errors import InputError, SolverError
@@ -41,8 +41,12 @@ REANALYSIS_KINDS = ("joint_flexibility",)
 #: Eigenvalue gaps below this fraction of the largest computed eigenvalue are treated as
 #: degenerate in the modal expansion (their coupling is left out instead of dividing by ~0).
 DEGENERATE_GAP = 1e-9
-#: Most residual evaluations of one refit (started at the linear fit, a few iterations suffice).
+#: Most iterations of one refit (started at the linear fit, a few iterations suffice).
 REFIT_NFEV = 12
+#: Forward-difference step of an effect parameter, in units of its reference size.
+FD_STEP = 1e-3
+#: Residual at a trial point whose model cannot be analysed, relative to the starting residual.
+PENALTY = 3.0
 
 
 @dataclass(frozen=True)
@@ -206,10 +210,16 @@ def pick_for_refit(rows, count: int) -> list:
     return chosen
 
 
-def refit(problem: Problem, theta0, effects, row: Screened | None, *, n_data: int) -> Refitted:
+def refit(problem: Problem, theta0, effects, row: Screened | None, *, n_data: int,
+          jacobian_theta) -> Refitted | None:
     """Bounded nonlinear least squares of a candidate's parameters and the nominal parameters.
 
-    ``row`` None refits the nominal parameters alone ("none").
+    The effect parameters' Jacobian columns are forward differences with reanalysis; the nominal
+    parameters' columns are ``jacobian_theta`` (n_data, n_theta), d r / d theta of the
+    calibration (they change little with a small effect; this saves a reanalysis of every
+    configuration per nominal parameter and iteration). ``row`` None refits the nominal
+    parameters alone ("none"). A model that cannot be analysed at some trial point (a mechanism)
+    costs ``PENALTY`` times the starting residual there; None when the start itself fails.
     """
     cand = None if row is None else row.candidate
     npar = 0 if cand is None else len(cand.parameters)
@@ -221,24 +231,51 @@ def refit(problem: Problem, theta0, effects, row: Screened | None, *, n_data: in
                          np.full(len(theta0), CALIBRATION_BOUND)]) / scale
     start = np.concatenate([row.values if cand else np.zeros(0), np.asarray(theta0, float)])
     z0 = np.clip(start / scale, lo, hi)
+    j_theta = np.asarray(jacobian_theta, float) * THETA_SCALE
 
     def split(z):
         x = z * scale
         extra = ((cand, x[:npar]),) if cand else ()
         return x[npar:], tuple(effects) + extra
 
-    def fun(z):
+    def residual(z):
         theta, eff = split(z)
         return problem.vector(problem.evaluate(theta, eff))
 
+    try:
+        r_start = residual(z0)
+    except (SolverError, InputError):
+        return None
+    cache = {}
+
+    def fun(z):
+        key = z.tobytes()
+        if key not in cache:
+            try:
+                cache[key] = residual(z)
+            except (SolverError, InputError):
+                cache[key] = PENALTY * r_start
+        return cache[key]
+
+    def jac(z):
+        r = fun(z)
+        cols = []
+        for k in range(npar):
+            h = FD_STEP if z[k] + FD_STEP <= hi[k] else -FD_STEP
+            step = z.copy()
+            step[k] += h
+            cols.append((fun(step) - r) / h)
+        return np.column_stack(cols + [j_theta]) if cols else j_theta
+
+    z = z0
     if z0.size:
-        sol = least_squares(fun, z0, bounds=(lo, hi), method="trf", diff_step=DIFF_STEP,
-                            max_nfev=REFIT_NFEV)
-        z = sol.x
-    else:
-        z = z0
+        z = least_squares(fun, z0, jac=jac, bounds=(lo, hi), method="trf",
+                          max_nfev=REFIT_NFEV).x
     theta, eff = split(z)
-    evs = problem.evaluate(theta, eff)
+    try:
+        evs = problem.evaluate(theta, eff)
+    except (SolverError, InputError):
+        return None
     chi2 = chi_square(problem.vector(evs))
     p = npar + len(theta0)
     return Refitted(cand, (z * scale)[:npar], theta, chi2, bic(chi2, p, n_data), p, evs)

@@ -14,11 +14,14 @@
 Verdict of a round (:func:`decide`), BIC = chi^2 + p ln n (Schwarz 1978), margins after Kass &
 Raftery (1995, a BIC difference above 10 is very strong evidence):
 
-- ``none``: the calibrated model without a further effect passes the goodness-of-fit test;
-- ``unexplained``: it fails, and no candidate beats it by ``settings.margin``;
-- ``ambiguous``: the best beats "none" but not, by the margin, the best candidate of another kind
-  or at a location that is not its neighbour (:func:`pipeline.diagnose.effects.neighbours`);
-- ``effect``: the best beats both by the margin.
+- ``effect``: the best refitted candidate beats "none" (the model with its nominal parameters
+  refitted) and the runner-up (the best candidate of another kind or at a location that is not
+  its neighbour, :func:`pipeline.diagnose.effects.neighbours`) by ``settings.margin``;
+- ``ambiguous``: it beats "none" but not the runner-up;
+- ``none``: no candidate beats "none" and "none" passes the goodness-of-fit test;
+- ``unexplained``: no candidate beats "none" and "none" fails the goodness-of-fit test.
+A clear BIC gain is tested before the goodness of fit: an omnibus chi^2 test over hundreds of
+shape entries is blind to an effect that moves a few frequencies, which the BIC sees.
 
 The overall verdict is ``effect`` when at least one effect was named, else the first round's.
 """
@@ -35,7 +38,8 @@ from threadpoolctl import threadpool_limits
 
 from pipeline.diagnose.calibrate import Problem, calibrate
 from pipeline.diagnose.effects import KINDS, candidates, neighbours
-from pipeline.diagnose.evidence import build_reference, elastic_index, gof_limit
+from pipeline.diagnose.evidence import (SELF_ORTHOGONALITY_LIMIT, build_reference, elastic_index,
+                                        gof_limit)
 from pipeline.diagnose.gap import gap_metrics, separating_measurement
 from pipeline.diagnose.result import CandidateScore, DiagnoseResult, EffectRecord
 from pipeline.diagnose.screen import pick_for_refit, refit, screen, signatures
@@ -142,19 +146,18 @@ def _overlaps(a, b) -> bool:
                 or set(a.properties) & set(b.properties))
 
 
-def decide(none_bic: float, none_chi2: float, none_dof: int, fits, margin: float,
-           near) -> tuple[str, int | None, int | None]:
+def decide(none_fit, fits, margin: float, near, n_data: int) -> tuple:
     """Verdict of one round from its score table.
 
     Parameters
     ----------
-    none_bic, none_chi2 : float, of the model without a further effect.
-    none_dof : int, its degrees of freedom (training residuals - nominal parameters).
-    fits : sequence of (kind, location, bic)
+    none_fit : (chi2, n_params) of the model without a further effect.
+    fits : sequence of (kind, location, chi2, n_params)
         Refitted candidates.
     margin : float
     near : callable(location_a, location_b) -> bool
         True when b is a's neighbour (one element layer).
+    n_data : int, training residuals.
 
     Returns
     -------
@@ -162,22 +165,38 @@ def decide(none_bic: float, none_chi2: float, none_dof: int, fits, margin: float
     best : int or None, index into ``fits``.
     runner : int or None, index of the runner-up (another kind or a location that is not a
         neighbour of the best's).
+    lead : float, score of the better of "none" and the runner-up minus the best's (nan without
+        fits).
+
+    Notes
+    -----
+    The scores are BIC = chi^2 / c + p ln n (Schwarz 1978) with the dispersion
+    c = max(1, chi^2_best / (n - p_best)) of the best fit (quasi-likelihood, Burnham & Anderson
+    2002 sec. 6.2): a residual the best candidate leaves far above its scales (a second effect,
+    or one outside the library) makes every chi^2 difference count for less, so that fitting
+    that remainder with a wrong candidate does not look decisive.
     """
-    if none_chi2 <= gof_limit(none_dof):
-        return "none", None, None
+    none_chi2, none_p = none_fit
+    fitting = gof_limit(n_data - none_p) >= none_chi2
     if not fits:
-        return "unexplained", None, None
-    scores = np.array([f[2] for f in fits], float)
+        return ("none" if fitting else "unexplained"), None, None, float("nan")
+    chi2 = np.array([f[2] for f in fits], float)
+    p = np.array([f[3] for f in fits], float)
+    best = int(np.argmin(chi2 + p * np.log(n_data)))
+    c = max(1.0, chi2[best] / max(n_data - p[best], 1.0))
+    scores = chi2 / c + p * np.log(n_data)                                  # Schwarz 1978
+    none_score = none_chi2 / c + none_p * np.log(n_data)
     best = int(np.argmin(scores))
     kind, loc = fits[best][0], fits[best][1]
     rivals = [i for i, f in enumerate(fits)
               if i != best and (f[0] != kind or not near(loc, f[1]))]
     runner = min(rivals, key=lambda i: scores[i]) if rivals else None
-    if not scores[best] + margin < none_bic:
-        return "unexplained", best, runner
+    lead = float(min(none_score, scores[runner] if runner is not None else np.inf) - scores[best])
+    if not scores[best] + margin < none_score:
+        return ("none" if fitting else "unexplained"), best, runner, lead
     if runner is not None and not scores[best] + margin < scores[runner]:
-        return "ambiguous", best, runner
-    return "effect", best, runner
+        return "ambiguous", best, runner, lead
+    return "effect", best, runner, lead
 
 
 # ------------------------------------------------------------------------------------ diagnose
@@ -197,7 +216,7 @@ def _preflight(configurations, settings: DiagnoseSettings, notes: list):
                              f"{elastic_index(modes).size} elastic analysis modes. Fix: raise "
                              "[diagnose] nmodes.")
         ref, facts = build_reference(
-            data.name, data.gvt, data.measured_mass, modes, frequency_noise=settings.frequency_noise,
+            data.name, data.model, data.gvt, data.measured_mass, modes, frequency_noise=settings.frequency_noise,
             shape_noise_value=settings.shape_noise, model_scatter=settings.model_scatter,
             holdout=settings.holdout, nmodes=nmodes, wtmass=data.model.wtmass)
         refs.append(ref)
@@ -207,8 +226,12 @@ def _preflight(configurations, settings: DiagnoseSettings, notes: list):
                          f"test self-orthogonality largest off-diagonal "
                          f"{facts['self_orthogonality'] if facts['self_orthogonality'] is None else round(facts['self_orthogonality'], 3)}, "
                          f"paired MAC min {min(facts['mac']):.2f}.")
+            if facts["unmatched"]:
+                notes.append(f"{data.name}: test modes {facts['unmatched']} have no counterpart "
+                             "among the analysis modes (their shapes lie outside the modes' span "
+                             "at the sensors): a local mode the model lacks.")
             if facts["self_orthogonality"] is not None and \
-                    facts["self_orthogonality"] > 0.2:
+                    facts["self_orthogonality"] > SELF_ORTHOGONALITY_LIMIT:
                 notes.append(f"{data.name}: the test modes are not orthogonal in the analysis mass "
                              f"(largest off-diagonal {facts['self_orthogonality']:.2f}): noisy or "
                              "aliased shapes, or a mass distribution the model lacks.")
@@ -280,7 +303,9 @@ def diagnose(configurations, settings: DiagnoseSettings = DiagnoseSettings(), *,
         for k in range(settings.max_effects):
             _say(progress, f"round {k + 1}: screening")
             model0 = problem.model(0, theta, effects)
-            cands = candidates(model0, settings.kinds)
+            named = {(c.kind, c.location) for c, _ in effects}
+            cands = [c for c in candidates(model0, settings.kinds)
+                     if (c.kind, c.location) not in named]
             r0, signed, skipped = signatures(problem, theta, effects, none_evs, cands,
                                              progress=progress)
             if skipped:
@@ -288,18 +313,20 @@ def diagnose(configurations, settings: DiagnoseSettings = DiagnoseSettings(), *,
                              f"every configuration (first: {skipped[0]}).")
             rows = screen(r0, signed)
             _say(progress, f"round {k + 1}: refitting")
-            none = refit(problem, theta, effects, None, n_data=n_data) if k else \
-                _none_fit(problem, cal, n_data)
-            fits = [refit(problem, theta, effects, row, n_data=n_data)
+            none = refit(problem, theta, effects, None, n_data=n_data,
+                         jacobian_theta=cal.jacobian) if k else _none_fit(problem, cal, n_data)
+            fits = [refit(problem, theta, effects, row, n_data=n_data, jacobian_theta=cal.jacobian)
                     for row in pick_for_refit(rows, settings.refit)]
+            fits = [f for f in fits if f is not None]
             model_k = model0
 
             def near(a, b):
                 return _overlaps(neighbours(model_k, a), b)
 
-            verdict, best, runner = decide(none.bic, none.chi2, n_data - len(theta),
-                                           [(f.candidate.kind, f.candidate.location, f.bic)
-                                            for f in fits], settings.margin, near)
+            verdict, best, runner, lead = decide((none.chi2, none.n_params),
+                                           [(f.candidate.kind, f.candidate.location, f.chi2,
+                                             f.n_params) for f in fits],
+                                           settings.margin, near, n_data)
             rounds.append(_round_record(k, verdict, fits, best, runner, none))
             if k == 0:
                 first = verdict
@@ -309,8 +336,7 @@ def diagnose(configurations, settings: DiagnoseSettings = DiagnoseSettings(), *,
             if verdict != "effect":
                 break
             chosen = fits[best]
-            rival = min(none.bic, fits[runner].bic if runner is not None else np.inf)
-            records.append(EffectRecord(chosen.candidate, chosen.values, float(rival - chosen.bic)))
+            records.append(EffectRecord(chosen.candidate, chosen.values, lead))
             effects.append((chosen.candidate, chosen.values))
             theta, none_evs = chosen.theta, chosen.evaluations
         after_evs = none_evs
