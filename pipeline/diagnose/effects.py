@@ -415,8 +415,14 @@ def _joint(model, candidate, x):
 
 
 def _member_rows(model: FEModel, member: Member):
-    es = model.elements[member.card]
-    pos = {int(e): i for i, e in enumerate(es.eids)}
+    es = model.elements.get(member.card)
+    pos = {} if es is None else {int(e): i for i, e in enumerate(es.eids)}
+    missing = [e for e in member.eids if e not in pos]
+    if missing:
+        raise InputError(card_message(f"the member's elements {missing} are not in the model.",
+                                      card=member.card, card_id=missing[0],
+                                      filename=model.filename,
+                                      fix="build the candidate with candidates() on this model."))
     return es, np.array([pos[e] for e in member.eids])
 
 
