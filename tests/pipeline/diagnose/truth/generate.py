@@ -114,16 +114,19 @@ def _jsonable(value):
     return value
 
 
-def _case_toml(name: str, units: str, configurations) -> str:
-    lines = [f"# blind-study case (tests/pipeline/diagnose/truth): the truth is in truth.json",
+def _case_toml(name: str, units: str, configurations, diagnose: dict) -> str:
+    lines = ["# blind-study case (tests/pipeline/diagnose/truth): the truth is in truth.json",
              f'name = "{name}"', f'units = "{units}"']
     for c, deck in configurations:
         lines += ["", "[[configurations]]", f'name = "{c}"', f'deck = "{deck.name}"',
                   f'gvt = "gvt_{c}.unv"', f'measured_mass = "mass_{c}.json"']
+    if diagnose:
+        lines += ["", "[diagnose]"] + [f"{k} = {json.dumps(v)}" for k, v in diagnose.items()]
     return "\n".join(lines) + "\n"
 
 
-def make_case(structure: str, kind: str, seed: int, out, *, decks=None) -> Path:
+def make_case(structure: str, kind: str, seed: int, out, *, decks=None,
+              diagnose: dict | None = None) -> Path:
     """Write a blind-study case into ``out``; returns the path of its ``case.toml``.
 
     Parameters
@@ -134,6 +137,8 @@ def make_case(structure: str, kind: str, seed: int, out, *, decks=None) -> Path:
     out : folder (created)
     decks : folder, optional
         Keep the truth decks there (``truth_<start deck>.bdf``, one per configuration).
+    diagnose : dict, optional
+        A ``[diagnose]`` table for the case file (e.g. ``{"max_effects": 1}``); none by default.
 
     Returns
     -------
@@ -195,5 +200,5 @@ def make_case(structure: str, kind: str, seed: int, out, *, decks=None) -> Path:
               {"grids": [], "elements": []},
               "max_frequency_shift": shift, "parameters": _jsonable(chosen.params)}
     write_text(json.dumps(record, indent=1) + "\n", out / "truth.json")
-    return write_text(_case_toml(f"{structure}_{kind}_{seed}", units, written.items()),
-                      out / "case.toml")
+    return write_text(_case_toml(f"{structure}_{kind}_{seed}", units, written.items(),
+                                 diagnose or {}), out / "case.toml")

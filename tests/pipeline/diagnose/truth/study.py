@@ -1,0 +1,202 @@
+"""The blind study of ``pipeline.diagnose``: cases from the truth generator, the workflow run on
+each through its public names only (``pipeline.case.read_case``,
+``pipeline.diagnose.inputs.configurations_from_case`` / ``settings_from_case``,
+``pipeline.diagnose.diagnose``), its verdict scored against ``truth.json``.
+
+Scores (issue 14, "Must show"):
+
+* named kind: the first named effect's kind when the verdict is "effect", else the verdict
+  ("none", "ambiguous", "unexplained"); "error" when the workflow raised;
+* top-1 kind accuracy: named kind == truth kind, over the library's kinds;
+* location hit (a case whose kind is right): the named effect's grids, elements or properties
+  meet the truth's location grown by one element layer (``truth.json`` ``neighbours``; its
+  properties);
+* no effect named on "none" data: verdict != "effect";
+* an effect outside the library: "ambiguous" or "unexplained" rather than a name;
+* the gap: held-out RMS frequency error and largest cross-orthogonality off-diagonal before and
+  after, per case.
+
+Run ``python -m tests.pipeline.diagnose.truth.study [--structures frame x56] [--seeds 10]
+[--out DIR]`` from the repository root: prints the confusion matrix and the scores, writes
+``DIR/study.nc`` and every case's ``diagnose.json``.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import time
+from pathlib import Path
+
+import numpy as np
+import xarray as xr
+
+from structures.common.files import write_dataset, write_text
+
+from .generate import KINDS, STRUCTURES, TRUTH_KINDS, make_case
+
+#: Columns of the confusion matrix: every kind the workflow can name and its other verdicts.
+NAMED = KINDS + ("none", "ambiguous", "unexplained", "error")
+
+
+def diagnose_case(case_toml: Path) -> dict:
+    """Run the workflow on a case (only what the case names); returns its JSON."""
+    from pipeline.case import read_case
+    from pipeline.diagnose import diagnose
+    from pipeline.diagnose.inputs import configurations_from_case, settings_from_case
+
+    case = read_case(case_toml)
+    return diagnose(configurations_from_case(case), settings_from_case(case)).to_json()
+
+
+def score(truth: dict, result: dict) -> dict:
+    """Score one verdict against its truth (module docstring)."""
+    effect = result.get("effect") if result.get("verdict") == "effect" else None
+    named = effect["kind"] if effect else result.get("verdict", "error")
+    hit = False
+    if effect and named == truth["kind"]:
+        loc = effect["location"]
+        hit = bool(set(loc.get("grids", ())) & set(truth["neighbours"]["grids"])
+                   or set(loc.get("elements", ())) & set(truth["neighbours"]["elements"])
+                   or set(loc.get("properties", ())) & set(truth["properties"]))
+
+    def gap(when, metric):
+        value = (result.get(when) or {}).get(metric)
+        return np.nan if value is None else float(value)
+
+    return {"named": named, "kind_correct": named == truth["kind"], "location_hit": hit,
+            "rms_before": gap("gap_before", "frequency_rms_held_out"),
+            "rms_after": gap("gap_after", "frequency_rms_held_out"),
+            "xo_before": gap("gap_before", "max_cross_orthogonality_offdiag"),
+            "xo_after": gap("gap_after", "max_cross_orthogonality_offdiag")}
+
+
+def run_study(structures=STRUCTURES, kinds=TRUTH_KINDS, seeds=range(10), out=None, *,
+              diagnose: dict | None = None, progress=print) -> xr.Dataset:
+    """Generate and diagnose every (structure, kind, seed) case; the scored study.
+
+    Parameters
+    ----------
+    structures : sequence of STRUCTURES
+    kinds : sequence of TRUTH_KINDS
+    seeds : sequence of int
+    out : folder of the cases (``out/<structure>/<kind>/<seed>/``) and ``study.nc``
+    diagnose : dict, optional, the cases' ``[diagnose]`` table (default: none, the defaults)
+    progress : callable(str) or None, one line per case
+
+    Returns
+    -------
+    xarray.Dataset
+        Per ``case``: ``structure``, ``truth_kind``, ``seed``, ``named_kind``, ``kind_correct``,
+        ``location_hit``, ``seconds`` (diagnose only), ``frequency_rms_held_out`` and
+        ``max_cross_orthogonality_offdiag`` on ``when`` (before, after), ``error``;
+        ``confusion(truth_kind_row, named_kind_column)`` counts; attrs: the scores
+        ``top1_kind_accuracy``, ``location_accuracy``, ``none_kept``, ``outside_not_named``,
+        ``gap_shrinks`` (fractions, NaN when no case counts) and the numbers of cases.
+    """
+    out = Path(out)
+    rows = []
+    for structure in structures:
+        for kind in kinds:
+            for seed in seeds:
+                folder = out / structure / kind / str(seed)
+                case = make_case(structure, kind, seed, folder, diagnose=diagnose)
+                truth = json.loads((folder / "truth.json").read_text())
+                start, error = time.perf_counter(), ""
+                try:
+                    result = diagnose_case(case)
+                except Exception as exc:  # a study records a crash and goes on
+                    result, error = {"verdict": "error"}, f"{type(exc).__name__}: {exc}"
+                seconds = time.perf_counter() - start
+                write_text(json.dumps(result, indent=1) + "\n", folder / "diagnose.json")
+                row = {"structure": structure, "truth_kind": kind, "seed": int(seed),
+                       "seconds": seconds, "error": error, **score(truth, result)}
+                rows.append(row)
+                if progress:
+                    progress(f"{structure:6s} {kind:18s} seed {seed:3d}: {row['named']:18s} "
+                             f"location {'hit' if row['location_hit'] else '-':3s} "
+                             f"{seconds:6.1f} s {error[:80]}")
+    ds = study_dataset(rows)
+    write_dataset(ds, out / "study.nc")
+    return ds
+
+
+def study_dataset(rows: list[dict]) -> xr.Dataset:
+    """The scored study as a Dataset (see ``run_study``) from per-case rows of ``score``."""
+    col = {k: [r[k] for r in rows] for k in rows[0]}
+    truth = np.array(col["truth_kind"], dtype=str)
+    named = np.array(col["named"], dtype=str)
+    confusion = np.array([[np.sum((truth == t) & (named == n)) for n in NAMED]
+                          for t in TRUTH_KINDS], dtype=int)
+    ds = xr.Dataset(
+        {"structure": ("case", np.array(col["structure"], dtype=str)),
+         "truth_kind": ("case", truth), "seed": ("case", np.array(col["seed"], int)),
+         "named_kind": ("case", named),
+         "kind_correct": ("case", np.array(col["kind_correct"], bool)),
+         "location_hit": ("case", np.array(col["location_hit"], bool)),
+         "seconds": ("case", np.array(col["seconds"], float), {"units": "s"}),
+         "error": ("case", np.array(col["error"], dtype=str)),
+         "frequency_rms_held_out": (("case", "when"), np.array(
+             [col["rms_before"], col["rms_after"]], float).T, {"units": "%"}),
+         "max_cross_orthogonality_offdiag": (("case", "when"), np.array(
+             [col["xo_before"], col["xo_after"]], float).T),
+         "confusion": (("truth_kind_row", "named_kind_column"), confusion)},
+        coords={"case": np.arange(len(rows)), "when": ["before", "after"],
+                "truth_kind_row": list(TRUTH_KINDS), "named_kind_column": list(NAMED)})
+    ds.attrs.update(scores(ds))
+    return ds
+
+
+def _fraction(mask: np.ndarray) -> float:
+    return float(np.mean(mask)) if mask.size else float("nan")
+
+
+def scores(ds: xr.Dataset) -> dict:
+    """The issue's scores of a study Dataset (fractions; NaN where no case counts)."""
+    truth, named = ds["truth_kind"].values, ds["named_kind"].values
+    lib = np.isin(truth, KINDS)
+    right = lib & ds["kind_correct"].values
+    rms, xo = ds["frequency_rms_held_out"].values, ds["max_cross_orthogonality_offdiag"].values
+    shrinks = (rms[:, 1] < rms[:, 0]) & ((xo[:, 1] < xo[:, 0]) | np.isnan(xo[:, 0]))
+    return {"top1_kind_accuracy": _fraction(right[lib]),
+            "location_accuracy": _fraction(ds["location_hit"].values[right]),
+            "none_kept": _fraction(~np.isin(named[truth == "none"], KINDS)),
+            "outside_not_named": _fraction(np.isin(named[truth == "outside"],
+                                                   ("ambiguous", "unexplained"))),
+            "gap_shrinks": _fraction(shrinks[right]),
+            "errors": int(np.sum(named == "error")), "cases": int(truth.size)}
+
+
+def confusion_text(ds: xr.Dataset) -> str:
+    """The confusion matrix and the scores as text."""
+    cols = list(NAMED)
+    short = {c: c.replace("member_", "").replace("_flexibility", "").replace("_stiffness", "")
+             .replace("lumped_", "")[:9] for c in cols}
+    lines = ["truth \\ named       " + " ".join(f"{short[c]:>9s}" for c in cols)]
+    for t in TRUTH_KINDS:
+        row = ds["confusion"].sel(truth_kind_row=t).values
+        if row.sum():
+            lines.append(f"{t:20s}" + " ".join(f"{v:9d}" for v in row))
+    lines.append("")
+    lines += [f"{k}: {v:.3f}" if isinstance(v, float) else f"{k}: {v}" for k, v in ds.attrs.items()
+              if k in ("top1_kind_accuracy", "location_accuracy", "none_kept",
+                       "outside_not_named", "gap_shrinks", "errors", "cases")]
+    lines.append(f"diagnose time per case: median {np.median(ds['seconds'].values):.1f} s, "
+                 f"max {np.max(ds['seconds'].values):.1f} s")
+    return "\n".join(lines)
+
+
+def main(argv=None) -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--structures", nargs="+", default=list(STRUCTURES), choices=STRUCTURES)
+    parser.add_argument("--kinds", nargs="+", default=list(TRUTH_KINDS), choices=TRUTH_KINDS)
+    parser.add_argument("--seeds", type=int, default=10, help="seeds 0 .. N-1")
+    parser.add_argument("--first-seed", type=int, default=0)
+    parser.add_argument("--out", type=Path, default=Path("runs/diagnose_blind_study"))
+    args = parser.parse_args(argv)
+    ds = run_study(args.structures, args.kinds,
+                   range(args.first_seed, args.first_seed + args.seeds), args.out)
+    print(confusion_text(ds))
+
+
+if __name__ == "__main__":
+    main()
