@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from flutter.results import is_flutter
 from pipeline.cli import main
 from structures.bdf import read_model
 from structures.common.files import read_dataset
@@ -180,3 +181,74 @@ def test_pipeline_run_reports_the_diagnosis(folder, capsys):
         assert needle in page
     code, out, _ = cli(["status", folder / "case.toml", "--out", folder / "run"], capsys)
     assert code == 0 and "diagnose" in out and "missing" not in out
+
+
+# ------------------------------------------------------------------------------------ flutter
+PT145 = Path(__file__).resolve().parents[1] / "data" / "pt145" / "pt145.bdf"
+
+
+def _lowest_flutter(summary: Path) -> float:
+    return min(c["velocity"] for c in json.loads(summary.read_text()) if is_flutter(c["kind"]))
+
+
+def test_flutter_speed_before_and_after(tmp_path, capsys):
+    """PT145 wing (cantilever, KE flutter): the truth has 1e-5 lbf-s^2/in more at grid 8 (9 % of
+    the wing's mass). The flutter speeds come from the one chain: before = stage 0's lowest
+    crossing, after = the diagnosed deck's (``pipeline flutter`` on that deck, with its PARAM LMODES
+    3 as the configuration's nmodes, gives the same), and
+    the diagnosed deck's flutter speed is closer to the truth's (``pipeline flutter`` on the truth
+    deck) than the baseline's."""
+    text = PT145.read_text()
+    end = text.index("ENDDATA")
+    (tmp_path / "pt145.bdf").write_text(text)
+    (tmp_path / "truth.bdf").write_text(text[:end] + "CONM2,999,8,,1.0-5\n" + text[end:])
+    truth = read_model(tmp_path / "truth.bdf")
+    modes = compute_modes(truth, 8)
+    pick = modes.isel(dof=np.nonzero(modes["component"].values == 3)[0]).sel(mode=[1, 3, 4])
+    write_uff(make_gvt_dataset(pick["frequency"].values, pick["shape"].values,
+                               pick["grid"].values, pick["component"].values, mode=[1, 2, 3]),
+              tmp_path / "gvt.unv")
+    weight = mass_properties(truth).weight
+    (tmp_path / "case.toml").write_text(
+        f'name = "pt"\nunits = "english_in"\n[[configurations]]\nname = "wing"\n'
+        f'deck = "pt145.bdf"\nnmodes = 3\ngvt = "gvt.unv"\n'
+        f'measured_mass = {{ weight = {weight!r} }}\n'
+        '[flutter]\nkernel = "quartic"\n[diagnose]\nmax_effects = 1\nshape_noise = 0.02\n'
+        'nmodes = 6\n')
+    code, out, err = cli(["diagnose", tmp_path / "case.toml", "--out", tmp_path / "run"], capsys)
+    assert code == 0, err
+    run = tmp_path / "run"
+    record = json.loads((run / "diagnose" / "diagnose.json").read_text())
+    assert record["verdict"] == "effect"
+    before, after = record["gap_before"]["flutter_speed"], record["gap_after"]["flutter_speed"]
+    assert before == _lowest_flutter(run / "stage0" / "wing" / "flutter" / "summary.json")
+    assert after == _lowest_flutter(run / "diagnose" / "wing" / "flutter" / "summary.json")
+    assert "flutter_speed [in/s]" in out
+    for deck, folder in ((run / "diagnose" / "wing_diagnosed.bdf", "f_diagnosed"),
+                         (tmp_path / "truth.bdf", "f_truth")):
+        assert cli(["flutter", deck, "--out", tmp_path / folder], capsys)[0] == 0
+    assert after == pytest.approx(_lowest_flutter(tmp_path / "f_diagnosed" / "summary.json"),
+                                  rel=1e-6)
+    speed = _lowest_flutter(tmp_path / "f_truth" / "summary.json")
+    assert abs(after - speed) < 0.5 * abs(before - speed)
+    np.testing.assert_allclose(read_dataset(run / "diagnose" / "diagnose.nc")["flutter_speed"],
+                               [before, after])
+
+
+def test_where_pipeline_run_places_the_stage(folder):
+    """With before_tuning the diagnose stage closes stage 0's plan (before any tuning stage);
+    without, it comes among the final stages, before the report; without [diagnose], nowhere."""
+    from pipeline.case import read_case
+    from pipeline.stages import diagnose_plan, final_stages, stage_plan
+
+    early = read_case(case_file(folder, "[diagnose]\nbefore_tuning = true\n"))
+    assert [s.name for s in stage_plan(early, 0)][-1] == "diagnose"
+    assert "diagnose" not in [s.name for s in final_stages(early, 0, [])]
+    late = read_case(case_file(folder, "[diagnose]\n"))
+    assert "diagnose" not in [s.name for s in stage_plan(late, 0)]
+    final = final_stages(late, 0, ["stage0/modes/base"])
+    assert [s.name for s in final] == ["diagnose", "report"] and "diagnose" in final[1].after
+    plain = read_case(case_file(folder, ""))
+    assert "diagnose" not in [s.name for s in stage_plan(plain, 0) + final_stages(plain, 0, [])]
+    # pipeline diagnose without [flutter]: the diagnose stage alone, reading no other stage
+    assert [(s.name, s.after) for s in diagnose_plan(plain)] == [("diagnose", ())]
