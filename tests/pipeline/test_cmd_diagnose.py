@@ -252,3 +252,15 @@ def test_where_pipeline_run_places_the_stage(folder):
     assert "diagnose" not in [s.name for s in stage_plan(plain, 0) + final_stages(plain, 0, [])]
     # pipeline diagnose without [flutter]: the diagnose stage alone, reading no other stage
     assert [(s.name, s.after) for s in diagnose_plan(plain)] == [("diagnose", ())]
+
+
+def test_ctrl_c_names_the_stage_and_leaves_no_folder(folder, capsys, monkeypatch):
+    import pipeline.diagnose.outputs as outputs
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(outputs, "write_diagnosis", interrupted)
+    code, _, err = cli(["diagnose", case_file(folder), "--out", folder / "run"], capsys)
+    assert code == 130 and "interrupted in diagnose" in err
+    assert not (folder / "run").exists()
