@@ -125,14 +125,12 @@ def settings_from_case(case):
     return case_diagnose_settings(case).workflow
 
 
-def configurations_from_case(case, decks=None) -> tuple:
+def configurations_from_case(case) -> tuple:
     """Every configuration's model, GVT and measured mass, read from what the case names.
 
     Parameters
     ----------
     case : pipeline.case.Case
-    decks : mapping, optional
-        configuration name -> deck replacing the case's (e.g. a tuned deck).
 
     Returns
     -------
@@ -149,14 +147,13 @@ def configurations_from_case(case, decks=None) -> tuple:
     from structures.bdf import read_model
     from structures.gvt import load_gvt
 
-    decks = dict(decks or {})
     out = []
     for c in case.configurations:
         if c.gvt is None:
             raise InputError(f"case {case.path}, configuration {c.name}: no GVT file; diagnose "
                              "compares the model with the test. Fix: add gvt = \"gvt.unv\" to "
                              "the configuration.")
-        deck = Path(decks.get(c.name, c.deck))
-        out.append(ConfigurationData(name=c.name, model=read_model(deck), gvt=load_gvt(c.gvt),
-                                     measured_mass=dict(c.measured_mass) or None, deck=deck))
+        out.append(ConfigurationData(name=c.name, model=read_model(c.deck), gvt=load_gvt(c.gvt),
+                                     measured_mass=dict(c.measured_mass) or None,
+                                     deck=Path(c.deck)))
     return tuple(out)
