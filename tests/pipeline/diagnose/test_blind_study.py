@@ -1,9 +1,9 @@
 """The blind study of ``pipeline diagnose`` (issue 14, "Must show").
 
 * scoring rules on hand-written verdicts (no workflow run);
-* quick subset (default suite): the frame, one seed, the kinds in ``QUICK_KINDS``: the workflow
-  runs on each generated case through the case file alone and writes a verdict of the issue's
-  schema;
+* quick subset (default suite, ~50 s): the frame, one seed, the kinds in ``QUICK_KINDS``, one
+  look-again round (``[diagnose] max_effects = 1`` in the case file): the workflow runs on each
+  generated case through the case file alone and writes a verdict of the issue's schema;
 * the full study (``slow``): both structures, every truth kind, seeds 0-9, against the issue's
   thresholds -- top-1 kind accuracy >= 90 %, location (named element / grid or its neighbour)
   >= 80 % of the correctly named cases, no effect named on ``none`` data in >= 95 % of seeds,
@@ -73,7 +73,8 @@ def test_scores_of_a_study():
 
 
 def test_quick_blind_subset(tmp_path):
-    ds = run_study(["frame"], QUICK_KINDS, [0], tmp_path, progress=None)
+    ds = run_study(["frame"], QUICK_KINDS, [0], tmp_path, diagnose={"max_effects": 1},
+                   progress=None)
     assert ds.sizes["case"] == len(QUICK_KINDS)
     assert ds.attrs["errors"] == 0, ds["error"].values
     for kind in QUICK_KINDS:
