@@ -93,7 +93,7 @@ def gof_limit(dof: int, quantile: float = GOF_QUANTILE) -> float:
 
 
 def runs_test(values) -> float:
-    """Two-sided p-value of the Wald-Wolfowitz runs test on the signs of ``values`` (in order).
+    """One-sided p-value (too few runs) of the Wald-Wolfowitz runs test on the signs of ``values``.
 
     Few runs (long stretches of one sign along the modes) mean a structured residual. Normal
     approximation (Wald & Wolfowitz 1940): mu = 2 n+ n- / n + 1,
@@ -110,7 +110,7 @@ def runs_test(values) -> float:
     var = (mu - 1.0) * (mu - 2.0) / (n - 1.0)
     if var <= 0:
         return 1.0
-    return float(2.0 * scipy.stats.norm.sf(abs(runs - mu) / np.sqrt(var)))
+    return float(scipy.stats.norm.cdf((runs - mu) / np.sqrt(var)))
 
 
 def holdout_mask(n_modes: int, holdout: int) -> np.ndarray:

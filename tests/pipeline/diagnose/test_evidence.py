@@ -1,0 +1,112 @@
+"""Evidence kernels of diagnose against hand computations and synthetic data of known noise."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from pipeline.diagnose.evidence import (bic, chi_square, gof_limit, holdout_mask, mass_residual,
+                                        mass_scales, pair_frequency_only, runs_test,
+                                        scatter_scales, shape_noise, shape_residual, unit_rms)
+from structures.bdf import read_model
+from structures.common.errors import InputError
+from structures.massprops import MassProperties
+from structures.modal import compute_modes
+
+
+def test_chi_square_and_bic_by_hand():
+    assert chi_square([3.0, 4.0]) == pytest.approx(25.0, rel=1e-15)
+    # Schwarz 1978: chi^2 + p ln n; ln 100 = 4.605170186
+    assert bic(25.0, 2, 100) == pytest.approx(25.0 + 2 * 4.605170186, rel=1e-9)
+    with pytest.raises(InputError):
+        bic(1.0, 1, 0)
+
+
+def test_gof_limit_against_table():
+    # chi-square 99.9 % quantiles (Abramowitz & Stegun table 26.8): 10 dof 29.588, 1 dof 10.828
+    assert gof_limit(10) == pytest.approx(29.588, abs=1e-3)
+    assert gof_limit(1) == pytest.approx(10.828, abs=1e-3)
+
+
+def test_runs_test_by_hand():
+    # ten + then ten -: 2 runs, mu = 2*10*10/20 + 1 = 11, var = 10*9/19, z = -9/sqrt(90/19)
+    # = -4.1352, one-sided p = Phi(-4.1352) = 1.773e-5
+    values = [1.0] * 10 + [-1.0] * 10
+    assert runs_test(values) == pytest.approx(1.773e-5, rel=2e-3)
+    assert runs_test([1.0, 2.0, 3.0]) == 1.0                  # one sign only
+    assert runs_test([1.0, -1.0] * 10) > 0.01                 # alternating: many runs, not few
+
+
+def test_holdout_split():
+    assert holdout_mask(7, 3).tolist() == [False, False, True, False, False, True, False]
+    assert holdout_mask(4, 2).tolist() == [False, True, False, True]
+    with pytest.raises(InputError, match="holdout"):
+        holdout_mask(5, 1)
+
+
+def test_shape_noise_recovers_known_sigma():
+    rng = np.random.default_rng(7)
+    n_dof, m, n_mode, sigma = 120, 30, 20, 0.05
+    phi = rng.standard_normal((n_dof, m))
+    clean = unit_rms((phi @ rng.standard_normal((m, n_mode))).T)
+    noisy = clean + sigma * rng.standard_normal(clean.shape)
+    est = shape_noise(phi, noisy)
+    # per mode 90 DOFs outside the span: relative standard error ~ 1/sqrt(2*90) = 7.5 %
+    assert np.median(est) == pytest.approx(sigma, rel=0.08)
+    assert np.all(np.abs(est / sigma - 1.0) < 0.3)
+    with pytest.raises(InputError):
+        shape_noise(phi[:30], noisy[:, :30])
+
+
+def test_shape_residual_by_hand():
+    # basis = identity on 3 DOFs (projector = I); test t = (1, 0.2, 0); analysis a = (2, 0, 0)
+    # alpha = a.t / a.a = 0.5; d = t - alpha a = (0, 0.2, 0); entries / scale 0.1 -> (0, 2, 0)
+    proj = np.eye(3)
+    t = np.array([[1.0, 0.2, 0.0]])
+    keep = np.array([[False, True, True]])                    # own coordinate left out
+    r = shape_residual(proj, t, np.array([[2.0, 0.0, 0.0]]), np.full((1, 3), 0.1), keep)
+    assert r.shape == (1, 2)
+    assert r[0] == pytest.approx([2.0, 0.0], abs=1e-14)
+    r_neg = shape_residual(proj, t, np.array([[-3.0, 0.0, 0.0]]), np.full((1, 3), 0.1), keep)
+    assert r_neg == pytest.approx(r, abs=1e-14)               # the analysis shape's sign is free
+
+
+def test_mass_scales_and_residual_by_hand():
+    measured = {"weight": 100.0, "x_cg": 2.0, "Ixx": 50.0, "Iyy": 200.0, "Izz": 220.0, "Ixy": 1.0}
+    scales = mass_scales(measured, wtmass=1.0)
+    assert scales["weight"] == pytest.approx(0.5)             # 0.5 % of 100
+    assert scales["Ixx"] == pytest.approx(1.0)                # 2 % of 50
+    assert scales["Ixy"] == pytest.approx(4.4)                # 2 % of the largest moment 220
+    assert scales["x_cg"] == pytest.approx(0.005 * np.sqrt(220.0 / 100.0))
+    props = MassProperties(mass=101.0, cg=np.array([2.01, 0.0, 0.0]),
+                           inertia=np.diag([51.0, 200.0, 220.0]) - np.array(
+                               [[0, 1.0, 0], [1.0, 0, 0], [0, 0, 0]]),
+                           rigid_body_mass=np.eye(6), reference_point=np.zeros(3))
+    r = mass_residual(props, measured, scales)
+    expected = [1.0 / 0.5, 0.01 / scales["x_cg"], 1.0 / 1.0, 0.0, 0.0, 0.0]
+    assert r == pytest.approx(expected, abs=1e-12)
+    with pytest.raises(InputError, match="radius of gyration"):
+        mass_scales({"x_cg": 1.0})
+
+
+def test_frequency_only_pairing_by_hand():
+    assert pair_frequency_only([10.0, 20.0], [9.0, 19.5, 30.0]).tolist() == [0, 1]
+    # assignment, not nearest per row: both are nearest to 19.5; 18 -> 19, 20 -> 19.5 is the
+    # smallest sum of |ln| ratios (0.0541 + 0.0253 < 0.0800 + 0.0513)
+    assert pair_frequency_only([18.0, 20.0], [19.0, 19.5, 60.0]).tolist() == [0, 1]
+    with pytest.raises(InputError):
+        pair_frequency_only([1.0, 2.0, 3.0], [1.0, 2.0])
+
+
+def test_scatter_scales_single_spring_mass(tmp_path):
+    # one DOF: k, m both scatter by s independently -> df/f = (dk/k - dm/m) / 2, sd = s / sqrt(2)
+    deck = tmp_path / "sdof.bdf"
+    deck.write_text("GRID,1,,0.,0.,0.,,23456\nCELAS2,1,400.,1,1\n"
+                    "CONM2,2,1,,4.\nENDDATA\n")
+    model = read_model(deck)
+    modes = compute_modes(model, 1)
+    lam = (2 * np.pi * modes["frequency"].values) ** 2
+    assert lam[0] == pytest.approx(100.0, rel=1e-10)
+    freq, mixing = scatter_scales(model, modes["shape"].values.T, lam, np.array([0]),
+                                  np.ones(1), 0.03)
+    assert freq[0] == pytest.approx(0.03 / np.sqrt(2.0), rel=1e-10)
+    assert mixing.shape == (1, 1)
