@@ -69,14 +69,7 @@ class Topology:
     wtmass: float                # PARAM WTMASS (1 when absent)
     size: float                  # largest extent of the grid cloud
     massive: frozenset           # grids carrying a CONM2
-
-    @property
-    def grid_elements(self) -> dict:
-        out = defaultdict(set)
-        for eid, gs in self.element_grids.items():
-            for g in gs:
-                out[g].add(eid)
-        return out
+    grid_elements: dict          # grid -> set of the eids of ``element_grids`` holding it
 
     def structural_grids(self) -> list[int]:
         """Grids referenced by a line or rigid element, sorted."""
@@ -84,8 +77,8 @@ class Topology:
 
     def adjacent(self, grid: int) -> list[int]:
         """Grids sharing an element with ``grid``, sorted."""
-        ge = self.grid_elements
-        return sorted({g for e in ge.get(grid, ()) for g in self.element_grids[e]} - {grid})
+        return sorted({g for e in self.grid_elements.get(grid, ()) for g in self.element_grids[e]}
+                      - {grid})
 
 
 def topology(bdf) -> Topology:
@@ -108,8 +101,13 @@ def topology(bdf) -> Topology:
     pts = np.array(list(xyz.values()))
     conm2 = [m for m in bdf.masses.values() if m.type == "CONM2"]
     wtmass = float(bdf.params["WTMASS"].values[0]) if "WTMASS" in bdf.params else 1.0
+    ge = defaultdict(set)
+    for eid, gs in eg.items():
+        for g in gs:
+            ge[g].add(eid)
     return Topology(eg, bars, rigid, xyz, float(sum(m.mass for m in conm2)), wtmass,
-                    float(np.ptp(pts, axis=0).max()), frozenset(int(m.nid) for m in conm2))
+                    float(np.ptp(pts, axis=0).max()), frozenset(int(m.nid) for m in conm2),
+                    dict(ge))
 
 
 def neighbours(topo: Topology, grids, elements) -> tuple[list[int], list[int]]:
@@ -191,14 +189,10 @@ def _hung(bdf, topo: Topology, pivot: int, grids) -> tuple[float, float]:
     return mass * topo.wtmass, max(inertia, floor) * topo.wtmass
 
 
-def _bar_stiffness(bdf, eid: int) -> tuple[float, float]:
-    """(E A / L, E max(I1, I2) / L) of a CBAR."""
-    e = bdf.elements[eid]
-    p = bdf.properties[e.pid]
-    ga, gb = (np.asarray(bdf.nodes[n].get_position(), float) for n in e.node_ids[:2])
-    length = float(np.linalg.norm(gb - ga))
-    young = bdf.materials[p.mid].e
-    return young * p.A / length, young * max(p.i1, p.i2) / length
+def _bar_ea(bdf, eid: int) -> float:
+    """E A of a CBAR."""
+    p = bdf.properties[bdf.elements[eid].pid]
+    return bdf.materials[p.mid].e * p.A
 
 
 def draw(kind: str, bdf, topo: Topology, rng: np.random.Generator, f1: float) -> Effect:
@@ -228,7 +222,6 @@ def draw(kind: str, bdf, topo: Topology, rng: np.random.Generator, f1: float) ->
                   for g, s, d in zip(chain, share, side)]
         return Effect(kind, grids=tuple(sorted(chain)), size=frac, params={"masses": masses})
     if kind == "joint_flexibility":
-        ge = topo.grid_elements
         eid = int(rng.choice([r for r, (_, dep) in sorted(topo.rigid.items())
                               if any(g in topo.massive for g in dep)]))
         gn, dep = topo.rigid[eid]
@@ -277,16 +270,10 @@ def draw(kind: str, bdf, topo: Topology, rng: np.random.Generator, f1: float) ->
         pairs = [(a, b) for a in bar_grids for b in bar_grids if a < b and far[(a, b)] >= 3
                  and np.linalg.norm(topo.xyz[a] - topo.xyz[b]) <= 0.25 * topo.size]
         a, b = pairs[int(rng.integers(len(pairs)))]
-        ea = max(_bar_stiffness(bdf, e)[0] * _length(topo, e) for g in (a, b)
-                 for e in topo.grid_elements[g] if e in topo.bars)
+        ea = max(_bar_ea(bdf, e) for g in (a, b) for e in topo.grid_elements[g] if e in topo.bars)
         frac = _loguniform(rng, 0.05, 1.0)
         return Effect(kind, grids=(a, b), size=frac, params={"ends": (a, b), "EA": frac * ea})
     raise ValueError(f"unknown truth kind {kind!r}")
-
-
-def _length(topo: Topology, eid: int) -> float:
-    ga, gb = topo.element_grids[eid]
-    return float(np.linalg.norm(topo.xyz[gb] - topo.xyz[ga]))
 
 
 def _graph_distance(topo: Topology, grids: list[int]) -> dict:
