@@ -56,7 +56,7 @@ def _walk(case, graph: Graph, display: Display, execute: bool, baseline_only: bo
         if targets is None or targets["met"]:
             break
         n += 1
-    for stage in [] if baseline_only else final_stages(case, n, names):
+    for stage in [] if baseline_only else final_stages(case, n, names, aero, display):
         graph.add(stage)
         if execute:
             with running(stage.name), display.stage(stage.name):

@@ -332,10 +332,12 @@ def diagnose_plan(case, display=None, aero: dict | None = None) -> list[Stage]:
     return [s for s in stage_plan(case, 0, display, aero) if s.name in needed] + [stage]
 
 
-def final_stages(case, last: int, upstream: list[str]) -> list[Stage]:
-    """The flutter-change table over stages 0..``last`` and the report (after ``upstream``)."""
+def final_stages(case, last: int, upstream: list[str], aero: dict | None = None,
+                 display=None) -> list[Stage]:
+    """The diagnosis (``[diagnose]`` without before_tuning), the flutter-change table over stages
+    0..``last`` and the report (after ``upstream``); ``aero`` as :func:`stage_plan`."""
     out = [] if case.diagnose is None or _before_tuning(case) else [
-        diagnose_stage(case, case_aero_groups(case))]
+        diagnose_stage(case, case_aero_groups(case) if aero is None else aero, display)]
     if case.flutter is not None:
         after = tuple(f"stage{k}/flutter/{c.name}" for k in range(last + 1)
                       for c in case.configurations)
@@ -364,5 +366,5 @@ def possible_stage_names(case) -> list[str]:
     last = case.loop.stages if case.loop is not None else 0
     aero = case_aero_groups(case)
     names = [s.name for n in range(last + 1) for s in stage_plan(case, n, aero=aero)]
-    return names + [s.name for s in final_stages(case, last, [])]
+    return names + [s.name for s in final_stages(case, last, [], aero)]
 

@@ -171,9 +171,10 @@ def test_hidden_mass_is_named_and_the_gap_shrinks(folder, capsys):
     np.testing.assert_allclose(fe, test, rtol=1e-3)
 
 
-def test_pipeline_run_reports_the_diagnosis(folder, capsys):
-    code, _, err = cli(["run", case_file(folder, "[diagnose]\nmax_effects = 1\nbefore_tuning = "
-                                                 "true\n"), "--out", folder / "run"], capsys)
+@pytest.mark.parametrize("early", ["true", "false"])
+def test_pipeline_run_reports_the_diagnosis(folder, capsys, early):
+    code, _, err = cli(["run", case_file(folder, f"[diagnose]\nmax_effects = 1\nbefore_tuning = "
+                                                 f"{early}\n"), "--out", folder / "run"], capsys)
     assert code == 0, err
     page = (folder / "run" / "report.html").read_text()
     for needle in ('<h2 id="diagnose">', 'id="diagnose-candidates"', 'id="diagnose-gap"',
