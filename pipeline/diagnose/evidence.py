@@ -254,30 +254,37 @@ def scatter_scales(model: FEModel, phi, lam, own, rho, scatter: float) -> tuple:
     return freq, np.minimum(c, MIXING_CAP)
 
 
-def mass_scales(measured: Mapping, wtmass: float = 1.0) -> dict:
-    """Stated standard deviation of every measured mass quantity (units of the quantity).
+_ACCURACY = {"weight": WEIGHT_ACCURACY, "x_cg": CG_ACCURACY, "y_cg": CG_ACCURACY,
+             "z_cg": CG_ACCURACY, **{k: INERTIA_ACCURACY for k in _INERTIA_NAMES}}
 
-    ``wtmass`` (PARAM WTMASS) turns the measured weight into the mass units of the inertias.
+
+def mass_references(measured: Mapping, model_props: MassProperties) -> dict:
+    """Reference size of every measured mass quantity (errors are stated relative to it).
+
+    Weight and moments of inertia: their measured value; CG: the radius of gyration
+    sqrt(I_max / m); products of inertia: the largest moment I_max. I_max and m are the measured
+    ones, or the model's (``model_props``) when the file does not give them.
     """
-    weight = measured.get("weight")
-    inertia = [abs(measured[k]) for k in ("Ixx", "Iyy", "Izz") if k in measured]
-    scales = {}
-    if weight is not None:
-        scales["weight"] = WEIGHT_ACCURACY * weight
-    i_ref = max(inertia) if inertia else None
-    if any(k in measured for k in ("x_cg", "y_cg", "z_cg")):
-        if weight is None or not inertia:
-            raise InputError("diagnose: measured CG without weight and inertias: the CG accuracy is "
-                             "stated relative to the radius of gyration. Fix: give weight and "
-                             "inertia_cg in the measured-mass file too.")
-    for key in ("x_cg", "y_cg", "z_cg"):
-        if key in measured:
-            # radius of gyration sqrt(I_max / m), m = weight x WTMASS (the inertias' mass units)
-            scales[key] = CG_ACCURACY * np.sqrt(i_ref / (weight * wtmass))
-    for key in _INERTIA_NAMES:
-        if key in measured:
-            scales[key] = INERTIA_ACCURACY * (abs(measured[key]) if key in _DIAGONAL else i_ref)
-    return scales
+    values = model_props.as_dict()
+    moments = [abs(measured[k]) for k in _DIAGONAL if k in measured]
+    i_max = max(moments) if moments else max(abs(values[k]) for k in _DIAGONAL)
+    mass = measured["weight"] * model_props.wtmass if "weight" in measured else model_props.mass
+    out = {}
+    for key in measured:
+        if key == "weight" or key in _DIAGONAL:
+            out[key] = abs(measured[key])
+        elif key in _PRODUCTS:
+            out[key] = i_max
+        else:
+            out[key] = float(np.sqrt(i_max / mass))
+    return out
+
+
+def mass_scales(measured: Mapping, model_props: MassProperties) -> dict:
+    """Stated standard deviation of every measured quantity: its accuracy (``WEIGHT_ACCURACY``,
+    ``CG_ACCURACY``, ``INERTIA_ACCURACY``) times its reference (:func:`mass_references`)."""
+    refs = mass_references(measured, model_props)
+    return {k: _ACCURACY[k] * refs[k] for k in measured}
 
 
 def mass_residual(props: MassProperties, measured: Mapping, scales: Mapping) -> np.ndarray:
@@ -448,7 +455,7 @@ def evaluate_modes(ref: Reference, frequency, sensor_shapes, props: MassProperti
 def build_reference(name: str, model: FEModel, gvt: xr.Dataset, measured_mass: Mapping | None,
                     modes: xr.Dataset, *,
                     frequency_noise: float, shape_noise_value: float | None, model_scatter: float,
-                    holdout: int, nmodes: int, wtmass: float = 1.0) -> tuple[Reference, dict]:
+                    holdout: int, nmodes: int) -> tuple[Reference, dict]:
     """Preflight of one configuration: pairing on the nominal modes, noise, training split.
 
     Returns
@@ -495,7 +502,7 @@ def build_reference(name: str, model: FEModel, gvt: xr.Dataset, measured_mass: M
                     projector=None, shape_scale=None, shape_keep=None,
                     frequency_sigma=np.full(f_test.size, float(frequency_noise)),
                     shape_sigma=noise, train=~holdout_mask(f_test.size, holdout),
-                    measured_mass=measured, mass_scale=mass_scales(measured, wtmass), nmodes=nmodes)
+                    measured_mass=measured, mass_scale=mass_scales(measured, mass_properties(model)), nmodes=nmodes)
     paired = pair(ref, modes)
     facts["paired_fe_mode"] = modes["mode"].values[paired].tolist()
     rigid = np.setdiff1d(np.arange(modes.sizes["mode"]), elastic_index(modes))

@@ -8,8 +8,10 @@ Gap metrics (issue 14 step 6, the contract's JSON keys), over all configurations
   test modes with their paired analysis modes (paper eq. 20; SEREP on the rigid and paired modes,
   eqs. 11-14, :mod:`structures.correlation`);
 - ``mac_min``, ``mac_mean``: of the paired modes (paper eq. 23);
-- ``mass``: relative error [%] of every measured quantity, from the configuration with the
-  largest |error|; ``mass_by_configuration`` all of them;
+- ``mass``: error [%] of every measured quantity relative to its reference size
+  (:func:`pipeline.diagnose.evidence.mass_references`: weight and moments themselves, CG the
+  radius of gyration, products the largest moment), from the configuration with the largest
+  |error|; ``mass_by_configuration`` all of them;
 - ``flutter_speed``: None (the pipeline stage fills it).
 Without shapes the cross-orthogonality and MAC entries are None.
 """
@@ -17,9 +19,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from pipeline.diagnose.evidence import elastic_index, mass_references
 from structures.correlation import cross_orthogonality, mac, serep_coordinates
-from pipeline.diagnose.evidence import elastic_index, unit_rms
-from structures.massprops import compare_mass_properties
+
 
 
 def _cross_offdiag(ref, ev) -> float:
@@ -46,9 +48,10 @@ def gap_metrics(problem, evaluations) -> dict:
             phi = ev.modes["shape"].values[ev.paired][:, ref.sensor_index]
             macs.append(np.diag(mac(ref.shapes.T, phi.T)))                 # eq. 23
         if ref.measured_mass:
-            cmp = compare_mass_properties(ev.props, ref.measured_mass)
-            mass_by[ref.name] = {str(q): float(v) for q, v in
-                                 zip(cmp["quantity"].values, cmp["relative_error"].values)}
+            values = ev.props.as_dict()
+            size = mass_references(ref.measured_mass, ev.props)
+            mass_by[ref.name] = {q: 100.0 * (values[q] - m) / size[q]
+                                 for q, m in ref.measured_mass.items()}
     allerr, held = np.concatenate(errors), np.concatenate(held)
     worst = {}
     for values in mass_by.values():

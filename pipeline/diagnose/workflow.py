@@ -146,7 +146,7 @@ def _overlaps(a, b) -> bool:
                 or set(a.properties) & set(b.properties))
 
 
-def decide(none_fit, fits, margin: float, near, n_data: int) -> tuple:
+def decide(none_fit, fits, margin: float, near, n_data: int, n_candidates: int = 1) -> tuple:
     """Verdict of one round from its score table.
 
     Parameters
@@ -158,6 +158,7 @@ def decide(none_fit, fits, margin: float, near, n_data: int) -> tuple:
     near : callable(location_a, location_b) -> bool
         True when b is a's neighbour (one element layer).
     n_data : int, training residuals.
+    n_candidates : int, candidates screened (the prior odds of "none" against each one).
 
     Returns
     -------
@@ -175,6 +176,12 @@ def decide(none_fit, fits, margin: float, near, n_data: int) -> tuple:
     2002 sec. 6.2): a residual the best candidate leaves far above its scales (a second effect,
     or one outside the library) makes every chi^2 difference count for less, so that fitting
     that remainder with a wrong candidate does not look decisive.
+
+    "none" and "some effect" are given equal prior probability, shared equally by the
+    ``n_candidates`` candidates, so the prior odds of "none" against one candidate are
+    n_candidates : 1 and its score gains 2 ln n_candidates (posterior odds = Bayes factor x prior
+    odds, Kass & Raftery 1995 sec. 3; BIC approximates -2 ln of the Bayes factor): the best of
+    many candidates fitted to noise does not look like evidence.
     """
     none_chi2, none_p = none_fit
     fitting = gof_limit(n_data - none_p) >= none_chi2
@@ -185,7 +192,7 @@ def decide(none_fit, fits, margin: float, near, n_data: int) -> tuple:
     best = int(np.argmin(chi2 + p * np.log(n_data)))
     c = max(1.0, chi2[best] / max(n_data - p[best], 1.0))
     scores = chi2 / c + p * np.log(n_data)                                  # Schwarz 1978
-    none_score = none_chi2 / c + none_p * np.log(n_data)
+    none_score = none_chi2 / c + none_p * np.log(n_data) - 2.0 * np.log(max(n_candidates, 1))
     best = int(np.argmin(scores))
     kind, loc = fits[best][0], fits[best][1]
     rivals = [i for i, f in enumerate(fits)
@@ -218,7 +225,7 @@ def _preflight(configurations, settings: DiagnoseSettings, notes: list):
         ref, facts = build_reference(
             data.name, data.model, data.gvt, data.measured_mass, modes, frequency_noise=settings.frequency_noise,
             shape_noise_value=settings.shape_noise, model_scatter=settings.model_scatter,
-            holdout=settings.holdout, nmodes=nmodes, wtmass=data.model.wtmass)
+            holdout=settings.holdout, nmodes=nmodes)
         refs.append(ref)
         if ref.has_shapes:
             notes.append(f"{data.name}: {n_test} test modes, {ref.sensor_index.size} sensor DOFs, "
@@ -326,7 +333,7 @@ def diagnose(configurations, settings: DiagnoseSettings = DiagnoseSettings(), *,
             verdict, best, runner, lead = decide((none.chi2, none.n_params),
                                            [(f.candidate.kind, f.candidate.location, f.chi2,
                                              f.n_params) for f in fits],
-                                           settings.margin, near, n_data)
+                                           settings.margin, near, n_data, len(cands))
             rounds.append(_round_record(k, verdict, fits, best, runner, none))
             if k == 0:
                 first = verdict
