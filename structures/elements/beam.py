@@ -182,7 +182,7 @@ def to_grids(local, axes, offset_a, offset_b):
     off[:, :6, :6] = rigid_offset(offset_a)
     off[:, 6:, 6:] = rigid_offset(offset_b)
     tt = t @ off
-    return np.einsum("eji,ejk,ekl->eil", tt, local, tt)
+    return np.swapaxes(tt, 1, 2) @ local @ tt
 
 
 def beam_matrices(x_a, x_b, v, offset_a, offset_b, e, g, area, i1, i2, i12, j, nsm, rho,
@@ -224,7 +224,7 @@ def beam_matrices(x_a, x_b, v, offset_a, offset_b, e, g, area, i1, i2, i12, j, n
         r = np.einsum("eij,ekj->eik", principal_axes, axes)
         for blk in range(4):
             rot[:, 3 * blk:3 * blk + 3, 3 * blk:3 * blk + 3] = r
-        k_elem = np.einsum("eji,ejk,ekl->eil", rot, k_local, rot)
+        k_elem = np.swapaxes(rot, 1, 2) @ k_local @ rot
         k_local, m_local = condense_pins(k_elem, m_local, np.asarray(pins))
         principal_axes = axes
     k = to_grids(k_local, principal_axes, offset_a, offset_b)

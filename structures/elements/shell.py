@@ -78,8 +78,9 @@ def _material_to_element(section: ShellSection, theta: np.ndarray):
     T[:, 1] = np.stack([s * s, c * c, -c * s], -1)
     T[:, 2] = np.stack([-2 * c * s, 2 * c * s, c * c - s * s], -1)
     R = np.stack([np.stack([c, s], -1), np.stack([-s, c], -1)], 1)
-    rot = lambda C: np.einsum("eki,ekl,elj->eij", T, C, T)  # noqa: E731
-    S = np.einsum("eki,ekl,elj->eij", R, section.S, R)
+    Tt, Rt = np.swapaxes(T, 1, 2), np.swapaxes(R, 1, 2)
+    rot = lambda C: Tt @ C @ T  # noqa: E731
+    S = Rt @ section.S @ R
     return rot(section.A), rot(section.B), rot(section.D), S
 
 
@@ -115,7 +116,7 @@ def _to_basic(K_local: np.ndarray, R: np.ndarray) -> np.ndarray:
 
 def _jacobian(dN: np.ndarray, xy: np.ndarray):
     """J (ne,2,2) = dN (2,nn) @ xy (ne,nn,2), its determinant and inverse (explicit 2x2)."""
-    J = np.einsum("ai,eik->eak", dN, xy)
+    J = dN @ xy
     det = J[:, 0, 0] * J[:, 1, 1] - J[:, 0, 1] * J[:, 1, 0]
     inv = np.empty_like(J)
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -188,7 +189,7 @@ def _quad_frame(xyz: np.ndarray):
     ey = np.cross(ez, ex)
     R = np.stack([ex, ey, ez], axis=1)
     rel = xyz - xyz.mean(axis=1, keepdims=True)
-    loc = np.einsum("enk,eik->eni", rel, R)
+    loc = rel @ np.swapaxes(R, 1, 2)
     return R, loc[:, :, :2], loc[:, :, 2]
 
 
@@ -206,7 +207,7 @@ def _covariant_shear_row(xy: np.ndarray, xi: float, eta: float, direction: int) 
     beta = (ry, -rx) are the slopes of the normal (u = z*beta_x, v = z*beta_y).
     """
     N, dN = _quad_shape(xi, eta)
-    J = np.einsum("ai,eik->eak", dN, xy)
+    J = dN @ xy
     xr, yr = J[:, direction, 0], J[:, direction, 1]
     row = np.zeros((xy.shape[0], 28))
     row[:, 2:24:6] = dN[direction]
@@ -315,7 +316,7 @@ def _tria_frame(xyz: np.ndarray):
         raise InputError("CTRIA3 with collinear grids (zero area). Fix: check G1, G2, G3.")
     ex, ez = _unit(ex), _unit(ez)
     R = np.stack([ex, np.cross(ez, ex), ez], axis=1)
-    loc = np.einsum("enk,eik->eni", xyz - xyz.mean(axis=1, keepdims=True), R)
+    loc = (xyz - xyz.mean(axis=1, keepdims=True)) @ np.swapaxes(R, 1, 2)
     return R, loc[:, :, :2]
 
 
