@@ -116,7 +116,7 @@ def _to_basic(K_local: np.ndarray, R: np.ndarray) -> np.ndarray:
 
 def _jacobian(dN: np.ndarray, xy: np.ndarray):
     """J (ne,2,2) = dN (2,nn) @ xy (ne,nn,2), its determinant and inverse (explicit 2x2)."""
-    J = dN @ xy
+    J = np.einsum("ai,eik->eak", dN, xy)
     det = J[:, 0, 0] * J[:, 1, 1] - J[:, 0, 1] * J[:, 1, 0]
     inv = np.empty_like(J)
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -207,7 +207,7 @@ def _covariant_shear_row(xy: np.ndarray, xi: float, eta: float, direction: int) 
     beta = (ry, -rx) are the slopes of the normal (u = z*beta_x, v = z*beta_y).
     """
     N, dN = _quad_shape(xi, eta)
-    J = dN @ xy
+    J = np.einsum("ai,eik->eak", dN, xy)
     xr, yr = J[:, direction, 0], J[:, direction, 1]
     row = np.zeros((xy.shape[0], 28))
     row[:, 2:24:6] = dN[direction]
