@@ -3,6 +3,7 @@ of the truth generator's frame (tests/pipeline/diagnose/truth, never imported by
 from __future__ import annotations
 
 import json
+from dataclasses import replace
 from math import log
 
 import pytest
@@ -141,3 +142,18 @@ def test_frame_outside_is_not_named(tmp_path):
     result, _ = _run(tmp_path, "outside")
     assert result.verdict in ("ambiguous", "unexplained")
     assert result.verdict != "ambiguous" or result.separating_measurement
+
+
+def test_frame_frequency_only_runs_and_says_what_it_cannot_tell(tmp_path):
+    # measured on seed 0 "none": verdict none, 20 modes paired by nearest frequency
+    case_path = make_case("frame", "none", 0, tmp_path / "none_0")
+    case = read_case(case_path)
+    confs = [replace(c, gvt=c.gvt.drop_vars("shape")) for c in configurations_from_case(case)]
+    result = diagnose(confs, settings_from_case(case))
+    assert result.verdict == "none"
+    assert any("frequency-only" in note for note in result.notes)
+    assert result.gap_before["mac_min"] is None
+    assert result.gap_before["max_cross_orthogonality_offdiag"] is None
+    record = result.to_json()
+    assert record["verdict"] == "none" and record["effect"] is None
+    assert json.loads(json.dumps(record)) == record                       # JSON-clean
