@@ -13,6 +13,7 @@ from pipeline.diagnose import DiagnoseSettings, diagnose
 from pipeline.diagnose.inputs import configurations_from_case, settings_from_case
 from pipeline.diagnose.workflow import decide
 from structures.common.errors import InputError
+from structures.common.files import read_dataset, write_dataset
 from tests.pipeline.diagnose.truth import make_case
 
 N = 400                      # training residuals of the tables
@@ -117,6 +118,10 @@ def test_frame_none_names_nothing(tmp_path):
     result, _ = _run(tmp_path, "none")
     assert result.verdict == "none" and not result.effects
     assert result.gap_before["frequency_rms_held_out"] < 2.0
+    assert result.candidates[0].score == 0.0 and any(c.kind == "none" for c in result.candidates)
+    write_dataset(result.to_dataset(), tmp_path / "diagnose.nc")
+    back = read_dataset(tmp_path / "diagnose.nc")
+    assert back.attrs["verdict"] == "none" and back.sizes["rank"] == len(result.candidates)
 
 
 @pytest.mark.slow
