@@ -50,6 +50,8 @@ from structures.model import FEModel
 
 #: Rigid-body modes added to twice the test modes for the default analysis mode count.
 N_RIGID = 6
+#: A fitted parameter within this share of its range from a (non-zero) bound sits on it.
+BOUND_SHARE = 0.01
 
 
 @dataclass(frozen=True)
@@ -343,6 +345,12 @@ def diagnose(configurations, settings: DiagnoseSettings = DiagnoseSettings(), *,
             if verdict != "effect":
                 break
             chosen = fits[best]
+            cand = chosen.candidate
+            for name, v, lo, hi in zip(cand.parameters, chosen.values, cand.lower, cand.upper):
+                if abs(v) > 0 and min(abs(v - lo), abs(v - hi)) <= BOUND_SHARE * (hi - lo):
+                    notes.append(f"round {k + 1}: {cand.kind} {cand.label} {name} = {v:.3g} sits on "
+                                 "its bound: the effect may be larger than the library allows, or "
+                                 "a different effect.")
             records.append(EffectRecord(chosen.candidate, chosen.values, lead))
             effects.append((chosen.candidate, chosen.values))
             theta, none_evs = chosen.theta, chosen.evaluations
