@@ -10,7 +10,8 @@ Each solver runs in its own subprocess, so that its wall time and peak resident 
 from ``os.wait4``) are its own; ours and MYSTRAN alternate ``--repeat`` times per size (the cores
 are shared, so single runs are noisy) and the figures are the minimum and median over the runs.
 Our solver reports the wall seconds of each phase (read, assemble, solve, write) and the sparse
-factorisation backend (``--backend`` forces one, as ``FTP_SPARSE_BACKEND``). Output: one
+factorisation backend (``--backend`` forces one, as ``FTP_SPARSE_BACKEND``) with its thread count
+(:func:`structures.sparse_factor.free_cores`: fewer on a busy machine). Output: one
 ``key: value`` per line, keys prefixed by the size (``dof60000_...``).
 
 Usage: ``PYTHONPATH=. python benchmarks/modal.py [--sizes 60000,240000 --modes 40 --repeat 2
@@ -83,7 +84,7 @@ def worker(deck: Path, out: Path, nmodes: int) -> None:
     from structures.bdf import read_model
     from structures.modal import compute_modes
     from structures.modes import write_modes
-    from structures.sparse_factor import choose_backend
+    from structures.sparse_factor import choose_backend, free_cores
 
     import pyNastran.bdf.bdf  # noqa: F401  (read_model's parser, imported before settling)
     from structures.common.process import settle_process
@@ -96,6 +97,7 @@ def worker(deck: Path, out: Path, nmodes: int) -> None:
     t0 = time.perf_counter()
     system = assemble(model)
     times["assemble"] = time.perf_counter() - t0
+    threads = free_cores()             # what the PARDISO factor, made next, will use
     t0 = time.perf_counter()
     ds = compute_modes(model, nmodes, system=system)
     times["solve"] = time.perf_counter() - t0
@@ -103,7 +105,8 @@ def worker(deck: Path, out: Path, nmodes: int) -> None:
     write_modes(ds, out)
     times["write"] = time.perf_counter() - t0
     print(json.dumps({"times": times, "frequencies": [float(f) for f in ds["frequency"].values],
-                      "a_set_dof": int(system.K.shape[0]), "backend": choose_backend()}))
+                      "a_set_dof": int(system.K.shape[0]), "backend": choose_backend(),
+                      "pardiso_threads": threads}))
     settle_process()
 
 
@@ -156,6 +159,7 @@ def compare(folder: Path, size: int, nmodes: int, repeat: int, env: dict, exe: s
         print(f"{key}_ours_{phase}_s_last: {seconds:.3f}")
     print(f"{key}_ours_startup_s_last: {runs['ours'][-1][0] - sum(ours['times'].values()):.3f}")
     print(f"{key}_ours_backend: {ours['backend']}")
+    print(f"{key}_ours_pardiso_threads_last: {ours['pardiso_threads']}")
     print(f"{key}_ours_a_set_dof: {ours['a_set_dof']}")
     for name, figures in runs.items():
         for label, index, fmt in (("wall_s", 0, ".3f"), ("cpu_s", 1, ".3f"),

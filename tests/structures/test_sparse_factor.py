@@ -16,6 +16,7 @@ from plate_decks import plate_deck
 from structures.assembly import assemble
 from structures.bdf import read_model
 from structures.common.errors import InputError, SolverError
+from structures import sparse_factor
 from structures.modal import DEFAULT_SHIFT, solve_eigen
 from structures.sparse_factor import BACKENDS, ENV_VAR, available_backends, factorize
 
@@ -131,3 +132,35 @@ def test_unknown_backend_lists_the_valid_ones(monkeypatch):
 def test_missing_backend_says_how_to_install():
     with pytest.raises(InputError, match="not installed"):
         factorize(random_spd(), backend="pardiso")
+
+
+@pytest.mark.parametrize("load, cores, expected", [
+    (0.2, 2, 2),         # idle machine: both cores
+    (1.3, 2, 2),         # about one unit of load: the solver's own earlier runs
+    (1.6, 2, 1),         # another program keeps a core busy
+    (4.0, 2, 1),         # overloaded: never fewer than one thread
+    (3.0, 8, 6),
+])
+def test_free_cores_leaves_the_busy_ones(monkeypatch, load, cores, expected):
+    """free_cores = cores - (round(load average) - 1), at least 1 (hand-computed cases)."""
+    monkeypatch.setattr(sparse_factor.os, "getloadavg", lambda: (load, load, load))
+    monkeypatch.setattr(sparse_factor.os, "sched_getaffinity", lambda pid: set(range(cores)),
+                        raising=False)
+    assert sparse_factor.free_cores() == expected
+
+
+@pytest.mark.skipif("pardiso" not in available_backends(), reason="PARDISO not installed")
+def test_pardiso_thread_count_gives_the_same_solution(monkeypatch):
+    """One MKL thread and two solve the same system to round-off (residual reference)."""
+    a = random_spd(2000, seed=5)
+    b = np.random.default_rng(1).standard_normal(a.shape[0])
+    solutions = []
+    for cores in (1, 2):
+        monkeypatch.setattr(sparse_factor, "free_cores", lambda cores=cores: cores)
+        factor = factorize(a, backend="pardiso")
+        assert factor.threads <= cores
+        solutions.append(factor.solve(b))
+    for x in solutions:
+        assert np.linalg.norm(a @ x - b) <= 1e-12 * np.linalg.norm(b)
+    assert np.allclose(solutions[0], solutions[1], rtol=1e-10,
+                       atol=1e-12 * np.abs(solutions[0]).max())
