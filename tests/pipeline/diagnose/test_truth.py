@@ -58,6 +58,19 @@ def test_names_of_the_contract():
                            "boundary_stiffness", "none", "outside")
 
 
+def test_truth_path_adds_nothing(tmp_path):
+    """The truth's route (pyNastran parse, edit, write, our reader) on an untouched deck gives the
+    analysis deck's modes and weight exactly: every difference in a truth is its effect or its
+    scatter."""
+    from tests.pipeline.diagnose.truth import frame
+
+    deck = frame.write_frame(tmp_path)
+    read_pynastran(deck).write_bdf(str(tmp_path / "round_trip.bdf"), enddata=True)
+    np.testing.assert_allclose(_elastic(tmp_path / "round_trip.bdf"), _elastic(deck), rtol=1e-12)
+    assert (sum(m.mass for m in _cards(tmp_path / "round_trip.bdf", "CONM2").values())
+            == pytest.approx(sum(m.mass for m in _cards(deck, "CONM2").values()), rel=1e-12))
+
+
 def test_deterministic(frame_cases, tmp_path):
     again = make_case("frame", "member_taper", SEED, tmp_path / "again").parent
     first = frame_cases["member_taper"][0]
