@@ -177,7 +177,9 @@ def _loguniform(rng, lo: float, hi: float) -> float:
 
 
 def _hung(bdf, topo: Topology, pivot: int, grids) -> tuple[float, float]:
-    """(mass, largest moment of inertia about ``pivot``) of the CONM2s at ``grids`` (x WTMASS)."""
+    """(mass, moment of inertia about ``pivot``) of the CONM2s at ``grids`` (x WTMASS): the sum
+    over the masses of each one's largest moment about the pivot's axes, at least
+    1e-3 x mass x size^2."""
     mass, inertia = 0.0, 0.0
     for m in bdf.masses.values():
         if m.type == "CONM2" and int(m.nid) in grids:

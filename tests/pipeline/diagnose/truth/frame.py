@@ -18,7 +18,7 @@ Different from the X-56A-class flying wing in layout, units and joints:
   CBARs each, PBAR 71 / 72) with 15 kg wheels;
 * all mass is CONM2 (MAT1 RHO = 0); no SPC (free-free); E = 70 GPa, nu = 0.33.
 
-88 grids; first elastic mode ~3 Hz; ``N_TEST`` elastic modes measured below ~40 Hz.
+88 grids, 583 kg; the ``N_TEST`` = 20 measured elastic modes span 2.8-25 Hz (our solver).
 """
 from __future__ import annotations
 
