@@ -6,6 +6,7 @@ the candidate effects (:data:`KINDS`) are in :mod:`pipeline.diagnose.effects`.
 """
 from pipeline.diagnose.effects import KINDS
 from pipeline.diagnose.result import DiagnoseResult
-from pipeline.diagnose.workflow import ConfigurationData, DiagnoseSettings, diagnose
+from pipeline.diagnose.workflow import ConfigurationData, DiagnoseSettings, diagnose, preflight
 
-__all__ = ["diagnose", "DiagnoseSettings", "ConfigurationData", "DiagnoseResult", "KINDS"]
+__all__ = ["diagnose", "preflight", "DiagnoseSettings", "ConfigurationData", "DiagnoseResult",
+           "KINDS"]

@@ -159,7 +159,8 @@ def model_changes(old: FEModel, new: FEModel) -> tuple[dict, list]:
     ----------
     old, new : FEModel
         ``new`` made from ``old`` by diagnose effects (elements and properties added or changed in
-        the families of :data:`CHANGED_FAMILIES`, CONM2s added, rigid elements removed).
+        the families of :data:`CHANGED_FAMILIES`, CONM2s added, rigid elements removed, RBE2s
+        with fewer dependent grids of one component set: removed and written again).
 
     Returns
     -------
@@ -167,10 +168,16 @@ def model_changes(old: FEModel, new: FEModel) -> tuple[dict, list]:
         (changed cards are deleted and written again).
     cards : list of field lists (card name first), in the order properties, elements, masses.
     """
-    new_rigid = {r.eid for r in new.rigid}
-    removed = {"rigid": sorted(r.eid for r in old.rigid if r.eid not in new_rigid),
+    new_rigid = {r.eid: r for r in new.rigid}
+    removed = {"rigid": sorted(r.eid for r in old.rigid if new_rigid.get(r.eid) != r),
                "elements": [], "properties": []}
     prop_cards, elem_cards, mass_cards = [], [], []
+    for eid in removed["rigid"]:
+        rigid = new_rigid.get(eid)
+        if rigid is not None:                                  # an RBE2 with fewer dependents
+            (grid, _), = rigid.independent
+            elem_cards.append(["RBE2", eid, grid, int(rigid.dependent[0][1]),
+                               *[g for g, _ in rigid.dependent]])
     for pid in sorted(new.properties):
         prop = new.properties[pid]
         if pid in old.properties and old.properties[pid] == prop:

@@ -17,8 +17,14 @@ scale of the model (so that bounds do not depend on units):
     touching the element's grids (all beams of the model when none touch them) of
     k_ref,t = 12 E I / L^3 (the transverse stiffness term of the beam element) and
     k_ref,r = E I / L (its bending stiffness per radian over its length), I = (I1 + I2) / 2: at
-    compliance 1 the joint is about as flexible as one adjacent element. Bounds [0, 20];
-    compliance 0 keeps the rigid element. Skipped: rigid elements whose partial dependent
+    compliance 1 the joint is about as flexible as one adjacent element. Bounds [0, 1e5]: a
+    joint whose hung mass has its local mode a few times the first elastic frequency is
+    10^2 - 10^4.5 times softer than an adjacent element (k_ref is the beam's, not the joint's);
+    compliance 0 keeps the rigid element. An RBE2 with several dependent grids also gives one
+    candidate per dependent grid (detail ``dependent``): that grid alone leaves the RBE2 (written
+    again without it) and hangs on its CBUSH, the others stay rigid (a joint that is flexible on
+    one side only, e.g. one control surface on its hinge line). The response is far from linear in the compliance, so
+    the screening samples it on a ladder of sizes (:data:`pipeline.diagnose.screen.LADDER`). Skipped: rigid elements whose partial dependent
     components are not in basic axes. Very small compliances make K ill-conditioned: at 1e-6 on
     the X-56 wing ribs the rigid-body eigenvalues carry round-off of 2e-6 of the first elastic
     one, which :mod:`structures.modal` rejects; 1e-5 is fine there.
@@ -43,7 +49,7 @@ scale of the model (so that bounds do not depend on units):
     One candidate per grid of ``lumped_mass`` and unconstrained direction.
 
 The screening step of each parameter (:attr:`Candidate.reference`, :data:`PARAMETER_RANGES`) is
-a plausible, clearly visible size: mass 0.02, compliance 4, scale 0.1, taper 0.3, bow 0.05, k 0.1.
+a plausible, clearly visible size: mass 0.02, compliance 100, scale 0.1, taper 0.3, bow 0.05, k 0.1.
 New elements take ids from the model's largest element, CONM2 or rigid-element id + 1; new
 properties from its largest PID + 1.
 """
@@ -71,7 +77,7 @@ DIRECTIONS = ("x", "y", "z")
 #: (lower, upper, reference) of each parameter, by kind and parameter name.
 PARAMETER_RANGES = {
     "lumped_mass": {"mass": (0.0, 0.10, 0.02)},
-    "joint_flexibility": {"compliance": (0.0, 20.0, 4.0)},
+    "joint_flexibility": {"compliance": (0.0, 1.0e5, 100.0)},
     "member_taper": {"scale": (-0.3, 0.3, 0.1), "taper": (-0.8, 0.8, 0.3)},
     "member_curvature": {"bow_1": (-0.15, 0.15, 0.05), "bow_2": (-0.15, 0.15, 0.05)},
     "boundary_stiffness": {f"k_{d}": (0.0, 1.0, 0.1) for d in DIRECTIONS},
@@ -295,6 +301,11 @@ def _joint_candidates(model: FEModel) -> list:
         out.append(_candidate("joint_flexibility",
                               Location(grids=mine, elements=(rigid.eid,)), label,
                               ("compliance",), detail))
+        if rigid.card == "RBE2" and len(deps) > 1:
+            out += [_candidate("joint_flexibility",
+                               Location(grids=(indep, g), elements=(rigid.eid,)),
+                               f"RBE2 {rigid.eid} ({indep}-{g} only)", ("compliance",),
+                               detail + (("dependent", g),)) for g, _ in deps]
     return out
 
 
@@ -407,11 +418,20 @@ def _joint(model, candidate, x):
                                       filename=model.filename,
                                       fix="build the candidate with candidates() on this model."))
     indep, deps = joint
+    only = candidate.get("dependent")
+    kept = tuple(d for d in deps if d[0] != only) if only is not None else ()
+    if only is not None and len(kept) == len(deps):
+        raise InputError(card_message(f"grid {only} is not a dependent grid of this RBE2.",
+                                      card=rigid.card, card_id=eid, filename=model.filename,
+                                      fix="build the candidate with candidates() on this model."))
     kt, kr = candidate.get("k_translation") / x[0], candidate.get("k_rotation") / x[0]
+    hung = [d for d in deps if d not in kept]
     stiffness = [[(kt if c < 3 else kr) if str(c + 1) in comps else 0.0 for c in range(6)]
-                 for _, comps in deps]
-    model = replace(model, rigid=tuple(r for r in model.rigid if r.eid != eid))
-    return _add_bushes(model, [(indep, g) for g, _ in deps], stiffness)
+                 for _, comps in hung]
+    rigid_new = tuple(replace(r, dependent=kept) if r.eid == eid else r for r in model.rigid
+                      if r.eid != eid or kept)
+    model = replace(model, rigid=rigid_new)
+    return _add_bushes(model, [(indep, g) for g, _ in hung], stiffness)
 
 
 def _member_rows(model: FEModel, member: Member):

@@ -12,9 +12,13 @@ h_k = the candidate's ``reference`` size, r the training residual of every confi
   c_kj = -phi_k^T (dK - lambda_j dM) phi_j / (lambda_k - lambda_j) (Fox & Kapoor 1968, eq. 19
   truncated), with the pairing of the current model kept; mass properties exactly from the changed
   mass matrix;
-- *reanalysis* (``joint_flexibility``, which changes the constraints, and any candidate whose
-  model gains grids): modes of the changed model (:func:`structures.modal.compute_modes`), paired
-  again.
+- *reanalysis* (any candidate whose model gains grids): modes of the changed model
+  (:func:`structures.modal.compute_modes`), paired again;
+- *ladder* (``joint_flexibility``, one parameter that changes the constraints and acts far from
+  linearly: a joint's local mode falls as 1 / sqrt(compliance) and sweeps through the measured
+  modes): reanalysis at every size of :data:`LADDER` (decades of the parameter's range) and at
+  the half decades either side of the best; the best size x* and its exact chi^2 are the
+  candidate's screening result, the secant (r(x*) - r0) / x* its signature.
 
 **Linear fit**: min |r0 + S x|^2 within the candidate's bounds (``scipy.optimize.lsq_linear``);
 the candidates are ranked by the drop of chi^2.
@@ -37,14 +41,18 @@ from structures.common.errors import InputError, SolverError
 from structures.massprops import mass_properties
 from structures.model import ConcentratedMass, ElementSet, FEModel
 
-#: Kinds whose signature needs a reanalysis (they change the constraint equations).
-REANALYSIS_KINDS = ("joint_flexibility",)
+#: Kinds screened on the ladder of sizes by reanalysis (they change the constraint equations).
+LADDER_KINDS = ("joint_flexibility",)
+#: Sizes of a ladder-screened parameter, as fractions of its upper bound (decades); the best
+#: rung's half-decade neighbours are tried next.
+LADDER = (1e-4, 1e-3, 1e-2, 1e-1, 1.0)
 #: Eigenvalue gaps below this fraction of the largest computed eigenvalue are treated as
 #: degenerate in the modal expansion (their coupling is left out instead of dividing by ~0).
 DEGENERATE_GAP = 1e-9
 #: Most iterations of one refit (started at the linear fit, a few iterations suffice).
 REFIT_NFEV = 12
-#: Forward-difference step of an effect parameter, in units of its reference size.
+#: Forward-difference step of an effect parameter, relative to its scale in the refit (the larger
+#: of its reference size and its starting value).
 FD_STEP = 1e-3
 #: Residual at a trial point whose model cannot be analysed, relative to the starting residual.
 PENALTY = 3.0
@@ -60,7 +68,7 @@ class Screened:
     values : (npar,) best bounded size of the linearised fit.
     chi2 : float, linearised chi^2 at ``values``.
     drop : float, chi^2 of the current model minus ``chi2``.
-    signature : (n_data, npar) linear signature S.
+    signature : (n_data, npar) linear signature S (the secant to ``values`` for a ladder).
     """
 
     candidate: object
@@ -198,7 +206,8 @@ def signatures(problem: Problem, theta, effects, evaluations, candidates, *, pro
     Returns
     -------
     r0 : (n_data,) current training residual.
-    list of (Candidate, S (n_data, npar)); candidates that cannot be applied to every
+    list of (Candidate, S (n_data, npar), exact); ``exact`` is (values (npar,), chi2) of a
+    ladder-screened candidate's best size, else None. Candidates that cannot be applied to every
     configuration are left out (named in ``skipped``).
     skipped : list of str
     """
@@ -207,29 +216,62 @@ def signatures(problem: Problem, theta, effects, evaluations, candidates, *, pro
     models = [problem.model(i, theta, effects) for i in range(len(problem.refs))]
     mats = [assemble_g(m)[1] for m in models]
     r0 = problem.vector(evaluations)
+
+    def residual(cand, step, exact):
+        parts = []
+        for ref, model, ev, m0 in zip(problem.refs, models, evaluations, mats):
+            changed = apply_effect(model, cand, step)
+            if exact or len(changed.grids) != len(model.grids):
+                e1 = evaluate(ref, changed)
+            else:
+                e1 = _perturbed(ref, model, ev, m0, changed)
+            parts.append(e1.vector(ref.train))
+        return np.concatenate(parts)
+
     out, skipped = [], []
     for n, cand in enumerate(candidates):
         if progress is not None and n % 50 == 0:
             progress(f"screening {n}/{len(candidates)}")
-        cols = []
         try:
+            if cand.kind in LADDER_KINDS:
+                out.append(_ladder(cand, r0, residual))
+                continue
+            cols = []
             for k, h in enumerate(cand.reference):
                 step = np.zeros(len(cand.parameters))
                 step[k] = h
-                parts = []
-                for ref, model, ev, m0 in zip(problem.refs, models, evaluations, mats):
-                    changed = apply_effect(model, cand, step)
-                    if cand.kind in REANALYSIS_KINDS or len(changed.grids) != len(model.grids):
-                        e1 = evaluate(ref, changed)
-                    else:
-                        e1 = _perturbed(ref, model, ev, m0, changed)
-                    parts.append(e1.vector(ref.train))
-                cols.append((np.concatenate(parts) - r0) / h)
+                cols.append((residual(cand, step, False) - r0) / h)
         except (InputError, SolverError) as exc:
             skipped.append(f"{cand.label}: {exc}")
             continue
-        out.append((cand, np.column_stack(cols)))
+        out.append((cand, np.column_stack(cols), None))
     return r0, out, skipped
+
+
+def _ladder(cand, r0, residual) -> tuple:
+    """(Candidate, secant S, (x*, chi2*)) of a one-parameter candidate sampled on :data:`LADDER`
+    (sizes whose model cannot be analysed are passed over)."""
+    best, failure = None, None
+
+    def rung(size):
+        nonlocal best, failure
+        try:
+            r = residual(cand, np.array([size]), True)
+        except (InputError, SolverError) as exc:
+            failure = exc
+            return
+        if best is None or chi_square(r) < best[2]:
+            best = (size, r, chi_square(r))
+
+    for size in cand.upper[0] * np.asarray(LADDER):
+        rung(size)
+    if best is None:
+        raise failure
+    for size in best[0] * np.array([10.0 ** -0.5, 10.0 ** 0.5]):
+        if size <= cand.upper[0]:
+            rung(size)
+    size, r, chi2 = best
+    return cand, ((r - r0) / size)[:, None], (np.array([size]), chi2)
 
 
 def linear_fit(r0, signature, lower, upper) -> tuple[np.ndarray, float]:
@@ -249,11 +291,12 @@ def linear_fit(r0, signature, lower, upper) -> tuple[np.ndarray, float]:
 
 
 def screen(r0, signed) -> list:
-    """Linear fit of every (Candidate, S); list of Screened sorted by decreasing drop."""
+    """Linear fit of every (Candidate, S, exact) (``exact`` (x, chi2) of a ladder is taken as
+    it is); list of Screened sorted by decreasing drop."""
     chi0 = chi_square(r0)
     rows = []
-    for cand, s in signed:
-        x, chi2 = linear_fit(r0, s, cand.lower, cand.upper)
+    for cand, s, exact in signed:
+        x, chi2 = exact if exact is not None else linear_fit(r0, s, cand.lower, cand.upper)
         rows.append(Screened(cand, x, chi2, chi0 - chi2, s))
     rows.sort(key=lambda row: -row.drop)
     return rows
@@ -289,8 +332,9 @@ def refit(problem: Problem, theta0, effects, row: Screened | None, *, n_data: in
     """
     cand = None if row is None else row.candidate
     npar = 0 if cand is None else len(cand.parameters)
-    scale = np.concatenate([np.asarray(cand.reference, float) if cand else np.zeros(0),
-                            np.full(len(theta0), THETA_SCALE)])
+    size = np.maximum(np.asarray(cand.reference, float), np.abs(row.values)) if cand \
+        else np.zeros(0)
+    scale = np.concatenate([size, np.full(len(theta0), THETA_SCALE)])
     lo = np.concatenate([np.asarray(cand.lower, float) if cand else np.zeros(0),
                          np.full(len(theta0), -CALIBRATION_BOUND)]) / scale
     hi = np.concatenate([np.asarray(cand.upper, float) if cand else np.zeros(0),

@@ -214,6 +214,43 @@ def _say(progress, text: str) -> None:
         progress(text)
 
 
+def preflight(configurations, settings: DiagnoseSettings = DiagnoseSettings()) -> tuple:
+    """Every data check of :func:`diagnose` that can fail, without calibration or screening.
+
+    Analysis modes of every configuration, pairing, enough elastic modes and sensor DOFs, the
+    shape-noise estimate, test self-orthogonality and the measured-mass residual scales (step 1
+    of the module docstring), so that a caller (the CLI) can reject bad data before any stage
+    runs.
+
+    Parameters
+    ----------
+    configurations : sequence of ConfigurationData
+    settings : DiagnoseSettings
+
+    Returns
+    -------
+    refs : tuple of :class:`pipeline.diagnose.evidence.Reference`, one per configuration.
+    notes : tuple of str, what the data can and cannot tell.
+
+    Raises
+    ------
+    InputError
+        No or repeated configurations, wrong settings, too few analysis modes or sensor DOFs.
+    """
+    configurations = tuple(configurations)
+    if not configurations:
+        raise InputError("diagnose: no configurations. Fix: give at least one ConfigurationData.")
+    names = [c.name for c in configurations]
+    if len(set(names)) != len(names):
+        raise InputError(f"diagnose: configuration names {names} repeat. Fix: name each once.")
+    if not isinstance(settings, DiagnoseSettings):
+        raise InputError("diagnose: settings must be a DiagnoseSettings.")
+    notes: list = []
+    with threadpool_limits(limits=1):
+        refs = _preflight(configurations, settings, notes)
+    return tuple(refs), tuple(notes)
+
+
 def _preflight(configurations, settings: DiagnoseSettings, notes: list):
     refs = []
     for data in configurations:
@@ -288,17 +325,10 @@ def diagnose(configurations, settings: DiagnoseSettings = DiagnoseSettings(), *,
     DiagnoseResult
     """
     configurations = tuple(configurations)
-    if not configurations:
-        raise InputError("diagnose: no configurations. Fix: give at least one ConfigurationData.")
-    names = [c.name for c in configurations]
-    if len(set(names)) != len(names):
-        raise InputError(f"diagnose: configuration names {names} repeat. Fix: name each once.")
-    if not isinstance(settings, DiagnoseSettings):
-        raise InputError("diagnose: settings must be a DiagnoseSettings.")
     t0 = time.perf_counter()
-    notes: list = []
+    refs, notes = preflight(configurations, settings)
+    notes = list(notes)
     with threadpool_limits(limits=1):
-        refs = _preflight(configurations, settings, notes)
         problem = Problem.build(refs, [c.model for c in configurations])
         _say(progress, "calibrating the nominal parameters")
         cal = calibrate(problem)

@@ -236,6 +236,40 @@ def test_joint_compliance_tends_to_the_rigid_joint(x56, x56_candidates, label, c
         assert np.max(1 - soft / rigid) > 0.05      # the engine mount is clearly visible
 
 
+def test_one_dependent_grid_on_its_spring(tmp_path):
+    """A clamped grid 1 carries grids 2 and 3 (coincident with 1, so its CBUSH has no length to
+    couple translation and rotation) on an RBE2 (masses m2, m3 with inertia i3; a bar 1-4 gives
+    k_ref). The one-dependent candidate of grid 3 leaves 2 rigid and hangs 3 on a CBUSH of
+    k_t / c, k_r / c: by hand, the only modes are sqrt(k_t / (c m3)) (x3) and
+    sqrt(k_r / (c i3)) (x3); the written deck reads back to the same K and M."""
+    m2, m3, i3, c = 5.0, 2.0, 0.01, 300.0
+    deck = _deck(tmp_path, "hinge.bdf", [
+        ("GRID", 1, None, 0.0, 0.0, 0.0, None, 123456), ("GRID", 2, None, 0.3, 0.0, 0.0),
+        ("GRID", 3, None, 0.0, 0.0, 0.0), ("GRID", 4, None, 0.0, 1.0, 0.0, None, 123456),
+        ("RBE2", 10, 1, 123456, 2, 3), ("CONM2", 21, 2, None, m2),
+        ("CONM2", 22, 3, None, m3, 0.0, 0.0, 0.0, None, i3, 0.0, i3, 0.0, 0.0, i3),
+        ("CBAR", 31, 41, 1, 4, 0.0, 0.0, 1.0), ("PBAR", 41, 51, 1e-3, 2e-7, 4e-7, 3e-7),
+        ("MAT1", 51, 7.0e10, None, 0.33)])
+    model = read_model(deck)
+    joints = candidates(model, ["joint_flexibility"])
+    assert sorted(j.label for j in joints) == ["RBE2 10 (1-2 only)", "RBE2 10 (1-2/3)",
+                                               "RBE2 10 (1-3 only)"]
+    cand = _pick(joints, "joint_flexibility", "(1-3 only)")
+    kt, kr = cand.get("k_translation"), cand.get("k_rotation")
+    ei = 7.0e10 * 0.5 * (2e-7 + 4e-7)
+    assert (kt, kr) == pytest.approx((12 * ei, ei), rel=1e-12)     # L = 1
+    changed = apply_effect(model, cand, [c])
+    assert [r.dependent for r in changed.rigid] == [((2, "123456"),)]
+    f = np.sort(compute_modes(changed, 6)["frequency"].values)
+    expected = np.sort([np.sqrt(kt / (c * m3)) / (2 * np.pi)] * 3 +
+                       [np.sqrt(kr / (c * i3)) / (2 * np.pi)] * 3)
+    np.testing.assert_allclose(f, expected, rtol=1e-8)
+    back = read_model(write_effect_deck(deck, tmp_path / "hinge_out.bdf", model, [(cand, [c])]))
+    for got, want in zip(assemble_g(back), assemble_g(changed)):
+        assert abs(got - want).max() <= 1e-12 * abs(want).max()
+    assert [r.dependent for r in back.rigid] == [((2, "123456"),)]
+
+
 def test_zero_values_leave_k_and_m_and_small_values_are_continuous(x56, x56_candidates):
     base = assemble(x56, warn=False)
     picks = {"lumped_mass": "grid 3005", "joint_flexibility": "RBE2 7501",

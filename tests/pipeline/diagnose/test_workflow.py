@@ -9,7 +9,7 @@ from math import log
 import pytest
 
 from pipeline.case import read_case
-from pipeline.diagnose import DiagnoseSettings, diagnose
+from pipeline.diagnose import DiagnoseSettings, diagnose, preflight
 from pipeline.diagnose.inputs import configurations_from_case, settings_from_case
 from pipeline.diagnose.workflow import decide
 from structures.common.errors import InputError
@@ -162,3 +162,18 @@ def test_frame_frequency_only_runs_and_says_what_it_cannot_tell(tmp_path):
     record = result.to_json()
     assert record["verdict"] == "none" and record["effect"] is None
     assert json.loads(json.dumps(record)) == record                       # JSON-clean
+
+
+def test_preflight_checks_the_data_without_screening(tmp_path):
+    """The frame's 20 test modes: one reference with every mode paired, the training split of
+    holdout 3 (modes 3, 6, ... held out: 14 train), notes; too few analysis modes refused."""
+    case = read_case(make_case("frame", "none", 0, tmp_path / "none_0"))
+    confs = configurations_from_case(case)
+    refs, notes = preflight(confs, DiagnoseSettings())
+    assert len(refs) == 1 and refs[0].test_frequency.size == 20
+    assert int(refs[0].train.sum()) == 14 and refs[0].has_shapes
+    assert any("sensor DOFs" in n for n in notes)
+    with pytest.raises(InputError, match="nmodes"):
+        preflight(confs, DiagnoseSettings(nmodes=10))
+    with pytest.raises(InputError, match="repeat"):
+        preflight(confs * 2, DiagnoseSettings())
