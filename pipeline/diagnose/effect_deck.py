@@ -159,19 +159,24 @@ def model_changes(old: FEModel, new: FEModel) -> tuple[dict, list]:
     ----------
     old, new : FEModel
         ``new`` made from ``old`` by diagnose effects (elements and properties added or changed in
-        the families of :data:`CHANGED_FAMILIES`, CONM2s added, rigid elements removed, RBE2s
-        with fewer dependent grids of one component set: removed and written again).
+        the families of :data:`CHANGED_FAMILIES`, CONM2s added, grids added (basic frame),
+        rigid elements removed, RBE2s with fewer dependent grids of one component set or a new
+        independent grid: removed and written again).
 
     Returns
     -------
     removed : dict with ``rigid``, ``elements``, ``properties``: sorted ids of cards to delete
         (changed cards are deleted and written again).
-    cards : list of field lists (card name first), in the order properties, elements, masses.
+    cards : list of field lists (card name first), in the order grids, properties, elements,
+        masses.
     """
     new_rigid = {r.eid: r for r in new.rigid}
     removed = {"rigid": sorted(r.eid for r in old.rigid if new_rigid.get(r.eid) != r),
                "elements": [], "properties": []}
     prop_cards, elem_cards, mass_cards = [], [], []
+    added = ~np.isin(new.grids.ids, old.grids.ids)
+    grid_cards = [["GRID", int(gid), None, *map(float, xyz)]
+                  for gid, xyz in zip(new.grids.ids[added], new.grids.xyz[added])]
     for eid in removed["rigid"]:
         rigid = new_rigid.get(eid)
         if rigid is not None:                                  # an RBE2 with fewer dependents
@@ -196,7 +201,7 @@ def model_changes(old: FEModel, new: FEModel) -> tuple[dict, list]:
     known = set(old.masses.eids.tolist())
     mass_cards = [_conm2_card(new.masses, i) for i, eid in enumerate(new.masses.eids.tolist())
                   if eid not in known]
-    return removed, prop_cards + elem_cards + mass_cards
+    return removed, grid_cards + prop_cards + elem_cards + mass_cards
 
 
 def changed_parts(old: FEModel, new: FEModel) -> tuple[FEModel, FEModel]:

@@ -16,11 +16,16 @@ scale of the model (so that bounds do not depend on units):
     on the rigid element's dependent components. k_ref is the median over the CBAR/CBEAM elements
     touching the element's grids (all beams of the model when none touch them) of
     k_ref,t = 12 E I / L^3 (the transverse stiffness term of the beam element) and
-    k_ref,r = E I / L (its bending stiffness per radian over its length), I = (I1 + I2) / 2: at
+    k_ref,r = E I / L (its bending stiffness per radian over its length), I = (I1 + I2) / 2, plus
+    k_ref,t d^2, d the largest distance of a hung dependent grid from the independent one (a
+    rotation theta of the joint moves that grid by d theta: the same compliance for both): at
     compliance 1 the joint is about as flexible as one adjacent element. Bounds [0, 1e5]: a
     joint whose hung mass has its local mode a few times the first elastic frequency is
     10^2 - 10^4.5 times softer than an adjacent element (k_ref is the beam's, not the joint's);
-    compliance 0 keeps the rigid element. An RBE2 with several dependent grids also gives one
+    compliance 0 keeps the rigid element. An RBE2 with several dependent grids is instead kept
+    rigid and moved onto a new grid (id: the largest + 1) at its independent grid, which hangs on
+    one CBUSH to the independent grid: the hung part moves as one body (a control surface or a
+    store on flexible fittings). Such an RBE2 also gives one
     candidate per dependent grid (detail ``dependent``): that grid alone leaves the RBE2 (written
     again without it) and hangs on its CBUSH, the others stay rigid (a joint that is flexible on
     one side only, e.g. one control surface on its hinge line). The response is far from linear in the compliance, so
@@ -295,17 +300,21 @@ def _joint_candidates(model: FEModel) -> list:
         near = np.isin(nodes, mine).any(axis=1)
         if not near.any():
             near[:] = True
-        detail = (("k_translation", float(np.median(k_t[near]))),
-                  ("k_rotation", float(np.median(k_r[near]))))
+        kt, kr = float(np.median(k_t[near])), float(np.median(k_r[near]))
+        xyz = model.grids.xyz[model.grids.index(mine)]
+        d2 = np.sum((xyz[1:] - xyz[0]) ** 2, axis=1)                      # (n_dep,)
         label = f"{rigid.card} {rigid.eid} ({indep}-{'/'.join(str(g) for g, _ in deps)})"
         out.append(_candidate("joint_flexibility",
                               Location(grids=mine, elements=(rigid.eid,)), label,
-                              ("compliance",), detail))
+                              ("compliance",), (("k_translation", kt),
+                                                ("k_rotation", kr + kt * float(d2.max())))))
         if rigid.card == "RBE2" and len(deps) > 1:
             out += [_candidate("joint_flexibility",
                                Location(grids=(indep, g), elements=(rigid.eid,)),
                                f"RBE2 {rigid.eid} ({indep}-{g} only)", ("compliance",),
-                               detail + (("dependent", g),)) for g, _ in deps]
+                               (("k_translation", kt), ("k_rotation", kr + kt * float(dd)),
+                                ("dependent", g)))
+                    for (g, _), dd in zip(deps, d2)]
     return out
 
 
@@ -425,6 +434,8 @@ def _joint(model, candidate, x):
                                       card=rigid.card, card_id=eid, filename=model.filename,
                                       fix="build the candidate with candidates() on this model."))
     kt, kr = candidate.get("k_translation") / x[0], candidate.get("k_rotation") / x[0]
+    if only is None and rigid.card == "RBE2" and len(deps) > 1:
+        return _hang_whole(model, rigid, indep, kt, kr)
     hung = [d for d in deps if d not in kept]
     stiffness = [[(kt if c < 3 else kr) if str(c + 1) in comps else 0.0 for c in range(6)]
                  for _, comps in hung]
@@ -432,6 +443,21 @@ def _joint(model, candidate, x):
                       if r.eid != eid or kept)
     model = replace(model, rigid=rigid_new)
     return _add_bushes(model, [(indep, g) for g, _ in hung], stiffness)
+
+
+def _hang_whole(model: FEModel, rigid, indep: int, kt: float, kr: float) -> FEModel:
+    """The RBE2 kept rigid but moved onto a new grid at its independent grid, which hangs on a
+    CBUSH (all six components) to the independent grid."""
+    g = model.grids
+    new = int(g.ids.max()) + 1
+    i = int(g.index([indep])[0])
+    grids = replace(g, ids=np.append(g.ids, new), xyz=np.vstack([g.xyz, g.xyz[i]]),
+                    cd_axes=np.concatenate([g.cd_axes, np.eye(3)[None]]), cd=np.append(g.cd, 0),
+                    ps=np.append(g.ps, 0))
+    moved = tuple(replace(r, independent=((new, "123456"),)) if r.eid == rigid.eid else r
+                  for r in model.rigid)
+    model = replace(model, grids=grids, rigid=moved)
+    return _add_bushes(model, [(indep, new)], [[kt] * 3 + [kr] * 3])
 
 
 def _member_rows(model: FEModel, member: Member):

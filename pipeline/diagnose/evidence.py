@@ -113,19 +113,25 @@ def runs_test(values) -> float:
     return float(scipy.stats.norm.cdf((runs - mu) / np.sqrt(var)))
 
 
-def holdout_mask(n_modes: int, holdout: int) -> np.ndarray:
+def holdout_mask(n_modes: int, holdout: int, rotation: int = 0) -> np.ndarray:
     """Held-out modes: every ``holdout``-th of ``n_modes`` paired modes in frequency order.
+
+    ``rotation`` (the configuration's position) moves the held-out positions down by one per
+    configuration, so that with several configurations every mode trains in some configuration
+    (an effect that moves one mode, e.g. a local joint mode, is then never hidden from the naming
+    altogether), while each configuration keeps a held-out third to judge the gap on.
 
     Returns
     -------
     ndarray of bool, shape (n_modes,)
-        True for held-out modes: positions holdout-1, 2 holdout-1, ... (0-based).
+        True for held-out modes: positions holdout-1-r, 2 holdout-1-r, ... (0-based),
+        r = rotation mod holdout.
     """
     if holdout < 2:
         raise InputError(f"diagnose: holdout = {holdout} must be >= 2 (every holdout-th mode is "
                          "held out). Fix: use 2 or more.")
     mask = np.zeros(n_modes, bool)
-    mask[holdout - 1::holdout] = True
+    mask[(holdout - 1 - rotation) % holdout::holdout] = True
     return mask
 
 
@@ -455,7 +461,7 @@ def evaluate_modes(ref: Reference, frequency, sensor_shapes, props: MassProperti
 def build_reference(name: str, model: FEModel, gvt: xr.Dataset, measured_mass: Mapping | None,
                     modes: xr.Dataset, *,
                     frequency_noise: float, shape_noise_value: float | None, model_scatter: float,
-                    holdout: int, nmodes: int) -> tuple[Reference, dict]:
+                    holdout: int, nmodes: int, rotation: int = 0) -> tuple[Reference, dict]:
     """Preflight of one configuration: pairing on the nominal modes, noise, training split.
 
     Returns
@@ -501,7 +507,7 @@ def build_reference(name: str, model: FEModel, gvt: xr.Dataset, measured_mass: M
                     sensor_index=sensor_index, sensor_grid=grid, sensor_component=comp,
                     projector=None, shape_scale=None, shape_keep=None,
                     frequency_sigma=np.full(f_test.size, float(frequency_noise)),
-                    shape_sigma=noise, train=~holdout_mask(f_test.size, holdout),
+                    shape_sigma=noise, train=~holdout_mask(f_test.size, holdout, rotation),
                     measured_mass=measured, mass_scale=mass_scales(measured, mass_properties(model)), nmodes=nmodes)
     paired = pair(ref, modes)
     facts["paired_fe_mode"] = modes["mode"].values[paired].tolist()

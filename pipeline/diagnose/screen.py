@@ -16,9 +16,12 @@ h_k = the candidate's ``reference`` size, r the training residual of every confi
   (:func:`structures.modal.compute_modes`), paired again;
 - *ladder* (``joint_flexibility``, one parameter that changes the constraints and acts far from
   linearly: a joint's local mode falls as 1 / sqrt(compliance) and sweeps through the measured
-  modes): reanalysis at every size of :data:`LADDER` (decades of the parameter's range) and at
-  the half decades either side of the best; the best size x* and its exact chi^2 are the
-  candidate's screening result, the secant (r(x*) - r0) / x* its signature.
+  modes): reanalysis at every size of :data:`LADDER` (quarter decades of the parameter's range)
+  and at the eighth decades either side of the best (:data:`LADDER_REFINE`); the best size x*
+  and its exact chi^2 are the candidate's screening result, the secant (r(x*) - r0) / x* its
+  signature. The one-sided variants of a joint (one dependent grid on its spring) are screened
+  only for the ``ONE_SIDED_TOP`` best whole joints (cost: 15 reanalyses per joint and
+  configuration).
 
 **Linear fit**: min |r0 + S x|^2 within the candidate's bounds (``scipy.optimize.lsq_linear``);
 the candidates are ranked by the drop of chi^2.
@@ -43,9 +46,15 @@ from structures.model import ConcentratedMass, ElementSet, FEModel
 
 #: Kinds screened on the ladder of sizes by reanalysis (they change the constraint equations).
 LADDER_KINDS = ("joint_flexibility",)
-#: Sizes of a ladder-screened parameter, as fractions of its upper bound (decades); the best
-#: rung's half-decade neighbours are tried next.
-LADDER = (1e-4, 1e-3, 1e-2, 1e-1, 1.0)
+#: One-sided joint candidates (detail ``dependent``) are screened for the rigid elements of this
+#: many best whole-joint candidates only (a one-sided joint is a variant of its whole joint).
+ONE_SIDED_TOP = 5
+#: Sizes of a ladder-screened parameter, as fractions of its upper bound (quarter decades over
+#: the top three decades: the chi^2 of a joint has narrow valleys where its local modes meet the
+#: measured ones, a factor ~2 wide); the best rung's eighth-decade neighbours are tried next.
+LADDER = tuple(10.0 ** (-0.25 * np.arange(13)[::-1]))
+#: Refinement of the best rung (factors).
+LADDER_REFINE = (10.0 ** -0.125, 10.0 ** 0.125)
 #: Eigenvalue gaps below this fraction of the largest computed eigenvalue are treated as
 #: degenerate in the modal expansion (their coupling is left out instead of dividing by ~0).
 DEGENERATE_GAP = 1e-9
@@ -228,23 +237,34 @@ def signatures(problem: Problem, theta, effects, evaluations, candidates, *, pro
             parts.append(e1.vector(ref.train))
         return np.concatenate(parts)
 
+    def one_sided(cand):
+        return cand.kind in LADDER_KINDS and cand.get("dependent") is not None
+
     out, skipped = [], []
-    for n, cand in enumerate(candidates):
-        if progress is not None and n % 50 == 0:
-            progress(f"screening {n}/{len(candidates)}")
-        try:
-            if cand.kind in LADDER_KINDS:
-                out.append(_ladder(cand, r0, residual))
+
+    def run(cands):
+        for n, cand in enumerate(cands):
+            if progress is not None and n % 50 == 0:
+                progress(f"screening {n}/{len(cands)}")
+            try:
+                if cand.kind in LADDER_KINDS:
+                    out.append(_ladder(cand, r0, residual))
+                    continue
+                cols = []
+                for k, h in enumerate(cand.reference):
+                    step = np.zeros(len(cand.parameters))
+                    step[k] = h
+                    cols.append((residual(cand, step, False) - r0) / h)
+            except (InputError, SolverError) as exc:
+                skipped.append(f"{cand.label}: {exc}")
                 continue
-            cols = []
-            for k, h in enumerate(cand.reference):
-                step = np.zeros(len(cand.parameters))
-                step[k] = h
-                cols.append((residual(cand, step, False) - r0) / h)
-        except (InputError, SolverError) as exc:
-            skipped.append(f"{cand.label}: {exc}")
-            continue
-        out.append((cand, np.column_stack(cols), None))
+            out.append((cand, np.column_stack(cols), None))
+
+    run([c for c in candidates if not one_sided(c)])
+    whole = sorted((exact[1], cand.location.elements[0]) for cand, _, exact in out
+                   if cand.kind in LADDER_KINDS)
+    best = {eid for _, eid in whole[:ONE_SIDED_TOP]}
+    run([c for c in candidates if one_sided(c) and c.location.elements[0] in best])
     return r0, out, skipped
 
 
@@ -267,7 +287,7 @@ def _ladder(cand, r0, residual) -> tuple:
         rung(size)
     if best is None:
         raise failure
-    for size in best[0] * np.array([10.0 ** -0.5, 10.0 ** 0.5]):
+    for size in best[0] * np.array(LADDER_REFINE):
         if size <= cand.upper[0]:
             rung(size)
     size, r, chi2 = best

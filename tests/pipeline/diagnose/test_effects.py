@@ -270,6 +270,39 @@ def test_one_dependent_grid_on_its_spring(tmp_path):
     assert [r.dependent for r in back.rigid] == [((2, "123456"),)]
 
 
+def test_whole_rbe2_hangs_on_one_spring(tmp_path):
+    """Grids 2 (mass m2 at x = a, inertia i) and 3 (m3 at x = -b, b = a m2 / m3: CG on grid 1)
+    on an RBE2 at the clamped grid 1 (a bar 1-4 gives k_ref). The whole-joint candidate keeps
+    the RBE2 rigid on a new grid hung by one CBUSH at grid 1: by hand, translations
+    sqrt(k_t / (c M)) (x3), roll sqrt(k_r / (c i)), pitch and yaw sqrt(k_r / (c (m2 a^2 + m3 b^2
+    + i))), with k_r = E I / L + k_t max(a, b)^2 (documented scale); the deck reads back."""
+    m2, m3, a, i, c = 5.0, 2.0, 0.3, 0.01, 300.0
+    b = a * m2 / m3
+    deck = _deck(tmp_path, "store.bdf", [
+        ("GRID", 1, None, 0.0, 0.0, 0.0, None, 123456), ("GRID", 2, None, a, 0.0, 0.0),
+        ("GRID", 3, None, -b, 0.0, 0.0), ("GRID", 4, None, 0.0, 1.0, 0.0, None, 123456),
+        ("RBE2", 10, 1, 123456, 2, 3), ("CONM2", 22, 3, None, m3),
+        ("CONM2", 21, 2, None, m2, 0.0, 0.0, 0.0, None, i, 0.0, i, 0.0, 0.0, i),
+        ("CBAR", 31, 41, 1, 4, 0.0, 0.0, 1.0), ("PBAR", 41, 51, 1e-3, 2e-7, 4e-7, 3e-7),
+        ("MAT1", 51, 7.0e10, None, 0.33)])
+    model = read_model(deck)
+    cand = _pick(candidates(model, ["joint_flexibility"]), "joint_flexibility", "(1-2/3)")
+    kt, kr = cand.get("k_translation"), cand.get("k_rotation")
+    ei = 7.0e10 * 0.5 * (2e-7 + 4e-7)
+    assert (kt, kr) == pytest.approx((12 * ei, ei + 12 * ei * b ** 2), rel=1e-12)
+    changed = apply_effect(model, cand, [c])
+    assert changed.grids.ids.tolist() == [1, 2, 3, 4, 5]
+    assert changed.rigid[0].independent == ((5, "123456"),)
+    f = np.sort(compute_modes(changed, 6)["frequency"].values)
+    pitch = m2 * a ** 2 + m3 * b ** 2 + i
+    expected = np.sort(np.sqrt(np.array([kt / m2 / (1 + m3 / m2)] * 3 + [kr / i]
+                                        + [kr / pitch] * 2) / c) / (2 * np.pi))
+    np.testing.assert_allclose(f, expected, rtol=1e-8)
+    back = read_model(write_effect_deck(deck, tmp_path / "store_out.bdf", model, [(cand, [c])]))
+    for got, want in zip(assemble_g(back), assemble_g(changed)):
+        assert abs(got - want).max() <= 1e-12 * abs(want).max()
+
+
 def test_zero_values_leave_k_and_m_and_small_values_are_continuous(x56, x56_candidates):
     base = assemble(x56, warn=False)
     picks = {"lumped_mass": "grid 3005", "joint_flexibility": "RBE2 7501",
@@ -431,7 +464,8 @@ def test_effect_cards_against_mystran(x56, x56_candidates, tmp_path):
 # --------------------------------------------------------------------------- library & errors
 def test_candidates_of_x56_and_neighbours(x56, x56_candidates):
     counts = {k: sum(c.kind == k for c in x56_candidates) for k in KINDS}
-    assert counts["joint_flexibility"] == 28          # 28 RBE2 in structure_x56.inc
+    # 28 RBE2 in structure_x56.inc, 26 of them with two dependent grids (one-sided variants)
+    assert counts["joint_flexibility"] == 28 + 2 * 26
     assert counts["lumped_mass"] == len(x56.grids)     # every grid carries structure, none fixed
     assert counts["boundary_stiffness"] == 3 * len(x56.grids)
     assert counts["member_taper"] == counts["member_curvature"] == len(find_members(x56))

@@ -39,6 +39,10 @@ def test_runs_test_by_hand():
 def test_holdout_split():
     assert holdout_mask(7, 3).tolist() == [False, False, True, False, False, True, False]
     assert holdout_mask(4, 2).tolist() == [False, True, False, True]
+    # the second and third configurations: rotated by one position each
+    assert holdout_mask(7, 3, 1).tolist() == [False, True, False, False, True, False, False]
+    assert holdout_mask(7, 3, 2).tolist() == [True, False, False, True, False, False, True]
+    assert holdout_mask(7, 3, 3).tolist() == holdout_mask(7, 3).tolist()
     with pytest.raises(InputError, match="holdout"):
         holdout_mask(5, 1)
 
