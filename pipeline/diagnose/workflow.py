@@ -16,7 +16,8 @@
 6. Look again: the named effect is added and steps 4-5 repeat, up to ``settings.max_effects``.
 
 Verdict of a round (:func:`decide`), BIC = chi^2 + p ln n (Schwarz 1978), margins after Kass &
-Raftery (1995, a BIC difference above 10 is very strong evidence):
+Raftery (1995, a BIC difference above 10 is very strong evidence), among the refitted candidates
+whose size exceeds what the nominal scatter could do by itself (:func:`within_scatter`):
 
 - ``effect``: the best refitted candidate beats "none" (the model with its nominal parameters
   refitted) and the runner-up (the best candidate of another kind or at a location that is not
@@ -56,6 +57,9 @@ from structures.model import FEModel
 N_RIGID = 6
 #: A fitted parameter within this share of its range from a (non-zero) bound sits on it.
 BOUND_SHARE = 0.01
+#: A fitted effect no larger than this many standard deviations of the nominal scatter of what it
+#: changes is the scatter, not a missing effect (:func:`within_scatter`).
+SCATTER_SIGMAS = 3.0
 
 
 @dataclass(frozen=True)
@@ -147,6 +151,39 @@ class DiagnoseSettings:
 
 
 # ----------------------------------------------------------------------------------- verdict
+def within_scatter(model: FEModel, candidate, values, scatter: float) -> bool:
+    """True when a fitted effect is a change the nominal scatter could make by itself.
+
+    The residual scales treat the nominal scatter (``DiagnoseSettings.model_scatter``: every
+    property and CONM2 by a relative s) as independent noise, but the scatter of one heavy CONM2
+    or one member's section is a single structured change that the candidate at that spot fits
+    exactly. Such a fit is not a missing effect when it stays within ``SCATTER_SIGMAS`` x s of
+    what it changes:
+
+    - ``lumped_mass``: the added mass against the CONM2 mass already at its grid;
+    - ``member_taper``: the largest change of a section field, (1 + |scale|)^4 (1 + |taper| / 2)^4
+      - 1 (I ~ s^4 at the member's ends), against s.
+    Other kinds change nothing the scatter changes (False).
+
+    Parameters
+    ----------
+    model : FEModel, the current model (the one the candidate is applied to).
+    candidate : Candidate
+    values : (npar,) fitted parameters.
+    scatter : float, s.
+    """
+    limit = SCATTER_SIGMAS * scatter
+    x = dict(zip(candidate.parameters, np.abs(np.asarray(values, float))))
+    if candidate.kind == "lumped_mass":
+        cm = model.masses
+        local = float(cm.mass[cm.grid == candidate.location.grids[0]].sum())
+        return bool(x["mass"] * candidate.get("total_mass") <= limit * local)
+    if candidate.kind == "member_taper":
+        change = (1.0 + x["scale"]) ** 4 * (1.0 + x.get("taper", 0.0) / 2.0) ** 4 - 1.0
+        return bool(change <= limit)
+    return False
+
+
 def _overlaps(a, b) -> bool:
     return bool(set(a.grids) & set(b.grids) or set(a.elements) & set(b.elements)
                 or set(a.properties) & set(b.properties))
@@ -361,6 +398,13 @@ def diagnose(configurations, settings: DiagnoseSettings = DiagnoseSettings(), *,
             fits = [refit(problem, theta, effects, row, n_data=n_data, jacobian_theta=cal.jacobian)
                     for row in pick_for_refit(rows, settings.refit)]
             fits = [f for f in fits if f is not None]
+            small = [within_scatter(model0, f.candidate, f.values, settings.model_scatter)
+                     for f in fits]
+            if any(small):
+                labels = ", ".join(f.candidate.label for f, s in zip(fits, small) if s)
+                notes.append(f"round {k + 1}: {labels} left out: fitted within "
+                             f"{SCATTER_SIGMAS:g} x the nominal scatter of what they change.")
+                fits = [f for f, s in zip(fits, small) if not s]
             model_k = model0
 
             def near(a, b):

@@ -5,13 +5,16 @@ from __future__ import annotations
 import json
 from dataclasses import replace
 from math import log
+from types import SimpleNamespace
 
+import numpy as np
 import pytest
 
 from pipeline.case import read_case
+from pipeline.diagnose.effects import Candidate, Location
 from pipeline.diagnose import DiagnoseSettings, diagnose, preflight
 from pipeline.diagnose.inputs import configurations_from_case, settings_from_case
-from pipeline.diagnose.workflow import decide
+from pipeline.diagnose.workflow import decide, within_scatter
 from structures.common.errors import InputError
 from structures.common.files import read_dataset, write_dataset
 from tests.pipeline.diagnose.truth import make_case
@@ -177,3 +180,22 @@ def test_preflight_checks_the_data_without_screening(tmp_path):
         preflight(confs, DiagnoseSettings(nmodes=10))
     with pytest.raises(InputError, match="repeat"):
         preflight(confs * 2, DiagnoseSettings())
+
+
+def test_an_effect_within_the_nominal_scatter_is_not_named():
+    """3 x s = 9 % of what the effect changes (s = 0.03): a mass at a grid carrying a 40 kg CONM2
+    (total 500 kg) is scatter up to 3.6 kg; a member's scale up to 1.09^(1/4) - 1 = 2.18 %."""
+    model = SimpleNamespace(masses=SimpleNamespace(grid=np.array([7, 7, 9]),
+                                                   mass=np.array([30.0, 10.0, 5.0])))
+
+    def cand(kind, grid, names):
+        return Candidate(kind, Location(grids=(grid,)), "c", names, (-1.0,) * len(names),
+                         (1.0,) * len(names), (0.1,) * len(names), (("total_mass", 500.0),))
+
+    assert within_scatter(model, cand("lumped_mass", 7, ("mass",)), [3.5 / 500], 0.03)
+    assert not within_scatter(model, cand("lumped_mass", 7, ("mass",)), [3.7 / 500], 0.03)
+    assert not within_scatter(model, cand("lumped_mass", 8, ("mass",)), [1e-4], 0.03)
+    taper = cand("member_taper", 7, ("scale", "taper"))
+    assert within_scatter(model, taper, [-0.0215, 0.0], 0.03)
+    assert not within_scatter(model, taper, [0.0, 0.05], 0.03)       # 1.025^4 - 1 = 10.4 %
+    assert not within_scatter(model, cand("boundary_stiffness", 7, ("k_z",)), [1e-6], 0.03)
