@@ -87,9 +87,11 @@ def separating_measurement(problem, fit_a, fit_b) -> str:
         if not ref.has_shapes:
             continue
         modes_a, modes_b = ea.modes, eb.modes
-        trans = np.flatnonzero(modes_a["component"].values <= 3)
-        sa = modes_a["shape"].values[ea.paired]
-        sb = modes_b["shape"].values[eb.paired]
+        # the DOFs of both models: an effect's added grids come after the model's own
+        n_dof = min(modes_a.sizes["dof"], modes_b.sizes["dof"])
+        trans = np.flatnonzero(modes_a["component"].values[:n_dof] <= 3)
+        sa = modes_a["shape"].values[ea.paired, :n_dof]
+        sb = modes_b["shape"].values[eb.paired, :n_dof]
         scale_a = np.sqrt(np.mean(sa[:, ref.sensor_index] ** 2, axis=1, keepdims=True))
         scale_b = np.sqrt(np.mean(sb[:, ref.sensor_index] ** 2, axis=1, keepdims=True))
         sa, sb = sa / scale_a, sb / scale_b

@@ -199,3 +199,31 @@ def test_an_effect_within_the_nominal_scatter_is_not_named():
     assert within_scatter(model, taper, [-0.0215, 0.0], 0.03)
     assert not within_scatter(model, taper, [0.0, 0.05], 0.03)       # 1.025^4 - 1 = 10.4 %
     assert not within_scatter(model, cand("boundary_stiffness", 7, ("k_z",)), [1e-6], 0.03)
+
+
+def test_separating_measurement_across_an_added_grid():
+    """Model b gained a grid (a whole joint hung on a new grid): its modes have 6 more DOFs,
+    appended; the comparison runs on the DOFs of both and names the most different one."""
+    import xarray as xr
+
+    from pipeline.diagnose.gap import separating_measurement
+
+    def modes(shape):
+        n = shape.shape[1]
+        return xr.Dataset({"shape": (("mode", "dof"), shape)},
+                          coords={"grid": ("dof", np.repeat(np.arange(1, n // 6 + 1), 6)),
+                                  "component": ("dof", np.tile(np.arange(1, 7), n // 6))})
+
+    a = np.ones((1, 12))
+    b = np.concatenate([np.ones((1, 12)), np.full((1, 6), 50.0)], axis=1)
+    b[0, 7] = 3.0                                              # grid 2 component 2 differs
+    ref = SimpleNamespace(test_mode=np.array([7]), name="c", has_shapes=True,
+                          sensor_index=np.arange(12), shape_sigma=np.array([0.05]))
+    problem = SimpleNamespace(refs=(ref,))
+
+    def fit(shape, label):
+        ev = SimpleNamespace(frequency=np.zeros(1), modes=modes(shape), paired=np.array([0]))
+        return SimpleNamespace(evaluations=[ev], candidate=SimpleNamespace(kind="k", label=label))
+
+    text = separating_measurement(problem, fit(a, "A"), fit(b, "B"))
+    assert "grid 2 component 2" in text
