@@ -15,13 +15,15 @@ scale of the model (so that bounds do not depend on units):
     of translational stiffness k_ref,t / compliance and rotational stiffness k_ref,r / compliance
     on the rigid element's dependent components. k_ref is the median over the CBAR/CBEAM elements
     touching the element's grids (all beams of the model when none touch them) of
-    k_ref,t = 12 E I / L^3 (the transverse stiffness term of the beam element) and
-    k_ref,r = E I / L (its bending stiffness per radian over its length), I = (I1 + I2) / 2, plus
-    k_ref,t d^2, d the largest distance of a hung dependent grid from the independent one (a
-    rotation theta of the joint moves that grid by d theta: the same compliance for both): at
-    compliance 1 the joint is about as flexible as one adjacent element. Bounds [0, 1e5]: a
-    joint whose hung mass has its local mode a few times the first elastic frequency is
-    10^2 - 10^4.5 times softer than an adjacent element (k_ref is the beam's, not the joint's);
+    k_ref,t = 12 E I / L^3 (the transverse stiffness term of the beam element),
+    I = (I1 + I2) / 2; k_ref,r = k_ref,t I_h / m_h for the CONM2s on the hung grids (m_h their
+    mass, I_h their largest moment of inertia about the independent grid: one compliance puts the
+    hung part's local translation and rotation modes at one frequency); without hung mass,
+    k_ref,r = E I / L (the beam's bending stiffness per radian over its length) + k_ref,t d^2, d
+    the largest distance of a hung grid from the independent one. At compliance 1 the joint is
+    about as flexible as one adjacent element. Bounds [0, 1e5]: a joint whose hung mass has its
+    local mode a few times the first elastic frequency is 10^0.5 - 10^4.5 times softer than an
+    adjacent element (k_ref is the beam's, not the joint's);
     compliance 0 keeps the rigid element. An RBE2 with several dependent grids is instead kept
     rigid and moved onto a new grid (id: the largest + 1) at its independent grid, which hangs on
     one CBUSH to the independent grid: the hung part moves as one body (a control surface or a
@@ -301,21 +303,42 @@ def _joint_candidates(model: FEModel) -> list:
         if not near.any():
             near[:] = True
         kt, kr = float(np.median(k_t[near])), float(np.median(k_r[near]))
-        xyz = model.grids.xyz[model.grids.index(mine)]
-        d2 = np.sum((xyz[1:] - xyz[0]) ** 2, axis=1)                      # (n_dep,)
+        dep_ids = [g for g, _ in deps]
         label = f"{rigid.card} {rigid.eid} ({indep}-{'/'.join(str(g) for g, _ in deps)})"
         out.append(_candidate("joint_flexibility",
                               Location(grids=mine, elements=(rigid.eid,)), label,
                               ("compliance",), (("k_translation", kt),
-                                                ("k_rotation", kr + kt * float(d2.max())))))
+                                                ("k_rotation", _k_rotation(model, indep, dep_ids,
+                                                                           kt, kr)))))
         if rigid.card == "RBE2" and len(deps) > 1:
             out += [_candidate("joint_flexibility",
                                Location(grids=(indep, g), elements=(rigid.eid,)),
                                f"RBE2 {rigid.eid} ({indep}-{g} only)", ("compliance",),
-                               (("k_translation", kt), ("k_rotation", kr + kt * float(dd)),
+                               (("k_translation", kt),
+                                ("k_rotation", _k_rotation(model, indep, [g], kt, kr)),
                                 ("dependent", g)))
-                    for (g, _), dd in zip(deps, d2)]
+                    for g in dep_ids]
     return out
+
+
+def _k_rotation(model: FEModel, indep: int, hung, kt: float, kr: float) -> float:
+    """k_ref,r of a joint: k_ref,t I / m for the CONM2s at the hung grids (m their mass, I
+    their largest moment of inertia about the independent grid), so that one compliance puts the
+    hung part's local translation and rotation modes at one frequency; without hung mass,
+    E I / L + k_ref,t d^2 (d the largest distance of a hung grid)."""
+    xyz0 = model.grids.xyz[model.grids.index([indep])[0]]
+    cm = model.masses
+    sel = np.isin(cm.grid, hung)
+    mass = float(cm.mass[sel].sum())
+    if mass > 0:
+        r = model.grids.xyz[model.grids.index(cm.grid[sel])] + cm.offset[sel] - xyz0   # (k, 3)
+        parallel = np.einsum("k,kij->ij", cm.mass[sel],
+                             np.einsum("ki,ki->k", r, r)[:, None, None] * np.eye(3)
+                             - r[:, :, None] * r[:, None, :])
+        inertia = float(np.linalg.eigvalsh(cm.inertia[sel].sum(axis=0) + parallel)[-1])
+        return kt * inertia / mass
+    d2 = np.sum((model.grids.xyz[model.grids.index(hung)] - xyz0) ** 2, axis=1)
+    return kr + kt * float(d2.max())
 
 
 def neighbours(model: FEModel, location: Location) -> Location:

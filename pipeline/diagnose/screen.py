@@ -20,7 +20,7 @@ h_k = the candidate's ``reference`` size, r the training residual of every confi
   and at the eighth decades either side of the best (:data:`LADDER_REFINE`); the best size x*
   and its exact chi^2 are the candidate's screening result, the secant (r(x*) - r0) / x* its
   signature. The one-sided variants of a joint (one dependent grid on its spring) are screened
-  only for the ``ONE_SIDED_TOP`` best whole joints (cost: 15 reanalyses per joint and
+  only for the ``ONE_SIDED_TOP`` best whole joints (cost: 23 reanalyses per joint and
   configuration).
 
 **Linear fit**: min |r0 + S x|^2 within the candidate's bounds (``scipy.optimize.lsq_linear``);
@@ -50,9 +50,9 @@ LADDER_KINDS = ("joint_flexibility",)
 #: many best whole-joint candidates only (a one-sided joint is a variant of its whole joint).
 ONE_SIDED_TOP = 5
 #: Sizes of a ladder-screened parameter, as fractions of its upper bound (quarter decades over
-#: the top three decades: the chi^2 of a joint has narrow valleys where its local modes meet the
+#: the top five decades: the chi^2 of a joint has narrow valleys where its local modes meet the
 #: measured ones, a factor ~2 wide); the best rung's eighth-decade neighbours are tried next.
-LADDER = tuple(10.0 ** (-0.25 * np.arange(13)[::-1]))
+LADDER = tuple(10.0 ** (-0.25 * np.arange(21)[::-1]))
 #: Refinement of the best rung (factors).
 LADDER_REFINE = (10.0 ** -0.125, 10.0 ** 0.125)
 #: Eigenvalue gaps below this fraction of the largest computed eigenvalue are treated as

@@ -240,7 +240,7 @@ def test_one_dependent_grid_on_its_spring(tmp_path):
     """A clamped grid 1 carries grids 2 and 3 (coincident with 1, so its CBUSH has no length to
     couple translation and rotation) on an RBE2 (masses m2, m3 with inertia i3; a bar 1-4 gives
     k_ref). The one-dependent candidate of grid 3 leaves 2 rigid and hangs 3 on a CBUSH of
-    k_t / c, k_r / c: by hand, the only modes are sqrt(k_t / (c m3)) (x3) and
+    k_t / c, k_r / c (k_r = k_t i3 / m3): by hand, the only modes are sqrt(k_t / (c m3)) (x3) and
     sqrt(k_r / (c i3)) (x3); the written deck reads back to the same K and M."""
     m2, m3, i3, c = 5.0, 2.0, 0.01, 300.0
     deck = _deck(tmp_path, "hinge.bdf", [
@@ -257,7 +257,7 @@ def test_one_dependent_grid_on_its_spring(tmp_path):
     cand = _pick(joints, "joint_flexibility", "(1-3 only)")
     kt, kr = cand.get("k_translation"), cand.get("k_rotation")
     ei = 7.0e10 * 0.5 * (2e-7 + 4e-7)
-    assert (kt, kr) == pytest.approx((12 * ei, ei), rel=1e-12)     # L = 1
+    assert (kt, kr) == pytest.approx((12 * ei, 12 * ei * i3 / m3), rel=1e-12)   # L = 1
     changed = apply_effect(model, cand, [c])
     assert [r.dependent for r in changed.rigid] == [((2, "123456"),)]
     f = np.sort(compute_modes(changed, 6)["frequency"].values)
@@ -275,7 +275,8 @@ def test_whole_rbe2_hangs_on_one_spring(tmp_path):
     on an RBE2 at the clamped grid 1 (a bar 1-4 gives k_ref). The whole-joint candidate keeps
     the RBE2 rigid on a new grid hung by one CBUSH at grid 1: by hand, translations
     sqrt(k_t / (c M)) (x3), roll sqrt(k_r / (c i)), pitch and yaw sqrt(k_r / (c (m2 a^2 + m3 b^2
-    + i))), with k_r = E I / L + k_t max(a, b)^2 (documented scale); the deck reads back."""
+    + i))), with k_r = k_t (m2 a^2 + m3 b^2 + i) / (m2 + m3) (documented scale); the deck
+    reads back."""
     m2, m3, a, i, c = 5.0, 2.0, 0.3, 0.01, 300.0
     b = a * m2 / m3
     deck = _deck(tmp_path, "store.bdf", [
@@ -289,12 +290,12 @@ def test_whole_rbe2_hangs_on_one_spring(tmp_path):
     cand = _pick(candidates(model, ["joint_flexibility"]), "joint_flexibility", "(1-2/3)")
     kt, kr = cand.get("k_translation"), cand.get("k_rotation")
     ei = 7.0e10 * 0.5 * (2e-7 + 4e-7)
-    assert (kt, kr) == pytest.approx((12 * ei, ei + 12 * ei * b ** 2), rel=1e-12)
+    pitch = m2 * a ** 2 + m3 * b ** 2 + i
+    assert (kt, kr) == pytest.approx((12 * ei, 12 * ei * pitch / (m2 + m3)), rel=1e-12)
     changed = apply_effect(model, cand, [c])
     assert changed.grids.ids.tolist() == [1, 2, 3, 4, 5]
     assert changed.rigid[0].independent == ((5, "123456"),)
     f = np.sort(compute_modes(changed, 6)["frequency"].values)
-    pitch = m2 * a ** 2 + m3 * b ** 2 + i
     expected = np.sort(np.sqrt(np.array([kt / m2 / (1 + m3 / m2)] * 3 + [kr / i]
                                         + [kr / pitch] * 2) / c) / (2 * np.pi))
     np.testing.assert_allclose(f, expected, rtol=1e-8)
