@@ -6,7 +6,8 @@ grid GAFs, modes and flutter first) in the run folder of ``pipeline run`` (``--o
 ``*.png`` (pipeline.diagnose.outputs). Prints the verdict, each named effect with its location
 and parameters, the best five candidates and the gap before -> after; ``--json FILE`` also writes
 the verdict record there. The case and its ``[diagnose]`` table, every deck and GVT file and the
-output paths are checked before anything is computed.
+output paths are checked, and the diagnosis's data checks made
+(pipeline.diagnose.preflight), before anything is computed.
 """
 from __future__ import annotations
 
@@ -27,7 +28,8 @@ def add_parser(sub) -> None:
 
 def run(args) -> int:
     from pipeline.cmd_run import case_and_run_folder
-    from pipeline.diagnose.inputs import case_diagnose_settings, configurations_from_case
+    from pipeline.diagnose import preflight
+    from pipeline.diagnose.inputs import configurations_from_case, settings_from_case
     from pipeline.diagnose.outputs import FOLDER, verdict_summary
     from pipeline.run import run_case
     from structures.common.files import check_output, write_json
@@ -37,8 +39,10 @@ def run(args) -> int:
     if args.json:
         check_output(args.json, folder=False, option="--json")
     check_output(out, folder=True)
-    case_diagnose_settings(case)
-    configurations_from_case(case)      # every deck and GVT file read before any computation
+    # every deck and GVT file read, and every data check of the diagnosis (pairing, sensor DOFs,
+    # noise estimate, measured mass) made, before any stage computes
+    settings = settings_from_case(case)
+    preflight(configurations_from_case(case), settings)
     run_case(case, out, diagnose_only=True)
     record = json.loads((out / FOLDER / "diagnose.json").read_text())
     print(verdict_summary(record, unit_labels(case.units).velocity))

@@ -265,3 +265,16 @@ def test_ctrl_c_names_the_stage_and_leaves_no_folder(folder, capsys, monkeypatch
     code, _, err = cli(["diagnose", case_file(folder), "--out", folder / "run"], capsys)
     assert code == 130 and "interrupted in diagnose" in err
     assert not (folder / "run").exists()
+
+
+def test_data_the_diagnosis_cannot_use_fails_before_any_stage(folder, capsys):
+    """A GVT with fewer sensor DOFs than test modes (no DOF left outside the analysis modes' span
+    for the shape-noise estimate) is rejected by pipeline.diagnose.preflight before stage 0
+    computes anything: exit 2, no run folder."""
+    gvt = load_gvt(folder / "gvt.unv")
+    few = gvt.isel(dof=slice(0, 5))
+    write_uff(make_gvt_dataset(few["frequency"].values, few["shape"].values, few["grid"].values,
+                               few["component"].values, mode=few["mode"].values),
+              folder / "gvt.unv")
+    failed(["diagnose", case_file(folder), "--out", folder / "run"], capsys, "5", "Fix")
+    assert not (folder / "run").exists()
