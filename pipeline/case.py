@@ -132,7 +132,7 @@ TUNING_CONFIGURATION_KEYS = {"test_modes": "int list", "mass_targets": "table",
                              "mass_references": "table"}
 
 
-def _checked(table: dict, schema: dict, where: str, required=()) -> dict:
+def checked(table: dict, schema: dict, where: str, required=()) -> dict:
     """``table`` after checking its keys against ``schema`` (key -> kind) and the values' types."""
     unknown = sorted(set(table) - set(schema))
     if unknown:
@@ -151,7 +151,7 @@ def _checked(table: dict, schema: dict, where: str, required=()) -> dict:
     return table
 
 
-def _built(cls, where: str, **values):
+def built(cls, where: str, **values):
     """``cls(**values)``, with the file and table put in front of a range error's message."""
     try:
         return cls(**values)
@@ -424,29 +424,29 @@ def _tuning(table: dict, path: Path, case_name: str, configs: tuple) -> TuningSe
     from structures.design import DesignVariable
 
     where = f"file {path}, [tuning]"
-    _checked(table, TUNING_KEYS, where)
+    checked(table, TUNING_KEYS, where)
     base = path.parent
     variables = []
     for i, v in enumerate(table.get("variables", [])):
         at = f"file {path}, [[tuning.variables]] #{i + 1}"
-        _checked(v, VARIABLE_KEYS, at, required=("name", "fields"))
+        checked(v, VARIABLE_KEYS, at, required=("name", "fields"))
         for f in v["fields"]:
             if not (isinstance(f, list) and len(f) == 3 and isinstance(f[0], str)
                     and _KINDS["int"][0](f[1]) and isinstance(f[2], str)):
                 raise InputError(f"{at}: fields entry {f!r} is not [card, id, field]. Fix: write "
                                  'e.g. fields = [["PBAR", 11, "I1"]].')
-        variables.append(_built(DesignVariable, at, name=v["name"],
+        variables.append(built(DesignVariable, at, name=v["name"],
                                 fields=tuple(tuple(f) for f in v["fields"]), lower=v.get("lower"),
                                 upper=v.get("upper"), scale=v.get("scale")))
     objective, constraints = [], []
     names = {c.name for c in configs}
     for i, term in enumerate(table.get("objective", [])):
         at = f"file {path}, [[tuning.objective]] #{i + 1}"
-        _checked(term, OBJECTIVE_KEYS, at, ("index",))
+        checked(term, OBJECTIVE_KEYS, at, ("index",))
         objective.append((_index_pattern(term["index"], names, at), float(term.get("weight", 1.0))))
     for i, term in enumerate(table.get("constraints", [])):
         at = f"file {path}, [[tuning.constraints]] #{i + 1}"
-        _checked(term, CONSTRAINT_KEYS, at, ("index", "limit"))
+        checked(term, CONSTRAINT_KEYS, at, ("index", "limit"))
         constraints.append((_index_pattern(term["index"], names, at), float(term["limit"])))
     per = []
     for name, sub in table.get("configurations", {}).items():
@@ -456,13 +456,13 @@ def _tuning(table: dict, path: Path, case_name: str, configs: tuple) -> TuningSe
         if not isinstance(sub, dict):
             raise InputError(f"{at}: {sub!r} is not a table. Fix: write "
                              f"[tuning.configurations.{name}] with test_modes = [...].")
-        _checked(sub, TUNING_CONFIGURATION_KEYS, at)
+        checked(sub, TUNING_CONFIGURATION_KEYS, at)
         for key in ("mass_targets", "mass_references"):
             if key in sub:
                 check_measured_mass(sub[key], f"{at}, {key}")
         per.append((name, MappingProxyType(dict(sub))))
     restart = table.get("restart")
-    return _built(
+    return built(
         TuningSettings, where, variables=tuple(variables), objective=tuple(objective),
         constraints=tuple(constraints),
         method=table.get("method", "slsqp"), maxiter=table.get("maxiter", 50),
@@ -497,50 +497,50 @@ def read_case(path) -> Case:
         data = tomllib.loads(path.read_text(encoding="utf-8"))
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
         raise InputError(f"file {path}: not valid TOML ({exc}). Fix: correct the line named.") from None
-    _checked(data, CASE_KEYS, f"file {path}")
+    checked(data, CASE_KEYS, f"file {path}")
     base = path.parent
     configs = []
     for i, table in enumerate(data.get("configurations", [])):
         where = f"file {path}, [[configurations]] #{i + 1}"
-        table = dict(_checked(table, CONFIGURATION_KEYS, where, required=("name", "deck")))
+        table = dict(checked(table, CONFIGURATION_KEYS, where, required=("name", "deck")))
         table["deck"] = _existing(base, table["deck"], where, "deck")
         if "gvt" in table:
             table["gvt"] = _existing(base, table["gvt"], where, "gvt")
         if isinstance(table.get("measured_mass"), str):
             table["measured_mass"] = read_measured_mass(
                 _existing(base, table["measured_mass"], where, "measured_mass"))
-        configs.append(_built(Configuration, where, **table))
+        configs.append(built(Configuration, where, **table))
     flutter = None
     units = data.get("units", "si")
     if units not in UNIT_SYSTEMS:  # Case names the valid systems
         units = None
     if "flutter" in data:
         where = f"file {path}, [flutter]"
-        table = dict(_checked(data["flutter"], FLUTTER_KEYS, where))
+        table = dict(checked(data["flutter"], FLUTTER_KEYS, where))
         if "envelope" in table:
             at = f"{where}, envelope"
-            _checked(table["envelope"], ENVELOPE_KEYS, at, required=("mach", "velocity"))
-            table["envelope"] = _built(Envelope, at, mach=table["envelope"]["mach"],
+            checked(table["envelope"], ENVELOPE_KEYS, at, required=("mach", "velocity"))
+            table["envelope"] = built(Envelope, at, mach=table["envelope"]["mach"],
                                        velocity=table["envelope"]["velocity"],
                                        units=unit_labels(units).velocity)
         if "matched" in table:
             at = f"file {path}, [flutter.matched]"
-            _checked(table["matched"], MATCHED_KEYS, at,
+            checked(table["matched"], MATCHED_KEYS, at,
                      required=("mach", "altitude", "altitude_units"))
-            table["matched"] = _built(MatchedSettings, at, **table["matched"])
-        flutter = _built(FlutterSettings, where, **table)
+            table["matched"] = built(MatchedSettings, at, **table["matched"])
+        flutter = built(FlutterSettings, where, **table)
     sections = {}
     for key, cls, schema in (("selection", SelectionSettings, SELECTION_KEYS),
                              ("loop", LoopSettings, LOOP_KEYS)):
         if key in data:
             where = f"file {path}, [{key}]"
-            sections[key] = _built(cls, where, **_checked(data[key], schema, where))
+            sections[key] = built(cls, where, **checked(data[key], schema, where))
     name = data.get("name", path.stem)
     tuning = None if "tuning" not in data else _tuning(data["tuning"], path, name, tuple(configs))
     if "diagnose" in data:   # the table's schema and checks: pipeline.diagnose.inputs
         from pipeline.diagnose.inputs import diagnose_case_settings
         sections["diagnose"] = diagnose_case_settings(data["diagnose"], path, tuple(configs),
                                                       flutter is not None)
-    return _built(Case, f"file {path}", name=name, configurations=tuple(configs),
+    return built(Case, f"file {path}", name=name, configurations=tuple(configs),
                   units=data.get("units", "si"), flutter=flutter, tuning=tuning,
                   path=path.resolve(), **sections)

@@ -61,8 +61,20 @@ def _lumped(model: FEModel, mass: str) -> bool:
     return mass == "lumped"
 
 
-def _line_offsets(model, es, gi, filename):
-    """Orientation vectors and end offsets of CBAR/CBEAM in basic."""
+def line_offsets(model, es, gi, filename):
+    """Orientation vectors and end offsets of CBAR/CBEAM in basic.
+
+    Parameters
+    ----------
+    model : FEModel
+    es : ElementSet of CBAR or CBEAM (ne elements).
+    gi : (ne, 2) grid rows of the element ends.
+    filename : str, for messages.
+
+    Returns
+    -------
+    v, wa, wb : (ne, 3) orientation vector and end-A / end-B offsets, basic axes.
+    """
     grids = model.grids
     axes = grids.cd_axes[gi]
     offt = es.data["offt"]
@@ -99,7 +111,7 @@ def _line_offsets(model, es, gi, filename):
 
 def _beams(model, es, lumped):
     gi = model.grids.index(es.nodes, card=es.card, filename=model.filename)
-    v, wa, wb = _line_offsets(model, es, gi, model.filename)
+    v, wa, wb = line_offsets(model, es, gi, model.filename)
     cols = {k: np.zeros(len(es)) for k in ("E", "G", "A", "I1", "I2", "I12", "J", "NSM", "RHO")}
     k1, k2 = np.full(len(es), np.nan), np.full(len(es), np.nan)
     for e, (eid, pid) in enumerate(zip(es.eids, es.pids)):

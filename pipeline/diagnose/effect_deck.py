@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
+from structures.assembly import assemble_g
 from structures.bulk_text import card as card_text
 from structures.common.errors import InputError, card_message
 from structures.common.files import write_text
@@ -242,6 +243,26 @@ def changed_parts(old: FEModel, new: FEModel) -> tuple[FEModel, FEModel]:
     old_rows, new_rows = _mass_diff(old.masses, new.masses)
     return (replace(old, elements=parts[0], masses=_mass_rows(old.masses, old_rows)),
             replace(new, elements=parts[1], masses=_mass_rows(new.masses, new_rows)))
+
+
+def change_matrices(old: FEModel, new: FEModel, mass: str = "deck"):
+    """Change of the g-set stiffness and mass (basic axes) from ``old`` to ``new``, assembled
+    from the elements and CONM2s that differ only (:func:`changed_parts`).
+
+    Parameters
+    ----------
+    old, new : FEModel with the same grids and rigid elements.
+    mass : {'deck', 'consistent', 'lumped'}, as in :func:`structures.assembly.assemble_g`.
+
+    Returns
+    -------
+    dK, dM : scipy.sparse.csr_matrix (6 n_grids, 6 n_grids),
+        ``assemble_g(new) - assemble_g(old)``.
+    """
+    old_part, new_part = changed_parts(old, new)
+    k1, m1 = assemble_g(new_part, mass)
+    k0, m0 = assemble_g(old_part, mass)
+    return (k1 - k0).tocsr(), (m1 - m0).tocsr()
 
 
 def small_field_text(removed: dict, cards: list, header: str = "") -> str:

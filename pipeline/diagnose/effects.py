@@ -67,10 +67,10 @@ from pathlib import Path
 
 import numpy as np
 
-from pipeline.diagnose.effect_deck import (changed_parts, model_changes, small_field_text,
+from pipeline.diagnose.effect_deck import (change_matrices, model_changes, small_field_text,
                                            write_patched_deck)
-from pipeline.diagnose.members import Member, find_members, grow
-from structures.assembly import _line_offsets, assemble_g
+from pipeline.diagnose.members import Member, connectivity, find_members, grow
+from structures.assembly import line_offsets
 from structures.common.errors import InputError, card_message
 from structures.elements.beam import beam_axes
 from structures.massprops import mass_properties
@@ -78,7 +78,6 @@ from structures.model import ElementSet, FEModel, Property
 
 KINDS = ("lumped_mass", "joint_flexibility", "member_taper", "member_curvature",
          "boundary_stiffness")
-VERDICT_KINDS = KINDS + ("none",)
 DIRECTIONS = ("x", "y", "z")
 
 #: (lower, upper, reference) of each parameter, by kind and parameter name.
@@ -171,11 +170,8 @@ def _candidate(kind, location, label, names, detail=()) -> Candidate:
 # ----------------------------------------------------------------------------------- model scans
 def _element_grids(model: FEModel) -> np.ndarray:
     """Grid ids referenced by elements, rigid elements and CONM2s."""
-    parts = [es.nodes.ravel() for es in model.elements.values()]
-    parts.append(np.asarray(model.masses.grid, np.int64))
-    parts.extend(np.array([g for g, _ in r.independent + r.dependent], np.int64)
-                 for r in model.rigid)
-    ids = np.unique(np.concatenate(parts)) if parts else np.zeros(0, np.int64)
+    parts = [nodes.ravel() for _, nodes, _ in connectivity(model)]
+    ids = np.unique(np.concatenate(parts + [np.asarray(model.masses.grid, np.int64)]))
     return ids[ids > 0]
 
 
@@ -522,7 +518,7 @@ def _curvature(model, candidate, x):
     sub = ElementSet(es.card, es.eids[rows], es.pids[rows], es.nodes[rows],
                      {k: np.asarray(v)[rows] for k, v in es.data.items()})
     gi = model.grids.index(sub.nodes, card=es.card, filename=model.filename)
-    v, wa, wb = _line_offsets(model, sub, gi, model.filename)
+    v, wa, wb = line_offsets(model, sub, gi, model.filename)
     xyz = model.grids.xyz
     axes, _ = beam_axes(xyz[gi[:, 0]] + wa, xyz[gi[:, 1]] + wb, v)
     lateral = x[0] * axes[:, 1] + x[1] * axes[:, 2]
@@ -583,8 +579,8 @@ def apply_effect(model: FEModel, candidate: Candidate, values) -> FEModel:
 def effect_matrices(model: FEModel, candidate: Candidate, values, *, mass: str = "deck"):
     """Change of the g-set stiffness and mass (basic axes) made by an effect.
 
-    Only the changed and added elements and CONM2s are assembled, so this is much cheaper than
-    assembling the changed model (for eigenvalue-sensitivity screening).
+    Only the changed and added elements and CONM2s are assembled
+    (:func:`pipeline.diagnose.effect_deck.change_matrices`).
 
     Parameters
     ----------
@@ -601,10 +597,7 @@ def effect_matrices(model: FEModel, candidate: Candidate, values, *, mass: str =
     if candidate.kind == "joint_flexibility":
         raise InputError(f"candidate {candidate.label!r}: a joint flexibility changes the rigid "
                          "elements, not only element matrices. Fix: assemble the changed model.")
-    old_part, new_part = changed_parts(model, apply_effect(model, candidate, values))
-    k1, m1 = assemble_g(new_part, mass)
-    k0, m0 = assemble_g(old_part, mass)
-    return (k1 - k0).tocsr(), (m1 - m0).tocsr()
+    return change_matrices(model, apply_effect(model, candidate, values), mass)
 
 
 def effect_cards(model: FEModel, candidate: Candidate, values) -> str:

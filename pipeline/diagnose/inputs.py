@@ -84,11 +84,11 @@ def diagnose_case_settings(table: dict, path, configurations, has_flutter: bool
         effect kinds, ``flutter = true`` without ``[flutter]``, a configuration without ``gvt``;
         the message names the file, the table, the key and the fix.
     """
-    from pipeline.case import _built, _checked
+    from pipeline.case import built, checked
     from pipeline.diagnose import DiagnoseSettings
 
     where = f"file {path}, [diagnose]"
-    _checked(table, DIAGNOSE_KEYS, where)
+    checked(table, DIAGNOSE_KEYS, where)
     if table.get("flutter") and not has_flutter:
         raise InputError(f"{where}: flutter = true needs the case's [flutter] table (the flight "
                          "points and the kernel). Fix: add [flutter], or flutter = false.")
@@ -99,7 +99,7 @@ def diagnose_case_settings(table: dict, path, configurations, has_flutter: bool
                          "\"gvt.unv\" to each, or remove the configurations without a test.")
     values = {k: float(v) if DIAGNOSE_KEYS[k] == "float" else tuple(v) if k == "kinds" else v
               for k, v in table.items() if k not in STAGE_KEYS}
-    return DiagnoseCaseSettings(workflow=_built(DiagnoseSettings, where, **values),
+    return DiagnoseCaseSettings(workflow=built(DiagnoseSettings, where, **values),
                                 before_tuning=table.get("before_tuning", False),
                                 flutter=table.get("flutter", has_flutter))
 

@@ -140,7 +140,7 @@ def find_members(model: FEModel) -> tuple[Member, ...]:
     return tuple(sorted(members, key=lambda m: (m.card, m.pid, min(m.eids))))
 
 
-def _connectivity(model: FEModel) -> list:
+def connectivity(model: FEModel) -> list:
     """(eids, nodes (ne, nn), 0-padded, pids) of every element family and the rigid elements."""
     conn = [(es.eids, es.nodes, es.pids) for es in model.elements.values()]
     if model.rigid:
@@ -168,7 +168,7 @@ def grow(model: FEModel, grids, elements, properties) -> tuple[set, set, set]:
     -------
     (grids, elements, properties) : sets of ids.
     """
-    conn = _connectivity(model)
+    conn = connectivity(model)
     elements = set(elements)
     seeds = set(grids)
     for eids, nodes, _ in conn:

@@ -5,8 +5,8 @@ h_k = the candidate's ``reference`` size, r the training residual of every confi
 (:mod:`pipeline.diagnose.evidence`). Two routes:
 
 - *perturbation* (every kind that keeps the model's grids and rigid elements): the change of the
-  g-set matrices dK, dM (:func:`structures.assembly.assemble_g` of the changed model minus the
-  current one), then first-order eigenvalues (Fox & Kapoor 1968)
+  g-set matrices dK, dM (:func:`pipeline.diagnose.effect_deck.change_matrices`), then first-order
+  eigenvalues (Fox & Kapoor 1968, :func:`structures.sensitivity.eigenvalue_derivatives`)
   d lambda_j = phi_j^T (dK - lambda_j dM) phi_j and mode shapes by modal expansion over the m
   computed modes, dphi_j = sum_{k != j} phi_k c_kj - (phi_j^T dM phi_j / 2) phi_j with
   c_kj = -phi_k^T (dK - lambda_j dM) phi_j / (lambda_k - lambda_j) (Fox & Kapoor 1968, eq. 19
@@ -32,17 +32,18 @@ started at the linear fit; ranked by BIC = chi^2 + p ln n (Schwarz 1978).
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 from scipy.optimize import least_squares, lsq_linear
 
 from pipeline.diagnose.calibrate import CALIBRATION_BOUND, THETA_SCALE, Problem
+from pipeline.diagnose.effect_deck import change_matrices
 from pipeline.diagnose.evidence import bic, chi_square, evaluate, evaluate_modes
 from structures.assembly import assemble_g
 from structures.common.errors import InputError, SolverError
 from structures.massprops import mass_properties
-from structures.model import ConcentratedMass, ElementSet, FEModel
+from structures.sensitivity import eigenvalue_derivatives
 
 #: Kinds screened on the ladder of sizes by reanalysis (they change the constraint equations).
 LADDER_KINDS = ("joint_flexibility",)
@@ -110,83 +111,18 @@ class Refitted:
     evaluations: list
 
 
-def _rows_differ(old: ElementSet, new: ElementSet, props_old, props_new) -> tuple:
-    """Masks of the elements of ``new`` that are new or differ from ``old``, and of ``old``'s
-    elements that ``new`` changes (same card)."""
-    changed_pids = [pid for pid, prop in props_new.items()
-                    if prop is not props_old.get(pid) and prop != props_old.get(pid)]
-    order = np.argsort(old.eids)
-    pos = np.searchsorted(old.eids[order], new.eids)
-    pos = np.minimum(pos, max(len(old) - 1, 0))
-    j = order[pos] if len(old) else np.zeros(len(new), int)
-    hit_new = ~(old.eids[j] == new.eids) if len(old) else np.ones(len(new), bool)
-    same = ~hit_new
-    hit_new |= np.isin(new.pids, changed_pids)
-    hit_new[same] |= (new.pids[same] != old.pids[j[same]]) | \
-        np.any(new.nodes[same] != old.nodes[j[same]], axis=1)
-    for key, values in new.data.items():
-        a, b = values[same], old.data[key][j[same]]
-        hit_new[same] |= np.any((a != b).reshape(a.shape[0], -1), axis=1)
-    hit_old = np.zeros(len(old), bool)
-    hit_old[j[same & hit_new]] = True
-    return hit_new, hit_old
-
-
-def _subset(model: FEModel, masks: dict, mass_mask) -> FEModel:
-    """``model`` with only the masked elements and CONM2s (for the matrices of a change)."""
-    elements = {card: _take(es, masks[card]) for card, es in model.elements.items()
-                if card in masks and masks[card].any()}
-    cm = model.masses
-    masses = ConcentratedMass(cm.eids[mass_mask], cm.grid[mass_mask], cm.mass[mass_mask],
-                              cm.offset[mass_mask], cm.inertia[mass_mask])
-    return replace(model, elements=elements, masses=masses)
-
-
-def _take(es: ElementSet, mask) -> ElementSet:
-    return ElementSet(es.card, es.eids[mask], es.pids[mask], es.nodes[mask],
-                      {k: v[mask] for k, v in es.data.items()})
-
-
-def change_matrices(model: FEModel, changed: FEModel):
-    """dK, dM (g-set, basic) of ``changed`` minus ``model``, assembled from the elements and
-    CONM2s that differ only (same grids and rigid elements)."""
-    new_masks, old_masks = {}, {}
-    for card, es in changed.elements.items():
-        old = model.elements.get(card)
-        if old is None:
-            new_masks[card] = np.ones(len(es), bool)
-            continue
-        new_masks[card], old_masks[card] = _rows_differ(old, es, model.properties,
-                                                        changed.properties)
-    cm_old, cm_new = model.masses, changed.masses
-    known = {int(e): i for i, e in enumerate(cm_old.eids)}
-    mass_new = np.ones(len(cm_new), bool)
-    mass_old = np.zeros(len(cm_old), bool)
-    for i, eid in enumerate(cm_new.eids.tolist()):
-        j = known.get(eid)
-        if j is not None and cm_new.grid[i] == cm_old.grid[j] and cm_new.mass[i] == cm_old.mass[j] \
-                and np.array_equal(cm_new.offset[i], cm_old.offset[j]) \
-                and np.array_equal(cm_new.inertia[i], cm_old.inertia[j]):
-            mass_new[i] = False
-        elif j is not None:
-            mass_old[j] = True
-    k1, m1 = assemble_g(_subset(changed, new_masks, mass_new))
-    k0, m0 = assemble_g(_subset(model, old_masks, mass_old))
-    return k1 - k0, m1 - m0
-
-
 def _perturbed(ref, model, ev, m0, changed):
     """Residual entries of the first-order perturbation of ``ev`` by changed - current."""
     dk, dm = change_matrices(model, changed)
     m1 = m0 + dm
     phi = ev.modes["shape"].values.T                                       # (n_g, m)
     lam = (2.0 * np.pi * ev.modes["frequency"].values) ** 2
-    g = phi.T @ (dk @ phi)
-    hm = phi.T @ (dm @ phi)
-    dlam = np.diag(g) - lam * np.diag(hm)                                   # Fox & Kapoor 1968
+    dlam = eigenvalue_derivatives(lam, phi, [dk], [dm])[0]                  # Fox & Kapoor 1968
     freq = np.sqrt(np.clip(lam + dlam, 0.0, None)) / (2.0 * np.pi)
     shapes = None
     if ref.has_shapes:
+        g = phi.T @ (dk @ phi)
+        hm = phi.T @ (dm @ phi)
         j = ev.paired
         gap = lam[:, None] - lam[None, j]                                   # lambda_k - lambda_j
         coupling = -(g[:, j] - hm[:, j] * lam[None, j])                     # -phi_k^T (dK - l_j dM) phi_j

@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 from pipeline.diagnose.evidence import build_reference, evaluate
-from pipeline.diagnose.screen import (Screened, _perturbed, change_matrices, linear_fit,
-                                      pick_for_refit)
+from pipeline.diagnose.effect_deck import change_matrices
+from pipeline.diagnose.screen import Screened, _perturbed, linear_fit, pick_for_refit
 from structures.assembly import assemble_g
 from structures.bdf import read_model
 from structures.gvt import make_gvt_dataset
