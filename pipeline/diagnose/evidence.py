@@ -300,7 +300,14 @@ def mass_residual(props: MassProperties, measured: Mapping, scales: Mapping) -> 
 
 
 def self_orthogonality(phi_m, shapes) -> float:
-    """Largest off-diagonal of the test modes' SEREP orthogonality (paper eq. 11, analysis mass)."""
+    """Largest off-diagonal of the test modes' SEREP orthogonality (paper eq. 11, analysis mass).
+
+    Parameters
+    ----------
+    phi_m : (n_MD, m) mass-normalised analysis modes at the sensors (Phi^T M Phi = I: any other
+        column scaling changes the metric the off-diagonals are measured in).
+    shapes : (n, n_MD) test shapes.
+    """
     q = serep_coordinates(phi_m, np.asarray(shapes, float).T)
     ortho, _ = orthogonality(q)
     off = np.abs(ortho - np.diag(np.diag(ortho)))
@@ -529,7 +536,8 @@ def build_reference(name: str, model: FEModel, gvt: xr.Dataset, measured_mass: M
         keep_mask[np.arange(own.size), own] = False
         facts["mac"] = np.diag(mac(shapes.T, phi_m[paired].T)).tolist()
         try:
-            facts["self_orthogonality"] = self_orthogonality(a0, shapes)
+            # the mass-normalised modes: q^T q is then the orthogonality in the analysis mass
+            facts["self_orthogonality"] = self_orthogonality(phi_m[keep].T, shapes)
         except InputError:
             facts["self_orthogonality"] = None
         ref = replace(ref, projector=projector, shape_scale=scale, shape_keep=keep_mask)

@@ -4,11 +4,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from pipeline.diagnose.evidence import (bic, chi_square, gof_limit, holdout_mask, mass_residual,
+from pipeline.diagnose.evidence import (bic, build_reference, chi_square, gof_limit, holdout_mask, mass_residual,
                                         mass_scales, pair_frequency_only, runs_test,
                                         scatter_scales, shape_noise, shape_residual, unit_rms)
 from structures.bdf import read_model
 from structures.common.errors import InputError
+from structures.gvt import make_gvt_dataset
 from structures.massprops import MassProperties
 from structures.modal import compute_modes
 
@@ -115,3 +116,27 @@ def test_scatter_scales_single_spring_mass(tmp_path):
                                   np.ones(1), 0.03)
     assert freq[0] == pytest.approx(0.03 / np.sqrt(2.0), rel=1e-10)
     assert mixing.shape == (1, 1)
+
+
+def test_self_orthogonality_of_mixed_modes_in_the_analysis_mass(tmp_path):
+    """Test shapes psi_1 = cos(a) phi_1 + sin(a) phi_2 and psi_2 = phi_2 of mass-normalised modes:
+    psi_1^T M psi_2 / sqrt(psi_1^T M psi_1 psi_2^T M psi_2) = sin(a) by hand, whatever the
+    modes' amplitudes at the sensors (masses 1, 2, 3 give modes of different RMS)."""
+    deck = tmp_path / "chain.bdf"
+    deck.write_text("GRID,1,,0.,0.,0.,,23456\nGRID,2,,1.,0.,0.,,23456\nGRID,3,,2.,0.,0.,,23456\n"
+                    "CELAS2,1,400.,1,1\nCELAS2,2,300.,1,1,2,1\nCELAS2,3,200.,2,1,3,1\n"
+                    "CONM2,4,1,,1.\nCONM2,5,2,,2.\nCONM2,6,3,,3.\nENDDATA\n")
+    model = read_model(deck)
+    modes = compute_modes(model, 3)
+    x = np.flatnonzero(modes["component"].values == 1)
+    phi = modes["shape"].values[:2][:, x]
+    rms = np.sqrt(np.mean(phi ** 2, axis=1))
+    assert abs(rms[0] / rms[1] - 1.0) > 0.1                  # unit-RMS columns would differ
+    a = 0.3
+    shapes = np.array([np.cos(a) * phi[0] + np.sin(a) * phi[1], phi[1]])
+    gvt = make_gvt_dataset(modes["frequency"].values[:2], shapes, modes["grid"].values[x],
+                           modes["component"].values[x], mode=[1, 2])
+    _, facts = build_reference("chain", model, gvt, None, modes, frequency_noise=0.01,
+                               shape_noise_value=0.02, model_scatter=0.03, holdout=3, nmodes=3)
+    assert facts["paired_fe_mode"] == [1, 2]
+    assert facts["self_orthogonality"] == pytest.approx(np.sin(a), rel=1e-8)   # 0.29552
