@@ -133,20 +133,25 @@ def test_taper_copies_a_shared_property(x56, x56_candidates):
     es = new.elements["CBAR"]
     pids = dict(zip(es.eids.tolist(), es.pids.tolist()))
     assert pids[5001] == pids[5101] == 101 and new.properties[101] == x56.properties[101]
+    # the six fuselage elements get PIDs 253..258 (the deck's largest PID is 252), in order
     fresh = [pids[e] for e in (1003, 1004, 1005, 1006, 1007, 1008)]
-    assert len(set(fresh)) == 6 and min(fresh) > max(x56.properties)
-    base = x56.properties[101].fields
-    xi = (np.arange(6) + 0.5) / 6
-    size = 1 + 0.5 * (xi - 0.5)
-    np.testing.assert_allclose([new.properties[p].fields["A"] for p in fresh],
-                               1.1 * base["A"] * size ** 2, rtol=1e-14)
-    np.testing.assert_allclose([new.properties[p].fields["I2"] for p in fresh],
-                               1.1 * base["I2"] * size ** 4, rtol=1e-14)
+    assert max(x56.properties) == 252 and fresh == [253, 254, 255, 256, 257, 258]
+    # by hand: PBAR 101 is A 6, I1 60, I2 40, I12 0, J 60; xi_mid = 1/12, 3/12, .., 11/12 gives
+    # s = 1 + 0.5 (xi - 1/2) = 19/24, 21/24, .., 29/24; A 1.1 x 6 s^2, I 1.1 x I s^4
+    s = np.array([19.0, 21.0, 23.0, 25.0, 27.0, 29.0]) / 24.0
+    hand = {"A": 6.6 * s ** 2, "I1": 66.0 * s ** 4, "I2": 44.0 * s ** 4, "J": 66.0 * s ** 4,
+            "I12": np.zeros(6)}
+    assert hand["A"][0] == pytest.approx(4.1364583333, rel=1e-10)       # 6.6 x 361 / 576
+    for key, values in hand.items():
+        np.testing.assert_allclose([new.properties[p].fields[key] for p in fresh], values,
+                                   rtol=1e-14, atol=0.0, err_msg=key)
+    assert all(new.properties[p].fields["MID"] == 1 and new.properties[p].card == "PBAR"
+               for p in fresh)
     again = apply_effect(new, cand, [0.1, 0.0])                # a second taper multiplies
     es2 = again.elements["CBAR"]
     assert es2.pids.tolist() == es.pids.tolist()              # the copies are now the only users
     np.testing.assert_allclose([again.properties[p].fields["A"] for p in fresh],
-                               1.21 * base["A"] * size ** 2, rtol=1e-14)
+                               1.21 * 6.0 * s ** 2, rtol=1e-14)
 
 
 def _cantilever(tmp_path, n, length, props):
