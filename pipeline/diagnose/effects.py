@@ -69,6 +69,8 @@ import numpy as np
 
 from pipeline.diagnose.effect_deck import (change_matrices, model_changes, small_field_text,
                                            write_patched_deck)
+from pipeline.diagnose.edits import append_elements, next_eid, next_pid
+from pipeline.diagnose.joints import flexible_joint, joint_sites
 from pipeline.diagnose.members import Member, connectivity, find_members, grow
 from structures.assembly import line_offsets
 from structures.common.errors import InputError, card_message
@@ -185,37 +187,6 @@ def _fixed_masks(model: FEModel) -> np.ndarray:
     return masks
 
 
-def _beam_stiffness(model: FEModel):
-    """Per CBAR/CBEAM element: (eids, nodes, 12 E I / L^3, E I / L) with I = (I1 + I2) / 2."""
-    out = []
-    for card in ("CBAR", "CBEAM"):
-        es = model.elements.get(card)
-        if es is None:
-            continue
-        gi = model.grids.index(es.nodes, card=card, filename=model.filename)
-        length = np.linalg.norm(model.grids.xyz[gi[:, 1]] - model.grids.xyz[gi[:, 0]], axis=1)
-        ei = np.zeros(len(es))
-        for pid in np.unique(es.pids):
-            sel = es.pids == pid
-            prop = model.property(pid, card=card, eid=int(es.eids[sel][0]))
-            e_mod = model.material(prop.get("MID"), card=prop.card, pid=pid).isotropic()[0]
-            ei[sel] = e_mod * 0.5 * (prop.get("I1") + prop.get("I2"))
-        out.append((es.eids, es.nodes, 12.0 * ei / length ** 3, ei / length))
-    if not out:
-        return None
-    return tuple(np.concatenate(parts) for parts in zip(*out))
-
-
-def _joint_grids(rigid) -> tuple | None:
-    """(independent grid, ((dependent grid, components), ...)) of a rigid joint, else None."""
-    if rigid.card not in ("RBE2", "RBAR") or len(rigid.independent) != 1:
-        return None
-    grid, comps = rigid.independent[0]
-    if sorted(str(comps)) != list("123456"):
-        return None
-    return int(grid), tuple((int(g), str(c)) for g, c in rigid.dependent)
-
-
 def _lowest_elastic_frequency(model: FEModel) -> float:
     from structures.modal import compute_modes
     ds = compute_modes(model, 8)
@@ -266,7 +237,9 @@ def candidates(model: FEModel, kinds=KINDS, *, frequency: float | None = None
                     out.append(_candidate(kind, Location(grids=(g,)), f"grid {g} {d}", (f"k_{d}",),
                                           (("direction", d), ("k_ref", k_ref))))
         elif kind == "joint_flexibility":
-            out += _joint_candidates(model)
+            out += [_candidate(kind, Location(grids=grids_j, elements=(eid,)), label,
+                               ("compliance",), detail)
+                    for grids_j, eid, label, detail in joint_sites(model)]
         else:
             for m in members:
                 names = PARAMETER_RANGES[kind] if kind == "member_curvature" or len(m.eids) > 1 \
@@ -278,63 +251,6 @@ def candidates(model: FEModel, kinds=KINDS, *, frequency: float | None = None
                                                      properties=(m.pid,)),
                                       label, tuple(names), (("member", m),)))
     return tuple(out)
-
-
-def _joint_candidates(model: FEModel) -> list:
-    beams = _beam_stiffness(model)
-    if beams is None:
-        return []
-    eids, nodes, k_t, k_r = beams
-    out = []
-    for rigid in model.rigid:
-        joint = _joint_grids(rigid)
-        if joint is None:
-            continue
-        indep, deps = joint
-        partial = [g for g, c in deps if sorted(c) != list("123456")]
-        if partial and np.any(model.grids.cd[model.grids.index(partial)] != 0):
-            continue
-        mine = [indep] + [g for g, _ in deps]
-        near = np.isin(nodes, mine).any(axis=1)
-        if not near.any():
-            near[:] = True
-        kt, kr = float(np.median(k_t[near])), float(np.median(k_r[near]))
-        dep_ids = [g for g, _ in deps]
-        label = f"{rigid.card} {rigid.eid} ({indep}-{'/'.join(str(g) for g, _ in deps)})"
-        out.append(_candidate("joint_flexibility",
-                              Location(grids=mine, elements=(rigid.eid,)), label,
-                              ("compliance",), (("k_translation", kt),
-                                                ("k_rotation", _k_rotation(model, indep, dep_ids,
-                                                                           kt, kr)))))
-        if rigid.card == "RBE2" and len(deps) > 1:
-            out += [_candidate("joint_flexibility",
-                               Location(grids=(indep, g), elements=(rigid.eid,)),
-                               f"RBE2 {rigid.eid} ({indep}-{g} only)", ("compliance",),
-                               (("k_translation", kt),
-                                ("k_rotation", _k_rotation(model, indep, [g], kt, kr)),
-                                ("dependent", g)))
-                    for g in dep_ids]
-    return out
-
-
-def _k_rotation(model: FEModel, indep: int, hung, kt: float, kr: float) -> float:
-    """k_ref,r of a joint: k_ref,t I / m for the CONM2s at the hung grids (m their mass, I
-    their largest moment of inertia about the independent grid), so that one compliance puts the
-    hung part's local translation and rotation modes at one frequency; without hung mass,
-    E I / L + k_ref,t d^2 (d the largest distance of a hung grid)."""
-    xyz0 = model.grids.xyz[model.grids.index([indep])[0]]
-    cm = model.masses
-    sel = np.isin(cm.grid, hung)
-    mass = float(cm.mass[sel].sum())
-    if mass > 0:
-        r = model.grids.xyz[model.grids.index(cm.grid[sel])] + cm.offset[sel] - xyz0   # (k, 3)
-        parallel = np.einsum("k,kij->ij", cm.mass[sel],
-                             np.einsum("ki,ki->k", r, r)[:, None, None] * np.eye(3)
-                             - r[:, :, None] * r[:, None, :])
-        inertia = float(np.linalg.eigvalsh(cm.inertia[sel].sum(axis=0) + parallel)[-1])
-        return kt * inertia / mass
-    d2 = np.sum((model.grids.xyz[model.grids.index(hung)] - xyz0) ** 2, axis=1)
-    return kr + kt * float(d2.max())
 
 
 def neighbours(model: FEModel, location: Location) -> Location:
@@ -376,49 +292,12 @@ def _check_values(candidate: Candidate, values) -> np.ndarray:
     return x
 
 
-def _next_eid(model: FEModel) -> int:
-    ids = [0, *model.masses.eids.tolist(), *(r.eid for r in model.rigid)]
-    ids += [int(es.eids.max()) for es in model.elements.values() if len(es)]
-    return max(ids) + 1
-
-
-def _next_pid(model: FEModel) -> int:
-    return max([0, *model.properties]) + 1
-
-
-def _append_elements(model: FEModel, card: str, eids, pids, nodes, data) -> dict:
-    elements = dict(model.elements)
-    old = elements.get(card)
-    if old is not None:
-        eids = np.concatenate([old.eids, eids])
-        pids = np.concatenate([old.pids, pids])
-        nodes = np.concatenate([old.nodes, nodes])
-        data = {k: np.concatenate([np.asarray(old.data[k]), np.asarray(v)])
-                for k, v in data.items()}
-    elements[card] = ElementSet(card, eids, pids, nodes, data)
-    return elements
-
-
-def _add_bushes(model: FEModel, pairs, stiffness) -> FEModel:
-    """CBUSHes (CID 0, S 0.5) on (GA, GB) grid pairs, one PBUSH each."""
-    n = len(pairs)
-    eid0, pid0 = _next_eid(model), _next_pid(model)
-    props = dict(model.properties)
-    for i, k in enumerate(stiffness):
-        props[pid0 + i] = Property(pid0 + i, "PBUSH", {f"K{c + 1}": float(k[c]) for c in range(6)})
-    elements = _append_elements(
-        model, "CBUSH", np.arange(eid0, eid0 + n), np.arange(pid0, pid0 + n), np.array(pairs),
-        {"v": np.zeros((n, 3)), "g0": np.zeros(n, np.int64), "cid": np.zeros(n, np.int64),
-         "s": np.full(n, 0.5)})
-    return replace(model, elements=elements, properties=props)
-
-
 def _lumped_mass(model, candidate, x):
     total = candidate.get("total_mass")
     if total is None:
         total = mass_properties(model).weight
     cm = model.masses
-    masses = replace(cm, eids=np.append(cm.eids, _next_eid(model)),
+    masses = replace(cm, eids=np.append(cm.eids, next_eid(model)),
                      grid=np.append(cm.grid, candidate.location.grids[0]),
                      mass=np.append(cm.mass, x[0] * total),
                      offset=np.concatenate([cm.offset, np.zeros((1, 3))]),
@@ -427,8 +306,8 @@ def _lumped_mass(model, candidate, x):
 
 
 def _boundary(model, candidate, x):
-    eid = _next_eid(model)
-    elements = _append_elements(
+    eid = next_eid(model)
+    elements = append_elements(
         model, "CELAS", np.array([eid]), np.zeros(1, np.int64),
         np.array([[candidate.location.grids[0], 0]]),
         {"c1": np.array([DIRECTIONS.index(candidate.get("direction")) + 1]),
@@ -437,46 +316,9 @@ def _boundary(model, candidate, x):
 
 
 def _joint(model, candidate, x):
-    eid = candidate.location.elements[0]
-    rigid = next((r for r in model.rigid if r.eid == eid), None)
-    joint = None if rigid is None else _joint_grids(rigid)
-    if joint is None:
-        raise InputError(card_message("no rigid joint (RBE2, or RBAR independent on one grid) with "
-                                      "this id in the model.", card="RBE2/RBAR", card_id=eid,
-                                      filename=model.filename,
-                                      fix="build the candidate with candidates() on this model."))
-    indep, deps = joint
-    only = candidate.get("dependent")
-    kept = tuple(d for d in deps if d[0] != only) if only is not None else ()
-    if only is not None and len(kept) == len(deps):
-        raise InputError(card_message(f"grid {only} is not a dependent grid of this RBE2.",
-                                      card=rigid.card, card_id=eid, filename=model.filename,
-                                      fix="build the candidate with candidates() on this model."))
-    kt, kr = candidate.get("k_translation") / x[0], candidate.get("k_rotation") / x[0]
-    if only is None and rigid.card == "RBE2" and len(deps) > 1:
-        return _hang_whole(model, rigid, indep, kt, kr)
-    hung = [d for d in deps if d not in kept]
-    stiffness = [[(kt if c < 3 else kr) if str(c + 1) in comps else 0.0 for c in range(6)]
-                 for _, comps in hung]
-    rigid_new = tuple(replace(r, dependent=kept) if r.eid == eid else r for r in model.rigid
-                      if r.eid != eid or kept)
-    model = replace(model, rigid=rigid_new)
-    return _add_bushes(model, [(indep, g) for g, _ in hung], stiffness)
-
-
-def _hang_whole(model: FEModel, rigid, indep: int, kt: float, kr: float) -> FEModel:
-    """The RBE2 kept rigid but moved onto a new grid at its independent grid, which hangs on a
-    CBUSH (all six components) to the independent grid."""
-    g = model.grids
-    new = int(g.ids.max()) + 1
-    i = int(g.index([indep])[0])
-    grids = replace(g, ids=np.append(g.ids, new), xyz=np.vstack([g.xyz, g.xyz[i]]),
-                    cd_axes=np.concatenate([g.cd_axes, np.eye(3)[None]]), cd=np.append(g.cd, 0),
-                    ps=np.append(g.ps, 0))
-    moved = tuple(replace(r, independent=((new, "123456"),)) if r.eid == rigid.eid else r
-                  for r in model.rigid)
-    model = replace(model, grids=grids, rigid=moved)
-    return _add_bushes(model, [(indep, new)], [[kt] * 3 + [kr] * 3])
+    return flexible_joint(model, candidate.location.elements[0],
+                          candidate.get("k_translation") / x[0],
+                          candidate.get("k_rotation") / x[0], candidate.get("dependent"))
 
 
 def _member_rows(model: FEModel, member: Member):
@@ -498,7 +340,7 @@ def _taper(model, candidate, x):
     s = 1.0 + taper * (member.xi_mid - 0.5)
     pids = np.array(es.pids)
     props = dict(model.properties)
-    new_pid = _next_pid(model)
+    new_pid = next_pid(model)
     for i, row in enumerate(rows):
         base = model.property(es.pids[row], card=es.card, eid=es.eids[row])
         if np.count_nonzero(es.pids == base.pid) > 1:
