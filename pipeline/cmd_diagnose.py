@@ -2,8 +2,9 @@
 
 Runs the ``diagnose`` stage of the case (pipeline.stages.diagnose_plan: with flutter, stage 0's
 grid GAFs, modes and flutter first) in the run folder of ``pipeline run`` (``--out``, default
-``runs/<case name>``): ``diagnose/diagnose.json``, ``diagnose.nc``, ``<config>_diagnosed.bdf``,
-``*.png`` (pipeline.diagnose.outputs). Prints the verdict, each named effect with its location
+``runs/<case name>``): ``diagnose/diagnose.json``, ``diagnose.nc``, ``<config>_calibrated.bdf``
+and ``<config>_diagnosed.bdf`` (the models of the gap before and after), ``*.png``
+(pipeline.diagnose.outputs). Prints the verdict, each named effect with its location
 and parameters, the best five candidates and the gap before -> after; ``--json FILE`` also writes
 the verdict record there. The case and its ``[diagnose]`` table, every deck and GVT file and the
 output paths are checked, and the diagnosis's data checks made

@@ -22,7 +22,7 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from pipeline.diagnose.evidence import chi_square, evaluate, gof_limit, runs_test
-from structures.design import DesignVariable, apply_design, bind
+from structures.design import DesignVariable, apply_design, bind, write_tuned_bdf
 from structures.model import FEModel
 
 #: Bound of every nominal parameter (relative): a material's modulus or the masses are known to
@@ -74,6 +74,31 @@ def _mass_variable(model: FEModel) -> list:
         return []
     fields = tuple(("CONM2", int(model.masses.eids[i]), "M") for i in hit)
     return [DesignVariable("mass", fields)]
+
+
+def write_calibrated_deck(deck_in, deck_out, model: FEModel, nominal):
+    """Write ``deck_in`` with the nominal parameters ``nominal`` applied (the model of a gap).
+
+    Parameters
+    ----------
+    deck_in, deck_out : path-like
+        ``model`` is ``read_model(deck_in)``.
+    model : FEModel
+    nominal : mapping {parameter name: relative change theta}
+        :attr:`pipeline.diagnose.DiagnoseResult.calibrated` (the model of ``gap_before``) or
+        ``nominal`` (of ``gap_after``); a parameter the model lacks is skipped, one missing from
+        the mapping is left at 0.
+
+    Returns
+    -------
+    Path
+        The deck (:func:`structures.design.write_tuned_bdf`: x = x0 (1 + theta) of the same
+        design space as :meth:`Problem.model`).
+    """
+    variables = _material_variables(model) + _mass_variable(model)
+    space = bind(variables, [model])
+    theta = np.array([float(nominal.get(v.name, 0.0)) for v in variables])
+    return write_tuned_bdf(deck_in, deck_out, space, space.x0 * (1.0 + theta))
 
 
 @dataclass(frozen=True)

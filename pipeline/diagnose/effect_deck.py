@@ -105,7 +105,7 @@ def _conm2_card(masses, i: int) -> list:
 
 def _differs(a, b) -> np.ndarray:
     """Row-wise inequality of two arrays (NaN equal to NaN): (n,) bool."""
-    a, b = np.asarray(a).reshape(len(a), -1), np.asarray(b).reshape(len(b), -1)
+    a, b = (np.asarray(x).reshape(len(x), int(np.prod(np.shape(x)[1:]))) for x in (a, b))
     out = a != b
     if a.dtype.kind == "f":
         out &= ~(np.isnan(a) & np.isnan(b))

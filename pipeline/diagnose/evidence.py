@@ -68,6 +68,9 @@ MIN_NOISE_DOF = 5
 #: Largest off-diagonal of the test-mode orthogonality (SEREP, analysis mass) before the data
 #: quality is questioned (NASA-STD-5002 style limit 0.10, doubled for noise: 0.2).
 SELF_ORTHOGONALITY_LIMIT = 0.2
+#: An analysis mode whose RMS at the sensors is below this share of the largest elastic mode's
+#: (mass-normalised) is invisible to them: its MAC is rounding noise, it is not paired.
+INVISIBLE = 1e-6
 _INERTIA_NAMES = ("Ixx", "Iyy", "Izz", "Ixy", "Iyz", "Izx")
 _DIAGONAL = {"Ixx": 0, "Iyy": 1, "Izz": 2}
 _PRODUCTS = {"Ixy": (0, 1), "Iyz": (1, 2), "Izx": (2, 0)}
@@ -416,6 +419,9 @@ def elastic_index(modes: xr.Dataset) -> np.ndarray:
 def pair(ref: Reference, modes: xr.Dataset, *, sensor_shapes=None) -> np.ndarray:
     """Pair the test modes with elastic analysis modes: MAC assignment, or nearest frequency.
 
+    A mode the sensors do not see (:data:`INVISIBLE`, e.g. an in-plane mode at out-of-plane
+    sensors) gets MAC 0: its rounding-level shape at the sensors would otherwise give any MAC.
+
     Returns
     -------
     ndarray of int, shape (n_test,)
@@ -430,7 +436,9 @@ def pair(ref: Reference, modes: xr.Dataset, *, sensor_shapes=None) -> np.ndarray
         return elastic[pair_frequency_only(ref.test_frequency, f_fe)]
     if sensor_shapes is None:
         sensor_shapes = modes["shape"].values[:, ref.sensor_index]
-    metric = mac(ref.shapes.T, sensor_shapes[elastic].T)                    # eq. 23
+    seen = sensor_shapes[elastic]
+    rms = np.sqrt(np.mean(seen ** 2, axis=1))
+    metric = mac(ref.shapes.T, seen.T) * (rms >= INVISIBLE * rms.max())[None, :]   # eq. 23
     return elastic[pair_modes(metric, ref.test_frequency, f_fe).fe_index]
 
 

@@ -5,23 +5,27 @@ writes, below ``folder`` (the stage's staging folder, run-folder layout):
 
 - ``diagnose/diagnose.json``: the verdict record (:meth:`DiagnoseResult.to_json`);
 - ``diagnose/diagnose.nc``: :meth:`DiagnoseResult.to_dataset`;
-- ``diagnose/<config>_diagnosed.bdf``: each configuration's deck with the named effects
-  (:func:`pipeline.diagnose.effects.write_effect_deck`), when an effect was named;
+- ``diagnose/<config>_calibrated.bdf``: each configuration's deck with the calibrated nominal
+  parameters (``result.calibrated``), the model of ``gap_before``;
+- ``diagnose/<config>_diagnosed.bdf``: that with the final nominal parameters (``result.nominal``)
+  and the named effects (:func:`pipeline.diagnose.effects.write_effect_deck`), the model of
+  ``gap_after``, when an effect was named;
 - ``diagnose/candidates.png`` and ``diagnose/gap.png`` (:mod:`pipeline.diagnose.plots`);
 - with the case's ``[flutter]`` and ``[diagnose] flutter`` on: ``diagnose/<config>/flutter/*``,
-  the flutter solution of the diagnosed deck through the one chain (pipeline.chain.case_flutter on
-  the baseline's grid GAFs). ``gap_before["flutter_speed"]`` is the lowest flutter crossing of the
-  baseline (stage 0's ``summary.json`` of every configuration), ``gap_after["flutter_speed"]`` that
-  of the diagnosed decks (the baseline's when no effect was named), in the model's velocity unit.
+  the flutter solutions of the calibrated decks (``diagnose/<config>/flutter_before/*``) and of
+  the diagnosed decks, through the one chain (pipeline.chain.case_flutter on the baseline's grid
+  GAFs). ``gap_before["flutter_speed"]`` / ``gap_after["flutter_speed"]`` is the lowest flutter
+  crossing of the calibrated / diagnosed decks (the calibrated ones' when no effect was named), in
+  the model's velocity unit: each gap metric is of one model (``result.GAP_MODELS``).
 """
 from __future__ import annotations
 
-import json
 from dataclasses import replace
 from pathlib import Path
 
 from flutter.results import is_flutter
 from structures.common.files import read_dataset, write_dataset, write_json
+from structures.bdf import read_model
 from structures.units import unit_labels
 
 #: The stage's folder in the run folder.
@@ -56,8 +60,9 @@ def _named_effects(result) -> list:
 
 
 def _diagnosed_flutter(case, folder: Path, run_dir: Path, decks: dict, aero: dict,
-                       progress=None) -> float | None:
-    """Lowest flutter speed of the diagnosed decks (their flutter written below ``folder``)."""
+                       progress=None, name: str = "flutter") -> float | None:
+    """Lowest flutter speed of ``decks`` ({configuration: deck}; their flutter written to
+    ``folder / FOLDER / <config> / name``)."""
     from pipeline.chain import case_flutter, configuration_modes
 
     summaries = []
@@ -65,7 +70,7 @@ def _diagnosed_flutter(case, folder: Path, run_dir: Path, decks: dict, aero: dic
         diagnosed = replace(config, deck=decks[config.name])
         modes, _ = configuration_modes(diagnosed)
         grid = read_dataset(run_dir / f"stage0/aero/{aero[config.name][0]}/grid_gaf.nc")
-        out = folder / FOLDER / config.name / "flutter"
+        out = folder / FOLDER / config.name / name
         out.mkdir(parents=True, exist_ok=True)
         summaries.append(case_flutter(case, diagnosed, modes, out_dir=out, progress=progress,
                                       grid_gaf=grid)["summary"])
@@ -93,6 +98,7 @@ def write_diagnosis(case, folder, run_dir, aero: dict | None = None, progress=No
         With ``flutter_speed`` filled in ``gap_before`` / ``gap_after`` when flutter is on.
     """
     from pipeline.diagnose import diagnose
+    from pipeline.diagnose.calibrate import write_calibrated_deck
     from pipeline.diagnose.effects import write_effect_deck
     from pipeline.diagnose.inputs import case_diagnose_settings, configurations_from_case
     from pipeline.diagnose.plots import plot_candidates, plot_gap
@@ -102,15 +108,18 @@ def write_diagnosis(case, folder, run_dir, aero: dict | None = None, progress=No
     configurations = configurations_from_case(case)
     result = diagnose(configurations, options.workflow, progress=progress)
     effects = _named_effects(result)
-    decks = {}
-    if effects:
-        for data in configurations:
-            decks[data.name] = write_effect_deck(
-                data.deck, folder / FOLDER / f"{data.name}_diagnosed.bdf", data.model, effects)
+    calibrated, decks = {}, {}
+    for data in configurations:
+        calibrated[data.name] = write_calibrated_deck(
+            data.deck, folder / FOLDER / f"{data.name}_calibrated.bdf", data.model,
+            result.calibrated)
+        if effects:
+            final = folder / FOLDER / f"{data.name}_diagnosed.bdf"
+            write_calibrated_deck(data.deck, final, data.model, result.nominal)
+            decks[data.name] = write_effect_deck(final, final, read_model(final), effects)
     if options.flutter and case.flutter is not None:
-        before = lowest_flutter_speed(
-            json.loads((run_dir / f"stage0/{c.name}/flutter/summary.json").read_text())
-            for c in case.configurations)
+        before = _diagnosed_flutter(case, folder, run_dir, calibrated, aero, progress,
+                                    "flutter_before")
         after = (_diagnosed_flutter(case, folder, run_dir, decks, aero, progress)
                  if effects else before)
         result = replace(result, gap_before={**result.gap_before, "flutter_speed": before},

@@ -1,7 +1,7 @@
 """The result of :func:`pipeline.diagnose.diagnose`: verdict, named effects, ranking, gap.
 
-``to_json()`` gives the issue's schema (plus ``effects`` for every look-again round, ``nominal``
-and ``rounds``); ``to_dataset()`` a netCDF-able Dataset: the first round's candidate table on dim
+``to_json()`` gives the issue's schema (plus ``effects`` for every look-again round, ``nominal``,
+``calibrated``, ``gap_models`` and ``rounds``); ``to_dataset()`` a netCDF-able Dataset: the first round's candidate table on dim
 ``rank`` and the gap metrics on (``metric``, ``when``).
 """
 from __future__ import annotations
@@ -18,6 +18,14 @@ VERDICTS = ("effect", "none", "ambiguous", "unexplained")
 #: Scalar gap metrics (keys of ``gap_before`` / ``gap_after``) put in the Dataset.
 GAP_METRICS = ("frequency_rms_held_out", "frequency_rms", "max_cross_orthogonality_offdiag",
                "mac_min", "mac_mean")
+
+#: Which model each gap is of (JSON ``gap_models``). The pipeline stage writes both decks.
+GAP_MODELS = {
+    "before": "the nominal model with its nominal parameters calibrated (E of each material, "
+              "CONM2 mass scale: 'calibrated') and no effect; deck <config>_calibrated.bdf",
+    "after": "the nominal model with the named effects and the nominal parameters refitted with "
+             "them ('nominal'); deck <config>_diagnosed.bdf (the calibrated deck when no effect "
+             "was named)"}
 
 
 class EffectRecord(NamedTuple):
@@ -84,11 +92,12 @@ class DiagnoseResult:
         ``frequency_rms_held_out``, ``frequency_rms`` [%], ``max_cross_orthogonality_offdiag``,
         ``mac_min``, ``mac_mean`` (None without shapes), ``mass`` {quantity: % error of the
         configuration with the largest |error|}, ``mass_by_configuration``, ``flutter_speed``
-        (None: filled by the pipeline stage). Before: the calibrated model without effects;
-        after: with the named effects, refitted.
+        (None: filled by the pipeline stage). :data:`GAP_MODELS` says which model each is.
     notes : tuple of str
     separating_measurement : str or None, for an ambiguous verdict.
-    nominal : mapping {parameter: relative change} of the final model (calibration).
+    nominal : mapping {parameter: relative change} of the final model (``gap_after``'s).
+    calibrated : mapping {parameter: relative change} of the nominal calibration without
+        effects (``gap_before``'s model).
     rounds : tuple of mapping, per look-again round: its verdict, best and runner-up.
     """
 
@@ -101,6 +110,7 @@ class DiagnoseResult:
     separating_measurement: str | None = None
     nominal: Mapping = field(default_factory=dict)
     rounds: tuple = ()
+    calibrated: Mapping = field(default_factory=dict)
 
     def __post_init__(self):
         if self.verdict not in VERDICTS:
@@ -119,7 +129,8 @@ class DiagnoseResult:
                            for c in self.candidates],
             "gap_before": dict(self.gap_before), "gap_after": dict(self.gap_after),
             "notes": list(self.notes), "separating_measurement": self.separating_measurement,
-            "nominal": dict(self.nominal), "rounds": list(self.rounds)})
+            "nominal": dict(self.nominal), "calibrated": dict(self.calibrated),
+            "gap_models": dict(GAP_MODELS), "rounds": list(self.rounds)})
 
     def to_dataset(self) -> xr.Dataset:
         """Candidate table on ``rank`` (1 = best) and the gap metrics on (metric, when)."""

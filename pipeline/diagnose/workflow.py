@@ -441,7 +441,8 @@ def diagnose(configurations, settings: DiagnoseSettings = DiagnoseSettings(), *,
                           gap_before=gap_before, gap_after=gap_after, notes=tuple(notes),
                           separating_measurement=separating,
                           nominal={n: float(t) for n, t in zip(problem.names, theta)},
-                          rounds=tuple(rounds))
+                          rounds=tuple(rounds),
+                          calibrated={n: float(t) for n, t in zip(problem.names, cal.theta)})
 
 
 def _none_fit(problem: Problem, cal, n_data: int):

@@ -171,6 +171,36 @@ def test_hidden_mass_is_named_and_the_gap_shrinks(folder, capsys):
     np.testing.assert_allclose(fe, test, rtol=1e-3)
 
 
+def _frequency_rms(deck: Path, gvt: Path) -> float:
+    """RMS of 100 (f_FE - f_GVT) / f_GVT [%] of the deck's modes against the GVT, each test mode
+    paired with the analysis mode of largest MAC at the test DOFs (all 3 per grid)."""
+    model = read_model(deck)
+    test = load_gvt(gvt)
+    modes = compute_modes(model, 3 * len(model.grids.ids))
+    dofs = list(zip(modes["grid"].values, modes["component"].values))
+    at = [dofs.index(d) for d in zip(test["grid"].values, test["component"].values)]
+    phi, psi = modes["shape"].values[:, at], test["shape"].values
+    mac = (psi @ phi.T) ** 2 / np.outer(np.sum(psi ** 2, 1), np.sum(phi ** 2, 1))
+    fe = modes["frequency"].values[np.argmax(mac, axis=1)]
+    ft = test["frequency"].values
+    return float(np.sqrt(np.mean((100.0 * (fe - ft) / ft) ** 2)))
+
+
+def test_written_decks_are_the_models_of_the_gaps(folder, capsys):
+    """<config>_calibrated.bdf / _diagnosed.bdf, read back and correlated with the GVT, give the
+    frequency RMS of gap_before / gap_after."""
+    code, _, err = cli(["diagnose", case_file(folder), "--out", folder / "run"], capsys)
+    assert code == 0, err
+    run = folder / "run" / "diagnose"
+    record = json.loads((run / "diagnose.json").read_text())
+    assert record["verdict"] == "effect" and abs(record["calibrated"]["mass"]) > 1e-3
+    assert record["gap_before"]["frequency_rms"] > 1.0
+    for deck, gap in (("base_calibrated.bdf", "gap_before"), ("base_diagnosed.bdf", "gap_after")):
+        assert _frequency_rms(run / deck, folder / "gvt.unv") == pytest.approx(
+            record[gap]["frequency_rms"], abs=1e-6)
+    assert set(record["gap_models"]) == {"before", "after"}
+
+
 @pytest.mark.parametrize("early", ["true", "false"])
 def test_pipeline_run_reports_the_diagnosis(folder, capsys, early):
     code, _, err = cli(["run", case_file(folder, f"[diagnose]\nmax_effects = 1\nbefore_tuning = "
@@ -194,8 +224,8 @@ def _lowest_flutter(summary: Path) -> float:
 
 def test_flutter_speed_before_and_after(tmp_path, capsys):
     """PT145 wing (cantilever, KE flutter): the truth has 1e-5 lbf-s^2/in more at grid 8 (9 % of
-    the wing's mass). The flutter speeds come from the one chain: before = stage 0's lowest
-    crossing, after = the diagnosed deck's (``pipeline flutter`` on that deck, with its PARAM LMODES
+    the wing's mass). The flutter speeds come from the one chain: before = the calibrated deck's
+    lowest crossing (the model of gap_before), after = the diagnosed deck's (``pipeline flutter`` on that deck, with its PARAM LMODES
     3 as the configuration's nmodes, gives the same), and
     the diagnosed deck's flutter speed is closer to the truth's (``pipeline flutter`` on the truth
     deck) than the baseline's."""
@@ -222,7 +252,7 @@ def test_flutter_speed_before_and_after(tmp_path, capsys):
     record = json.loads((run / "diagnose" / "diagnose.json").read_text())
     assert record["verdict"] == "effect"
     before, after = record["gap_before"]["flutter_speed"], record["gap_after"]["flutter_speed"]
-    assert before == _lowest_flutter(run / "stage0" / "wing" / "flutter" / "summary.json")
+    assert before == _lowest_flutter(run / "diagnose" / "wing" / "flutter_before" / "summary.json")
     assert after == _lowest_flutter(run / "diagnose" / "wing" / "flutter" / "summary.json")
     assert "flutter_speed [in/s]" in out
     for deck, folder in ((run / "diagnose" / "wing_diagnosed.bdf", "f_diagnosed"),
