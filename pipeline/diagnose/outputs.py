@@ -178,7 +178,7 @@ def verdict_summary(record: dict, velocity: str = "model units", top: int = 5) -
     candidates = list(record.get("candidates") or [])[:top]
     if candidates:
         lines.append(f"candidates (best {len(candidates)} of {len(record['candidates'])}, score: "
-                     "BIC difference to the best):")
+                     "the verdict's BIC-type score minus the best's):")
         lines += [f"  {i}. {c['kind']:<18} {_number(c.get('score'), '9.2f')}  "
                   f"{c.get('label') or _location(c.get('location'))}"
                   for i, c in enumerate(candidates, 1)]

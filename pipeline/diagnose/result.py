@@ -29,8 +29,10 @@ GAP_MODELS = {
 
 
 class EffectRecord(NamedTuple):
-    """A named effect: the candidate, its fitted parameter values (npar,) and its score
-    (BIC of the runner-up or of "none", whichever is lower, minus the effect's BIC)."""
+    """A named effect: the candidate, its fitted parameter values (npar,) and its score: the
+    lead of :func:`pipeline.diagnose.workflow.decide` in its round, the lower of the runner-up's
+    and "none"'s scores minus the effect's, each score chi^2 / c + p ln n (c the round's
+    dispersion; "none"'s less 2 ln of the candidates screened, its prior odds)."""
 
     candidate: object
     values: np.ndarray
@@ -40,9 +42,11 @@ class EffectRecord(NamedTuple):
 class CandidateScore(NamedTuple):
     """A ranked candidate of the first round.
 
-    ``score`` is its BIC minus the best BIC (0 for the best); ``refitted`` says whether the BIC
-    comes from the nonlinear refit (else from the linearised fit); ``kind`` "none" is the model
-    with its nominal parameters only.
+    ``score`` is its score minus the best's (0 for the best), the scores the verdict compared
+    (:func:`pipeline.diagnose.workflow.round_scores`: chi^2 / c + p ln n with the round's
+    dispersion c, "none"'s less 2 ln of the candidates screened); ``refitted`` says whether the
+    chi^2 comes from the nonlinear refit (else from the linearised fit); ``kind`` "none" is the
+    model with its nominal parameters only.
     """
 
     kind: str
@@ -142,7 +146,8 @@ class DiagnoseResult:
             {"kind": ("rank", np.array([c.kind for c in self.candidates], dtype=str)),
              "label": ("rank", np.array([c.label for c in self.candidates], dtype=str)),
              "score": ("rank", np.array([c.score for c in self.candidates], float),
-                       {"long_name": "BIC minus the best BIC"}),
+                       {"long_name": "verdict score (chi^2 / c + p ln n, none with its prior "
+                                     "odds) minus the best's", "units": "1"}),
              "refitted": ("rank", np.array([c.refitted for c in self.candidates], bool)),
              "gap": (("metric", "when"), gap,
                      {"long_name": "gap between model and test", "units":

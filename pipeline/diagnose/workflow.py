@@ -189,6 +189,34 @@ def _overlaps(a, b) -> bool:
                 or set(a.properties) & set(b.properties))
 
 
+def round_scores(none_fit, fits, n_data: int, n_candidates: int = 1) -> tuple:
+    """The scores a round's verdict compares (:func:`decide`'s Notes).
+
+    Parameters
+    ----------
+    none_fit : (chi2, n_params) of the model without a further effect.
+    fits : sequence of (kind, location, chi2, n_params), the refitted candidates.
+    n_data : int, training residuals.
+    n_candidates : int, candidates screened.
+
+    Returns
+    -------
+    scores : (len(fits),) chi^2 / c + p ln n of each fit.
+    none_score : float, chi^2 / c + p ln n - 2 ln n_candidates of "none".
+    c : float, the dispersion max(1, chi^2_best / (n - p_best)) (1 without fits).
+    """
+    none_chi2, none_p = none_fit
+    chi2 = np.array([f[2] for f in fits], float)
+    p = np.array([f[3] for f in fits], float)
+    c = 1.0
+    if fits:
+        best = int(np.argmin(chi2 + p * np.log(n_data)))
+        c = max(1.0, chi2[best] / max(n_data - p[best], 1.0))
+    scores = chi2 / c + p * np.log(n_data)                                  # Schwarz 1978
+    none_score = none_chi2 / c + none_p * np.log(n_data) - 2.0 * np.log(max(n_candidates, 1))
+    return scores, float(none_score), float(c)
+
+
 def decide(none_fit, fits, margin: float, near, n_data: int, n_candidates: int = 1) -> tuple:
     """Verdict of one round from its score table.
 
@@ -230,12 +258,7 @@ def decide(none_fit, fits, margin: float, near, n_data: int, n_candidates: int =
     fitting = gof_limit(n_data - none_p) >= none_chi2
     if not fits:
         return ("none" if fitting else "unexplained"), None, None, float("nan")
-    chi2 = np.array([f[2] for f in fits], float)
-    p = np.array([f[3] for f in fits], float)
-    best = int(np.argmin(chi2 + p * np.log(n_data)))
-    c = max(1.0, chi2[best] / max(n_data - p[best], 1.0))
-    scores = chi2 / c + p * np.log(n_data)                                  # Schwarz 1978
-    none_score = none_chi2 / c + none_p * np.log(n_data) - 2.0 * np.log(max(n_candidates, 1))
+    scores, none_score, _ = round_scores(none_fit, fits, n_data, n_candidates)
     best = int(np.argmin(scores))
     kind, loc = fits[best][0], fits[best][1]
     rivals = [i for i, f in enumerate(fits)
@@ -332,15 +355,19 @@ def _preflight(configurations, settings: DiagnoseSettings, notes: list):
     return refs
 
 
-def _table(rows, refits, none, n_data: int, n_theta: int) -> tuple:
-    """The first round's ranked candidates (refitted ones by their BIC, the rest linearised)."""
-    scored = [(fit.bic, fit.candidate, True) for fit in refits]
+def _table(rows, refits, none, n_data: int, n_theta: int, n_candidates: int) -> tuple:
+    """The first round's ranked candidates by the scores :func:`decide` compared
+    (:func:`round_scores`: refitted ones from their refit, the rest from their linearised chi^2
+    with the same dispersion c, "none" with its prior odds), minus the best."""
+    fits = [(f.candidate.kind, f.candidate.location, f.chi2, f.n_params) for f in refits]
+    scores, none_score, c = round_scores((none.chi2, none.n_params), fits, n_data, n_candidates)
+    scored = [(b, fit.candidate, True) for b, fit in zip(scores, refits)]
     done = {id(fit.candidate) for fit in refits}
     for row in rows:
         if id(row.candidate) not in done:
             p = len(row.candidate.parameters) + n_theta
-            scored.append((row.chi2 + p * np.log(n_data), row.candidate, False))
-    scored.append((none.bic, None, True))
+            scored.append((row.chi2 / c + p * np.log(n_data), row.candidate, False))
+    scored.append((none_score, None, True))
     scored.sort(key=lambda s: s[0])
     best = scored[0][0]
     return tuple(CandidateScore(c.kind if c else "none", c.location.as_dict() if c else
@@ -417,7 +444,7 @@ def diagnose(configurations, settings: DiagnoseSettings = DiagnoseSettings(), *,
             rounds.append(_round_record(k, verdict, fits, best, runner, none))
             if k == 0:
                 first = verdict
-                table = _table(rows, fits, none, n_data, len(theta))
+                table = _table(rows, fits, none, n_data, len(theta), len(cands))
             if verdict == "ambiguous" and not effects:
                 separating = separating_measurement(problem, fits[best], fits[runner])
             if verdict != "effect":

@@ -14,7 +14,7 @@ from pipeline.case import read_case
 from pipeline.diagnose.effects import Candidate, Location
 from pipeline.diagnose import DiagnoseSettings, diagnose, preflight
 from pipeline.diagnose.inputs import configurations_from_case, settings_from_case
-from pipeline.diagnose.workflow import decide, within_scatter
+from pipeline.diagnose.workflow import _table, decide, within_scatter
 from structures.common.errors import InputError
 from structures.common.files import read_dataset, write_dataset
 from tests.pipeline.diagnose.truth import make_case
@@ -180,6 +180,36 @@ def test_preflight_checks_the_data_without_screening(tmp_path):
         preflight(confs, DiagnoseSettings(nmodes=10))
     with pytest.raises(InputError, match="repeat"):
         preflight(confs * 2, DiagnoseSettings())
+
+
+def test_published_ranking_is_the_one_that_decided():
+    """n = 100, 10 candidates screened, 2 nominal parameters. Refits A chi^2 300 and B 350
+    (p 3), linearised C 400 (1 + 2 parameters), none 500 (p 2). Dispersion c = 300 / 97; scores
+    A 97 + 3 ln 100 = 110.816, B 350 / c + 3 ln 100 = 126.982, C 400 / c + 3 ln 100 = 143.149,
+    none 500 / c + 2 ln 100 - 2 ln 10 = 166.272: by hand."""
+    def cand(kind, grid):
+        return Candidate(kind, Location(grids=(grid,)), f"{kind} {grid}", ("x",), (0.0,), (1.0,),
+                         (0.1,))
+
+    a, b, c = cand("lumped_mass", 1), cand("member_taper", 9), cand("boundary_stiffness", 5)
+    refits = [SimpleNamespace(candidate=a, chi2=300.0, n_params=3),
+              SimpleNamespace(candidate=b, chi2=350.0, n_params=3)]
+    rows = [SimpleNamespace(candidate=x, chi2=chi2) for x, chi2 in ((a, 280.0), (b, 340.0),
+                                                                     (c, 400.0))]
+    none = SimpleNamespace(chi2=500.0, n_params=2)
+    table = _table(rows, refits, none, 100, 2, 10)
+    disp = 300.0 / 97.0
+    hand = {"lumped_mass": 0.0, "member_taper": 350.0 / disp - 97.0,
+            "boundary_stiffness": 400.0 / disp - 97.0,
+            "none": 500.0 / disp - 97.0 - log(100.0) - 2.0 * log(10.0)}
+    assert [t.kind for t in table] == list(hand)
+    for t in table:
+        assert t.score == pytest.approx(hand[t.kind], rel=1e-12, abs=1e-12)
+    assert [t.refitted for t in table] == [True, True, False, True]
+    _, best, runner, lead = decide((500.0, 2), [(x.candidate.kind, x.candidate.location, x.chi2,
+                                                 x.n_params) for x in refits], 10.0, _never_near,
+                                   100, 10)
+    assert (best, runner) == (0, 1) and lead == pytest.approx(table[1].score, rel=1e-12)
 
 
 def test_an_effect_within_the_nominal_scatter_is_not_named():
