@@ -1,9 +1,11 @@
 """The blind study of ``pipeline diagnose`` (issue 14, "Must show").
 
 * scoring rules on hand-written verdicts (no workflow run);
-* quick subset (default suite, ~50 s): the frame, one seed, the kinds in ``QUICK_KINDS``, one
-  look-again round (``[diagnose] max_effects = 1`` in the case file): the workflow runs on each
-  generated case through the case file alone and writes a verdict of the issue's schema;
+* quick subset (default suite, ~17 s a case, three cases): the frame, seed 0, one look-again
+  round (``[diagnose] max_effects = 1`` in the case file), the workflow run on each generated
+  case through the case file alone: a verdict of the issue's schema and the one the truth
+  demands (``QUICK``: a hidden lumped mass named with its kind and location, "none" data kept
+  "none", an effect outside the library given no library name);
 * the full study (``slow``): both structures, every truth kind, seeds 0-9, against the issue's
   thresholds -- top-1 kind accuracy >= 90 %, location (named element / grid or its neighbour)
   >= 80 % of the correctly named cases, no effect named on ``none`` data in >= 95 % of seeds,
@@ -22,8 +24,10 @@ from tests.pipeline.diagnose.truth import KINDS, STRUCTURES, TRUTH_KINDS
 from tests.pipeline.diagnose.truth.study import confusion_text, run_study, score, study_dataset
 
 VERDICTS = ("effect", "none", "ambiguous", "unexplained")
-#: The quick subset's kinds (one library kind of each family, no effect, outside the library).
-QUICK_KINDS = ("lumped_mass", "member_taper", "none", "outside")
+#: The quick subset: truth kind -> what the verdict must be (measured on frame seed 0: a lumped
+#: mass named with a location hit, "none", and "ambiguous" for the outside effect).
+QUICK = {"lumped_mass": "the kind and a location hit", "none": "verdict none",
+         "outside": "no library kind"}
 TRUTH = {"kind": "member_taper", "grids": [2002, 2003], "elements": [2003], "properties": [22],
          "neighbours": {"grids": [2001, 2002, 2003, 2004, 2102, 2103, 2202, 2203],
                         "elements": [2002, 2003, 2004, 7002, 7003]}}
@@ -43,8 +47,14 @@ def _verdict(kind, grids=(), elements=(), properties=(), verdict="effect", befor
 def test_score_location_by_neighbour():
     neighbour = score(TRUTH, _verdict("member_taper", elements=[2004]))       # next element
     assert neighbour["kind_correct"] and neighbour["location_hit"]
+    by_grid = score(TRUTH, _verdict("member_taper", grids=[2202]))            # a neighbour grid
+    assert by_grid["location_hit"]
     far = score(TRUTH, _verdict("member_taper", elements=[2009], grids=[2009, 2010]))
     assert far["kind_correct"] and not far["location_hit"]
+    # the truth's property alone is no hit (a PID can run through the whole structure)
+    same_pid = score(TRUTH, _verdict("member_taper", elements=[2009], grids=[2009, 2010],
+                                     properties=[22]))
+    assert same_pid["kind_correct"] and not same_pid["location_hit"]
     wrong = score(TRUTH, _verdict("lumped_mass", grids=[2003]))
     assert wrong["named"] == "lumped_mass" and not wrong["kind_correct"]
     assert not wrong["location_hit"]
@@ -72,18 +82,49 @@ def test_scores_of_a_study():
     assert "top1_kind_accuracy: 0.500" in confusion_text(ds)
 
 
-def test_quick_blind_subset(tmp_path):
-    ds = run_study(["frame"], QUICK_KINDS, [0], tmp_path, diagnose={"max_effects": 1},
-                   progress=None)
-    assert ds.sizes["case"] == len(QUICK_KINDS)
+@pytest.fixture(scope="module")
+def quick_run(tmp_path_factory):
+    """Runs (once per kind) of the quick subset: kind -> (study Dataset, diagnose.json)."""
+    runs = {}
+
+    def run(kind):
+        if kind not in runs:
+            out = tmp_path_factory.mktemp(f"blind_{kind}")
+            ds = run_study(["frame"], [kind], [0], out, diagnose={"max_effects": 1},
+                           progress=None)
+            assert (out / "study.nc").is_file()
+            runs[kind] = ds, json.loads((out / "frame" / kind / "0" / "diagnose.json")
+                                        .read_text())
+        return runs[kind]
+    return run
+
+
+@pytest.mark.parametrize("kind", list(QUICK))
+def test_quick_blind_subset(quick_run, kind):
+    ds, result = quick_run(kind)
+    assert ds.sizes["case"] == 1
     assert ds.attrs["errors"] == 0, ds["error"].values
-    for kind in QUICK_KINDS:
-        result = json.loads((tmp_path / "frame" / kind / "0" / "diagnose.json").read_text())
-        assert result["verdict"] in VERDICTS
-        assert {"effect", "candidates", "gap_before", "gap_after"} <= set(result)
-        if result["verdict"] == "effect":
-            assert result["effect"]["kind"] in KINDS
-    assert (tmp_path / "study.nc").is_file()
+    assert result["verdict"] in VERDICTS
+    assert {"effect", "candidates", "gap_before", "gap_after"} <= set(result)
+    named = str(ds["named_kind"].values[0])
+    if kind == "none":
+        assert result["verdict"] == "none", named
+    elif kind == "outside":
+        assert named not in KINDS and result["verdict"] != "effect", named
+    else:
+        assert result["verdict"] == "effect" and named == kind, named
+        assert bool(ds["location_hit"].values[0]), result["effect"]["location"]
+
+
+@pytest.mark.xfail(strict=True, reason="measured: frame lumped_mass seed 0 (truth 2.8 % of the "
+                   "mass spread over grids 3008, 3009, 3209) names 2.1 % at grid 3009; the "
+                   "cross-orthogonality drops (0.71 -> 0.58) and mac_min rises (0.41 -> 0.57) "
+                   "but the held-out RMS frequency error grows 10.44 -> 11.13 % (one round)")
+def test_quick_gap_shrinks_on_the_named_mass(quick_run):
+    _, result = quick_run("lumped_mass")
+    before, after = result["gap_before"], result["gap_after"]
+    assert after["max_cross_orthogonality_offdiag"] < before["max_cross_orthogonality_offdiag"]
+    assert after["frequency_rms_held_out"] < before["frequency_rms_held_out"]
 
 
 @pytest.mark.slow

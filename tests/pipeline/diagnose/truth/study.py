@@ -8,9 +8,9 @@ Scores (issue 14, "Must show"):
 * named kind: the first named effect's kind when the verdict is "effect", else the verdict
   ("none", "ambiguous", "unexplained"); "error" when the workflow raised;
 * top-1 kind accuracy: named kind == truth kind, over the library's kinds;
-* location hit (a case whose kind is right): the named effect's grids, elements or properties
-  meet the truth's location grown by one element layer (``truth.json`` ``neighbours``; its
-  properties);
+* location hit (a case whose kind is right): the named effect's grids or elements meet the
+  truth's location grown by one element layer (``truth.json`` ``neighbours``: the element / grid
+  named or its neighbour; a shared property alone is no hit, a PID can span the structure);
 * no effect named on "none" data: verdict != "effect";
 * an effect outside the library: "ambiguous" or "unexplained" rather than a name;
 * the gap: held-out RMS frequency error and largest cross-orthogonality off-diagonal before and
@@ -56,8 +56,7 @@ def score(truth: dict, result: dict) -> dict:
     if effect and named == truth["kind"]:
         loc = effect["location"]
         hit = bool(set(loc.get("grids", ())) & set(truth["neighbours"]["grids"])
-                   or set(loc.get("elements", ())) & set(truth["neighbours"]["elements"])
-                   or set(loc.get("properties", ())) & set(truth["properties"]))
+                   or set(loc.get("elements", ())) & set(truth["neighbours"]["elements"]))
 
     def gap(when, metric):
         value = (result.get(when) or {}).get(metric)
