@@ -7,7 +7,10 @@ Gap metrics (issue 14 step 6, the contract's JSON keys), over all configurations
 - ``max_cross_orthogonality_offdiag``: largest |S_ij|, i != j, of the cross-orthogonality of the
   test modes with their paired analysis modes (paper eq. 20; SEREP on the rigid and paired modes,
   eqs. 11-14, :mod:`structures.correlation`);
-- ``mac_min``, ``mac_mean``: of the paired modes (paper eq. 23);
+- ``max_cross_orthogonality_offdiag_held_out``: the same over the rows of the held-out test
+  modes only (the modes no fit saw; their columns still span every paired mode);
+- ``mac_min``, ``mac_mean``: of the paired modes (paper eq. 23); ``mac_min_held_out`` of the
+  held-out ones (None when no mode is held out);
 - ``mass``: error [%] of every measured quantity relative to its reference size
   (:func:`pipeline.diagnose.evidence.mass_references`: weight and moments themselves, CG the
   radius of gyration, products the largest moment), from the configuration with the largest
@@ -24,29 +27,34 @@ from structures.correlation import cross_orthogonality, mac, serep_coordinates
 
 
 
-def _cross_offdiag(ref, ev) -> float:
+def _cross_offdiag(ref, ev) -> tuple[float, float]:
+    """Largest |S_ij|, i != j, over all test modes and over the held-out ones (rows i)."""
     modes = ev.modes
     phi_m = modes["shape"].values[:, ref.sensor_index]
     rigid = np.setdiff1d(np.arange(modes.sizes["mode"]), elastic_index(modes))
     keep = np.concatenate([rigid, ev.paired])
     q = serep_coordinates(phi_m[keep].T, ref.shapes.T)                     # eq. 14
     s = np.abs(cross_orthogonality(q, np.eye(keep.size)))[:, rigid.size:]   # eq. 20, paired block
-    return float(np.max(s - np.diag(np.diag(s)), initial=0.0))
+    off = s - np.diag(np.diag(s))
+    return float(np.max(off, initial=0.0)), float(np.max(off[~ref.train], initial=0.0))
 
 
 def gap_metrics(problem, evaluations) -> dict:
     """The gap of a model (its evaluations, one per configuration) against the tests."""
     errors, held = [], []
-    cross, macs = [], []
+    cross, cross_held, macs, macs_held = [], [], [], []
     mass_by = {}
     for ref, ev in zip(problem.refs, evaluations):
         err = 100.0 * ev.frequency * ref.frequency_sigma                  # eq. 18 in %
         errors.append(err)
         held.append(err[~ref.train])
         if ref.has_shapes:
-            cross.append(_cross_offdiag(ref, ev))
+            both, held_only = _cross_offdiag(ref, ev)
+            cross.append(both)
+            cross_held.append(held_only)
             phi = ev.modes["shape"].values[ev.paired][:, ref.sensor_index]
             macs.append(np.diag(mac(ref.shapes.T, phi.T)))                 # eq. 23
+            macs_held.append(macs[-1][~ref.train])
         if ref.measured_mass:
             values = ev.props.as_dict()
             size = mass_references(ref.measured_mass, ev.props)
@@ -59,11 +67,15 @@ def gap_metrics(problem, evaluations) -> dict:
             if q not in worst or (np.isfinite(v) and abs(v) > abs(worst[q])):
                 worst[q] = v
     macs = np.concatenate(macs) if macs else None
+    macs_held = np.concatenate(macs_held) if macs_held else np.zeros(0)
     return {"frequency_rms_held_out": float(np.sqrt(np.mean(held ** 2))) if held.size else None,
             "frequency_rms": float(np.sqrt(np.mean(allerr ** 2))),
             "max_cross_orthogonality_offdiag": max(cross) if cross else None,
+            "max_cross_orthogonality_offdiag_held_out": max(cross_held) if cross_held and
+            macs_held.size else None,
             "mac_min": float(macs.min()) if macs is not None else None,
             "mac_mean": float(macs.mean()) if macs is not None else None,
+            "mac_min_held_out": float(macs_held.min()) if macs_held.size else None,
             "mass": worst, "mass_by_configuration": mass_by, "flutter_speed": None}
 
 

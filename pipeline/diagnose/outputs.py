@@ -33,7 +33,9 @@ FOLDER = "diagnose"
 #: Unit of each scalar gap metric (mass-property errors are in %; ``flutter_speed`` in the unit
 #: system's velocity).
 GAP_UNITS = {"frequency_rms_held_out": "%", "frequency_rms": "%",
-             "max_cross_orthogonality_offdiag": "-", "mac_min": "-", "mac_mean": "-"}
+             "max_cross_orthogonality_offdiag": "-",
+             "max_cross_orthogonality_offdiag_held_out": "-", "mac_min": "-",
+             "mac_min_held_out": "-", "mac_mean": "-"}
 
 
 def lowest_flutter_speed(summaries) -> float | None:

@@ -17,7 +17,8 @@ from structures.common.errors import InputError
 VERDICTS = ("effect", "none", "ambiguous", "unexplained")
 #: Scalar gap metrics (keys of ``gap_before`` / ``gap_after``) put in the Dataset.
 GAP_METRICS = ("frequency_rms_held_out", "frequency_rms", "max_cross_orthogonality_offdiag",
-               "mac_min", "mac_mean")
+               "max_cross_orthogonality_offdiag_held_out", "mac_min", "mac_min_held_out",
+               "mac_mean")
 
 #: Which model each gap is of (JSON ``gap_models``). The pipeline stage writes both decks.
 GAP_MODELS = {
@@ -93,8 +94,9 @@ class DiagnoseResult:
     effects : tuple of EffectRecord, the named effects in the order they were found.
     candidates : tuple of CandidateScore, the first round's ranking (best first).
     gap_before, gap_after : mapping
-        ``frequency_rms_held_out``, ``frequency_rms`` [%], ``max_cross_orthogonality_offdiag``,
-        ``mac_min``, ``mac_mean`` (None without shapes), ``mass`` {quantity: % error of the
+        ``frequency_rms_held_out``, ``frequency_rms`` [%], ``max_cross_orthogonality_offdiag``
+        (``_held_out``: rows of the held-out modes), ``mac_min``, ``mac_min_held_out``,
+        ``mac_mean`` (None without shapes), ``mass`` {quantity: % error of the
         configuration with the largest |error|}, ``mass_by_configuration``, ``flutter_speed``
         (None: filled by the pipeline stage). :data:`GAP_MODELS` says which model each is.
     notes : tuple of str
