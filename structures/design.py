@@ -310,7 +310,8 @@ def apply_design(model: FEModel, space: DesignSpace, x, *, only=None) -> FEModel
                    masses=replace(model.masses, mass=mass, inertia=inertia))
 
 
-def _material_ids(prop: Property) -> set:
+def material_ids(prop: Property) -> set:
+    """The material ids a property references (its MID, MID1 .. MID4 fields that are set)."""
     return {int(prop.fields[k]) for k in ("MID", "MID1", "MID2", "MID3", "MID4")
             if prop.fields.get(k)}
 
@@ -325,7 +326,7 @@ def affected_submodel(model: FEModel, space: DesignSpace, only=None) -> FEModel 
     refs = [ref for i in keep for ref in space.variables[i].fields]
     pids = {int(r.card_id) for r in refs if r.card in _PROPERTY_CARDS}
     mids = {int(r.card_id) for r in refs if r.card in ("MAT1", "MAT8")}
-    pids |= {pid for pid, p in model.properties.items() if _material_ids(p) & mids}
+    pids |= {pid for pid, p in model.properties.items() if material_ids(p) & mids}
     conm2 = {int(r.card_id) for r in refs if r.card == "CONM2"}
     celas2 = {int(r.card_id) for r in refs if r.card == "CELAS2"}
     elements = {}
