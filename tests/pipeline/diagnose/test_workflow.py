@@ -127,22 +127,33 @@ def test_frame_none_names_nothing(tmp_path):
     assert back.attrs["verdict"] == "none" and back.sizes["rank"] == len(result.candidates)
 
 
+class GapDidNotShrink(AssertionError):
+    """A gap metric that the issue requires to drop did not (an expected failure can name it)."""
+
+
 @pytest.mark.slow
-@pytest.mark.parametrize("kind, cross_drops", [("lumped_mass", True), ("boundary_stiffness", True),
-                                               ("member_taper", False)])
-def test_frame_effect_named_where_it_is(tmp_path, kind, cross_drops):
+@pytest.mark.parametrize("kind", [
+    "lumped_mass", "boundary_stiffness",
+    pytest.param("member_taper", marks=pytest.mark.xfail(
+        strict=True, raises=GapDidNotShrink,
+        reason="measured on seed 0 (3 taper effects named, PID 23 first): held-out frequency RMS "
+               "1.48 -> 0.60 %, but the cross-orthogonality off-diagonal rises 0.692 -> 0.697 "
+               "(held-out rows 0.692 -> 0.694; MAC min 0.44 -> 0.41): close modes mixed by the "
+               "nominal scatter that the taper cannot undo"))])
+def test_frame_effect_named_where_it_is(tmp_path, kind):
     # 20-40 s each on shared cores. Measured on seed 0: lumped mass at grid 3009 (truth 3008,
-    # 3009, 3209), boundary spring grid 5002 y (truth 5002), taper PID 23 (truth PID 23); the
-    # taper's cross-orthogonality stays (0.69 -> 0.70: close modes mixed by the nuisance scatter)
+    # 3009, 3209): held-out frequency RMS 10.4 -> 0.93 %, cross-orthogonality 0.707 -> 0.578
+    # (held-out rows the same); boundary spring grid 5002 y (truth 5002): 1.01 -> 0.72 %,
+    # 0.671 -> 0.496 (held-out rows 0.671 -> 0.489); taper PID 23 (truth PID 23)
     result, truth = _run(tmp_path, kind)
     assert result.verdict == "effect"
     first = result.effects[0]
     assert first.candidate.kind == kind and _near_truth(first, truth)
-    assert result.gap_after["frequency_rms_held_out"] < result.gap_before["frequency_rms_held_out"] \
-        or kind == "lumped_mass"
-    if cross_drops:
-        assert result.gap_after["max_cross_orthogonality_offdiag"] < \
-            result.gap_before["max_cross_orthogonality_offdiag"]
+    before, after = result.gap_before, result.gap_after
+    for key in ("frequency_rms_held_out", "max_cross_orthogonality_offdiag",
+                "max_cross_orthogonality_offdiag_held_out"):
+        if not after[key] < before[key]:
+            raise GapDidNotShrink(f"{key}: {before[key]} -> {after[key]}")
 
 
 @pytest.mark.slow
