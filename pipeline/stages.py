@@ -21,8 +21,10 @@ stage                       reads                                    writes
                                                                      ``targets.json`` (with [loop])
 ``diagnose`` ([diagnose])   decks, GVT files, measured mass,         ``diagnose/diagnose.json``,
                             [diagnose]; stage 0's flutter and grid   ``diagnose.nc``, ``*.png``,
-                            GAFs (flutter on); after stage 0 with    ``C_diagnosed.bdf``,
-                            before_tuning, else before the report    ``C/flutter/*``
+                            GAFs (flutter on); after stage 0 with    ``C_calibrated.bdf``,
+                            before_tuning, else before the report    ``C_diagnosed.bdf``,
+                                                                     ``C/flutter_before/*``,
+                                                                     ``C/flutter/*``
 ``flutter_change``          every stage's participation              ``flutter_change.nc``
 ``report``                  the whole run folder                     ``report.html``
 ==========================  =======================================  ==============================

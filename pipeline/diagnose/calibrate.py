@@ -22,7 +22,7 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from pipeline.diagnose.evidence import chi_square, evaluate, gof_limit, runs_test
-from structures.design import DesignVariable, apply_design, bind, write_tuned_bdf
+from structures.design import DesignVariable, apply_design, bind, material_ids, write_tuned_bdf
 from structures.model import FEModel
 
 #: Bound of every nominal parameter (relative): a material's modulus or the masses are known to
@@ -50,9 +50,7 @@ def _material_variables(model: FEModel) -> list:
             prop = model.properties.get(int(pid))
             if prop is None:
                 continue
-            for key, value in prop.fields.items():
-                if key.startswith("MID") and value:
-                    used.add(int(value))
+            used |= material_ids(prop)
     out = []
     for mid in sorted(used):
         mat = model.materials.get(mid)

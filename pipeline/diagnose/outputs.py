@@ -56,11 +56,6 @@ def lowest_flutter_speed(summaries) -> float | None:
     return min(speeds) if speeds else None
 
 
-def _named_effects(result) -> list:
-    """(Candidate, values) of every named effect, in the order named."""
-    return [(effect[0], effect[1]) for effect in result.effects]
-
-
 def _diagnosed_flutter(case, folder: Path, run_dir: Path, decks: dict, aero: dict,
                        progress=None, name: str = "flutter") -> float | None:
     """Lowest flutter speed of ``decks`` ({configuration: deck}; their flutter written to
@@ -109,7 +104,7 @@ def write_diagnosis(case, folder, run_dir, aero: dict | None = None, progress=No
     options = case_diagnose_settings(case)
     configurations = configurations_from_case(case)
     result = diagnose(configurations, options.workflow, progress=progress)
-    effects = _named_effects(result)
+    effects = [(effect[0], effect[1]) for effect in result.effects]   # (Candidate, values)
     calibrated, decks = {}, {}
     for data in configurations:
         calibrated[data.name] = write_calibrated_deck(
