@@ -17,10 +17,10 @@ from structures.common.files import read_dataset
 from structures.gvt import load_gvt, make_gvt_dataset, write_uff
 from structures.massprops import mass_properties
 from structures.modal import compute_modes
+from tests.pipeline.chain_deck import MASSES, chain_deck
 
 #: The hidden effect of the small case: a mass at grid 500 missing from the analysis deck.
 HIDDEN_GRID, HIDDEN_MASS = 500, 0.6
-MASSES = (1.0, 1.2, 1.4, 1.0, 1.2, 1.4)
 GAP_KEYS = {"frequency_rms_held_out", "frequency_rms", "max_cross_orthogonality_offdiag",
             "mac_min", "mass", "flutter_speed"}
 
@@ -32,20 +32,6 @@ def cli(argv, capsys) -> tuple[int, str, str]:
         code = exc.code
     out, err = capsys.readouterr()
     return code, out, err
-
-
-def chain_deck(path: Path, extra=()) -> None:
-    """Six grids along x tied by CELAS2 springs in x, y, z, CONM2 masses, rotations fixed."""
-    cards = ["CEND", "BEGIN BULK"]
-    for i, m in enumerate(MASSES):
-        cards += [f"GRID,{100 * (i + 1)},,{float(i)},0.,0.", f"CONM2,{900 + i},{100 * (i + 1)},,{m}"]
-    for i in range(len(MASSES) - 1):
-        for c, k in ((1, 4.0e4), (2, 1.0e4), (3, 2.5e4)):
-            cards.append(f"CELAS2,{10 * i + c},{k * (1.0 + 0.1 * i)},{100 * (i + 1)},{c},"
-                         f"{100 * (i + 2)},{c}")
-    cards += ["SPC1,1,456," + ",".join(str(100 * (i + 1)) for i in range(len(MASSES))),
-              *extra, "ENDDATA"]
-    path.write_text("\n".join(cards) + "\n")
 
 
 @pytest.fixture()

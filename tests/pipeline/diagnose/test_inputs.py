@@ -14,22 +14,7 @@ from structures.bdf import read_model
 from structures.common.errors import InputError
 from structures.gvt import make_gvt_dataset, write_uff
 from structures.modal import compute_modes
-
-MASSES = (1.0, 1.2, 1.4, 1.0, 1.2, 1.4)
-
-
-def chain_deck(path, extra=()) -> None:
-    """Six grids along x tied by CELAS2 springs in x, y, z, CONM2 masses, rotations fixed."""
-    cards = ["CEND", "BEGIN BULK"]
-    for i, m in enumerate(MASSES):
-        cards += [f"GRID,{100 * (i + 1)},,{float(i)},0.,0.", f"CONM2,{900 + i},{100 * (i + 1)},,{m}"]
-    for i in range(len(MASSES) - 1):
-        for c, k in ((1, 4.0e4), (2, 1.0e4), (3, 2.5e4)):
-            cards.append(f"CELAS2,{10 * i + c},{k * (1.0 + 0.1 * i)},{100 * (i + 1)},{c},"
-                         f"{100 * (i + 2)},{c}")
-    cards += ["SPC1,1,456," + ",".join(str(100 * (i + 1)) for i in range(len(MASSES))),
-              *extra, "ENDDATA"]
-    path.write_text("\n".join(cards) + "\n")
+from tests.pipeline.chain_deck import chain_deck
 
 
 @pytest.fixture()
