@@ -11,21 +11,11 @@ from pathlib import Path
 import pytest
 
 from flutter.results import is_flutter
-from pipeline.cli import main
+from tests.pipeline.cli_run import cli
 
 DATA = Path(__file__).resolve().parents[1] / "data"
 ROOT = Path(__file__).resolve().parents[2]
 BAH = ("bah_plane.bdf", "structure_bah.inc", "aero_bah.inc", "interface_bah.inc")
-
-
-def cli(argv, capsys) -> tuple[int, str, str]:
-    """Run ``pipeline ARGV`` in-process: (exit code, stdout, stderr)."""
-    try:
-        code = main([str(a) for a in argv])
-    except SystemExit as exc:  # argparse
-        code = exc.code
-    out, err = capsys.readouterr()
-    return code, out, err
 
 
 def failed(argv, capsys, *needles, code=2) -> str:

@@ -11,27 +11,18 @@ import numpy as np
 import pytest
 
 from flutter.results import is_flutter
-from pipeline.cli import main
 from structures.bdf import read_model
 from structures.common.files import read_dataset
 from structures.gvt import load_gvt, make_gvt_dataset, write_uff
 from structures.massprops import mass_properties
 from structures.modal import compute_modes
 from tests.pipeline.chain_deck import MASSES, chain_deck
+from tests.pipeline.cli_run import cli
 
 #: The hidden effect of the small case: a mass at grid 500 missing from the analysis deck.
 HIDDEN_GRID, HIDDEN_MASS = 500, 0.6
 GAP_KEYS = {"frequency_rms_held_out", "frequency_rms", "max_cross_orthogonality_offdiag",
             "mac_min", "mass", "flutter_speed"}
-
-
-def cli(argv, capsys) -> tuple[int, str, str]:
-    try:
-        code = main([str(a) for a in argv])
-    except SystemExit as exc:  # argparse
-        code = exc.code
-    out, err = capsys.readouterr()
-    return code, out, err
 
 
 @pytest.fixture()
