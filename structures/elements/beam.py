@@ -228,7 +228,11 @@ def beam_matrices(x_a, x_b, v, offset_a, offset_b, e, g, area, i1, i2, i12, j, n
         k_local, m_local = condense_pins(k_elem, m_local, np.asarray(pins))
         principal_axes = axes
     k = to_grids(k_local, principal_axes, offset_a, offset_b)
-    m = to_grids(m_local, principal_axes, offset_a, offset_b)
+    # Lumped mass is m I on the translations at each end, the same in every axes: rotating it
+    # would only add round-off couplings (1e-33 of the diagonal) that make M look non-diagonal
+    # to the eigensolver (structures.modal's lumped path).
+    mass_axes = np.broadcast_to(np.eye(3), principal_axes.shape) if lumped else principal_axes
+    m = to_grids(m_local, mass_axes, offset_a, offset_b)
     return k, m
 
 
