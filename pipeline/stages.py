@@ -6,8 +6,9 @@ stage n and configuration C, with the run-folder files of the contract in DESIGN
 ==========================  =======================================  ==============================
 stage                       reads                                    writes
 ==========================  =======================================  ==============================
-``stageN/tuning`` (N >= 1)  decks, GVT files, [tuning], [loop],      ``stageN/tuning/history.nc``,
-                            stage N-1's selection and tuning         ``report.txt``, ``C_tuned.bdf``
+``stageN/tuning`` (N >= 1)  decks (the diagnosed ones with           ``stageN/tuning/history.nc``,
+                            before_tuning), GVT files, [tuning],     ``report.txt``, ``C_tuned.bdf``
+                            [loop], stage N-1's selection and tuning
 ``stageN/modes/C``          deck (stage 0) or ``C_tuned.bdf``        ``stageN/C/modes.nc``,
                                                                      ``mass_properties.nc``
 ``stageN/correlation/C``    modes, mass properties, GVT file         ``stageN/C/correlation.nc``,
@@ -158,13 +159,14 @@ def _tuning(ctx: StageContext, case, n: int, progress=None) -> None:
     from structures.tuning_report import tuning_report
 
     settings = case.tuning
+    decks = _start_decks(ctx, case)
     names = [c.name for c in case.configurations]
     selection = read_dataset(ctx.run_dir / f"stage{n - 1}/selection.nc")
     objective, constraints, test_modes = loop_terms(selection, names, case.loop.criteria,
                                                     _measured_mass(case))
     prior = tuple(t for t in settings.objective if str(t[0]).startswith("design:"))
     problem = tuning_problem(case, objective + prior, constraints + settings.constraints,
-                             test_modes)
+                             test_modes, decks=decks)
     if n > 1:   # go on from the design the previous stage wrote out
         previous = read_dataset(ctx.run_dir / f"stage{n - 1}/tuning/history.nc")
         start = previous["design"].values[int(previous.attrs["chosen_iteration"])]
@@ -188,7 +190,7 @@ def _tuning(ctx: StageContext, case, n: int, progress=None) -> None:
     write_text(tuning_report(history, after=chosen) + "\n",
                ctx.output(f"stage{n}/tuning/report.txt"))
     for c in case.configurations:
-        write_tuned_bdf(c.deck, ctx.output(_tuned_deck(n, c.name)), result.space, design)
+        write_tuned_bdf(decks[c.name], ctx.output(_tuned_deck(n, c.name)), result.space, design)
     return (f"{'converged' if result.success else 'not converged'} after {result.iterations} "
             f"iterations, objective {float(history['objective'].values[chosen]):.4e} "
             f"(evaluation {chosen}), "
@@ -264,6 +266,17 @@ def _before_tuning(case) -> bool:
     return case.diagnose is not None and case.diagnose.before_tuning
 
 
+def _start_decks(ctx: StageContext, case) -> dict:
+    """configuration -> the deck every tuning stage starts from (its design applies to it): with
+    ``before_tuning``, the model the diagnosis ended with (the named effects added to the
+    calibrated deck, :func:`pipeline.diagnose.outputs.final_deck`), else the case's deck."""
+    if not _before_tuning(case):
+        return {c.name: c.deck for c in case.configurations}
+    from pipeline.diagnose.outputs import final_deck
+
+    return {c.name: final_deck(ctx.run_dir, c.name) for c in case.configurations}
+
+
 # ------------------------------------------------------------------------------------ the plan
 def case_aero_groups(case) -> dict:
     """pipeline.chain.aero_groups of a case with [flutter] ({} without): compute it once per run
@@ -294,6 +307,7 @@ def stage_plan(case, n: int, display=None, aero: dict | None = None) -> list[Sta
         files = tuple(f for c in case.configurations for f in (*deck_files(c.deck), c.gvt))
         files += (case.tuning.restart,) if case.tuning.restart is not None and n == 1 else ()
         after = (f"stage{n - 1}/selection",) + ((f"stage{n - 1}/tuning",) if n > 1 else ())
+        after += ("diagnose",) if n == 1 and _before_tuning(case) else ()
         out.append(Stage(f"stage{n}/tuning", partial(_tuning, case=case, n=n, progress=iteration),
                          settings=_tuning_settings(case), files=files, after=after))
         after_deck = (f"stage{n}/tuning",)

@@ -38,6 +38,15 @@ GAP_UNITS = {"frequency_rms_held_out": "%", "frequency_rms": "%",
              "mac_min_held_out": "-", "mac_mean": "-"}
 
 
+def final_deck(run_dir, config: str) -> Path:
+    """The deck of the model a diagnosis ended with, for configuration ``config`` of a run folder:
+    ``diagnose/<config>_diagnosed.bdf`` when an effect was named, else the calibrated deck (the
+    models of ``gap_after``, :data:`pipeline.diagnose.result.GAP_MODELS`)."""
+    folder = Path(run_dir) / FOLDER
+    diagnosed = folder / f"{config}_diagnosed.bdf"
+    return diagnosed if diagnosed.is_file() else folder / f"{config}_calibrated.bdf"
+
+
 def lowest_flutter_speed(summaries) -> float | None:
     """The lowest velocity of the flutter crossings (not divergence) of ``summaries``.
 

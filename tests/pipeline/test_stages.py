@@ -154,3 +154,26 @@ def test_configurations_share_grid_gafs_only_on_one_aerodynamic_grid(case, tmp_p
     assert [s.name for s in plan if "/aero/" in s.name] == ["stage0/aero/baseline",
                                                             "stage0/aero/fuel"]
     assert "stage0/aero/fuel" in next(s for s in plan if s.name == "stage0/flutter/fuel").after
+
+
+def test_tuning_starts_from_the_model_the_diagnosis_ended_with(case, tmp_path):
+    """With [diagnose] before_tuning, stage 1's tuning runs after the diagnosis and every tuning
+    stage starts from its decks: the diagnosed deck of a configuration with a named effect, the
+    calibrated one of a configuration without; without before_tuning, from the case's decks."""
+    from pipeline.diagnose.inputs import diagnose_case_settings
+    from pipeline.graph import Stage, StageContext
+    from pipeline.stages import _start_decks
+
+    early = replace(case, diagnose=diagnose_case_settings(
+        {"before_tuning": True}, CASE, case.configurations, True))
+    assert "diagnose" in _stage(early, "stage1/tuning").after
+    assert "diagnose" not in _stage(case, "stage1/tuning").after
+    ctx = StageContext(Stage("stage1/tuning", print), tmp_path / "staging", tmp_path)
+    assert _start_decks(ctx, case) == {c.name: c.deck for c in case.configurations}
+    first, second = (c.name for c in case.configurations)
+    folder = tmp_path / "diagnose"
+    folder.mkdir()
+    for name in (f"{first}_calibrated", f"{second}_calibrated", f"{second}_diagnosed"):
+        (folder / f"{name}.bdf").write_text("BEGIN BULK\nENDDATA\n")
+    assert _start_decks(ctx, early) == {first: folder / f"{first}_calibrated.bdf",
+                                        second: folder / f"{second}_diagnosed.bdf"}
