@@ -1,8 +1,9 @@
 """Ids and cards the candidate effects add to a model (:mod:`pipeline.diagnose.effects`,
-:mod:`pipeline.diagnose.joints`): new element and property ids, appended element rows, CBUSHes.
+:mod:`pipeline.diagnose.joints`): new element and property ids, appended element rows, CBUSHes,
+new grids.
 
 New elements take ids from the model's largest element, CONM2 or rigid-element id + 1; new
-properties from its largest PID + 1.
+properties from its largest PID + 1; new grids from its largest grid id + 1.
 """
 from __future__ import annotations
 
@@ -52,3 +53,16 @@ def add_bushes(model: FEModel, pairs, stiffness) -> FEModel:
         {"v": np.zeros((n, 3)), "g0": np.zeros(n, np.int64), "cid": np.zeros(n, np.int64),
          "s": np.full(n, 0.5)})
     return replace(model, elements=elements, properties=props)
+
+
+def add_grids(model: FEModel, xyz) -> tuple[FEModel, np.ndarray]:
+    """The model with grids added at the (n, 3) basic positions ``xyz`` (basic displacement
+    frame, no permanent constraints), ids from the largest grid id + 1; and their (n,) ids."""
+    g = model.grids
+    xyz = np.asarray(xyz, float).reshape(-1, 3)
+    ids = int(g.ids.max()) + 1 + np.arange(len(xyz))
+    grids = replace(g, ids=np.append(g.ids, ids), xyz=np.vstack([g.xyz, xyz]),
+                    cd_axes=np.concatenate([g.cd_axes, np.tile(np.eye(3), (len(xyz), 1, 1))]),
+                    cd=np.append(g.cd, np.zeros(len(xyz), np.int64)),
+                    ps=np.append(g.ps, np.zeros(len(xyz), np.int64)))
+    return replace(model, grids=grids), ids

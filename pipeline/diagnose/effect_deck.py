@@ -2,7 +2,8 @@
 
 An effect of :mod:`pipeline.diagnose.effects` is defined by the model it makes; its cards are read
 off the difference between the model before and after (new CONM2s, CBUSH/PBUSH and CELAS2
-springs, new or changed CBAR/CBEAM and PBAR/PBEAM cards, removed rigid elements), so that the
+springs, new or changed CBAR/CBEAM and PBAR/PBEAM cards, new or moved grids, removed rigid
+elements), so that the
 written deck and :func:`pipeline.diagnose.effects.apply_effect` cannot disagree. Cards are field
 lists: rendered as small-field text with :mod:`structures.bulk_text` (MYSTRAN-readable), or added
 to a pyNastran deck and written in large field (the precision of the model's numbers).
@@ -121,15 +122,17 @@ def _match(old_ids, new_ids) -> np.ndarray:
     return np.where(old_ids[j] == new_ids, j, -1)
 
 
-def _row_diff(before, es, changed_pids=()):
+def _row_diff(before, es, changed_pids=(), moved_grids=()):
     """Rows of ``es`` that are new, rows of ``es`` that differ from ``before`` (same element id,
-    or a property in ``changed_pids``), their rows in ``before``, and rows of ``before`` gone."""
+    a property in ``changed_pids`` or a grid in ``moved_grids``), their rows in ``before``, and
+    rows of ``before`` gone."""
     if before is None:
         return np.arange(len(es)), *(np.zeros(0, np.int64),) * 3
     j = _match(before.eids, es.eids)
     rows, j = np.flatnonzero(j >= 0), j[j >= 0]
     diff = (_differs(before.pids[j], es.pids[rows]) | _differs(before.nodes[j], es.nodes[rows])
-            | np.isin(es.pids[rows], list(changed_pids)))
+            | np.isin(es.pids[rows], list(changed_pids))
+            | np.isin(es.nodes[rows], list(moved_grids)).any(axis=1))
     for key, arr in es.data.items():
         diff |= _differs(np.asarray(before.data[key])[j], np.asarray(arr)[rows])
     gone = np.flatnonzero(~np.isin(before.eids, es.eids))
@@ -153,6 +156,14 @@ def _mass_rows(masses, rows):
                    offset=masses.offset[rows], inertia=masses.inertia[rows])
 
 
+def _moved_grids(old: FEModel, new: FEModel) -> np.ndarray:
+    """Sorted ids of the grids of both models whose basic position differs."""
+    j = _match(old.grids.ids, new.grids.ids)
+    both = np.flatnonzero(j >= 0)
+    moved = _differs(old.grids.xyz[j[both]], new.grids.xyz[both])
+    return np.sort(new.grids.ids[both[moved]])
+
+
 def model_changes(old: FEModel, new: FEModel) -> tuple[dict, list]:
     """The cards that turn ``old`` into ``new``.
 
@@ -162,12 +173,12 @@ def model_changes(old: FEModel, new: FEModel) -> tuple[dict, list]:
         ``new`` made from ``old`` by diagnose effects (elements and properties added or changed in
         the families of :data:`CHANGED_FAMILIES`, CONM2s added, grids added (basic frame),
         rigid elements removed, RBE2s with fewer dependent grids of one component set or a new
-        independent grid: removed and written again).
+        independent grid: removed and written again; grids of the basic frame moved).
 
     Returns
     -------
-    removed : dict with ``rigid``, ``elements``, ``properties``: sorted ids of cards to delete
-        (changed cards are deleted and written again).
+    removed : dict with ``rigid``, ``elements``, ``properties``, ``grids``: sorted ids of cards
+        to delete (changed cards are deleted and written again).
     cards : list of field lists (card name first), in the order grids, properties, elements,
         masses.
     """
@@ -175,7 +186,9 @@ def model_changes(old: FEModel, new: FEModel) -> tuple[dict, list]:
     removed = {"rigid": sorted(r.eid for r in old.rigid if new_rigid.get(r.eid) != r),
                "elements": [], "properties": []}
     prop_cards, elem_cards, mass_cards = [], [], []
-    added = ~np.isin(new.grids.ids, old.grids.ids)
+    moved = _moved_grids(old, new)
+    removed["grids"] = moved.tolist()
+    added = ~np.isin(new.grids.ids, old.grids.ids) | np.isin(new.grids.ids, moved)
     grid_cards = [["GRID", int(gid), None, *map(float, xyz)]
                   for gid, xyz in zip(new.grids.ids[added], new.grids.xyz[added])]
     for eid in removed["rigid"]:
@@ -206,7 +219,8 @@ def model_changes(old: FEModel, new: FEModel) -> tuple[dict, list]:
 
 
 def changed_parts(old: FEModel, new: FEModel) -> tuple[FEModel, FEModel]:
-    """The elements and CONM2s in which two models with the same grids and rigid elements differ.
+    """The elements and CONM2s in which two models with the same grids (ids; positions may
+    differ) and rigid elements differ.
 
     Parameters
     ----------
@@ -216,7 +230,7 @@ def changed_parts(old: FEModel, new: FEModel) -> tuple[FEModel, FEModel]:
     -------
     old_part, new_part : FEModel
         ``old`` restricted to its changed and removed elements and CONM2s, ``new`` to its changed
-        and added ones; elements whose property changed count as changed.
+        and added ones; elements whose property changed or with a moved grid count as changed.
         ``K(new) - K(old) = K(new_part) - K(old_part)`` for every assembled matrix.
     """
     if [r.eid for r in old.rigid] != [r.eid for r in new.rigid] or \
@@ -225,15 +239,16 @@ def changed_parts(old: FEModel, new: FEModel) -> tuple[FEModel, FEModel]:
                          "difference is not a sum of element matrices. Fix: reassemble both.")
     changed_pids = [pid for pid, prop in new.properties.items()
                     if pid in old.properties and old.properties[pid] != prop]
+    moved = _moved_grids(old, new)
     parts = ({}, {})
     for kind in sorted(set(old.elements) | set(new.elements)):
         es, before = new.elements.get(kind), old.elements.get(kind)
         if es is None:
             rows_new, rows_old = np.zeros(0, np.int64), np.arange(len(before))
-        elif es is before and not changed_pids:
+        elif es is before and not changed_pids and not moved.size:
             continue
         else:
-            added, changed, was, gone = _row_diff(before, es, changed_pids)
+            added, changed, was, gone = _row_diff(before, es, changed_pids, moved)
             rows_new, rows_old = np.concatenate([added, changed]), np.concatenate([was, gone])
         for side, source, rows in ((0, before, rows_old), (1, es, rows_new)):
             if len(rows):
@@ -269,8 +284,8 @@ def small_field_text(removed: dict, cards: list, header: str = "") -> str:
     """Small-field bulk-data text of the cards, removals stated as comments."""
     lines = [f"$ {line}" for line in header.splitlines()]
     for key, name in (("rigid", "rigid element"), ("elements", "element"),
-                      ("properties", "property")):
-        if removed[key]:
+                      ("properties", "property"), ("grids", "grid")):
+        if removed.get(key):
             lines.append(f"$ replaces or removes {name} " + " ".join(map(str, removed[key])))
     lines.extend(card_text(*fields) for fields in cards)
     return "\n".join(lines) + "\n"
@@ -292,6 +307,8 @@ def write_patched_deck(deck_in, deck_out, changes) -> Path:
             bdf.elements.pop(eid, None)
         for pid in removed["properties"]:
             bdf.properties.pop(pid, None)
+        for gid in removed.get("grids", ()):
+            bdf.nodes.pop(gid, None)
         for fields in cards:
             bdf.add_card(list(fields), fields[0], is_list=True)
     text = io.StringIO()

@@ -39,15 +39,22 @@ scale of the model (so that bounds do not depend on units):
     Each element's A times (1 + scale) (1 + taper (xi - 1/2))^2 and I1, I2, I12, J times
     (1 + scale) (1 + taper (xi - 1/2))^4 at its mid-length xi: a solid section scaled in size s
     (A ~ s^2, I ~ s^4) linearly along the member. Bounds scale [-0.3, 0.3], taper [-0.8, 0.8].
-    A one-element member has ``scale`` only (the taper has no effect at xi = 1/2). An element
-    keeps its PID when it is the PID's only element; otherwise it gets a new PID (a scaled copy
-    of its property, numbered from the model's largest PID + 1). Applied again, the factors
-    multiply (each element's current property is scaled).
+    A member of fewer than :data:`~pipeline.diagnose.members.MIN_SEGMENTS` elements is first
+    split in that many straight pieces (:func:`pipeline.diagnose.members.remesh`, new grids on
+    its line), so that a member one element long has a taper too. An element keeps its PID when
+    it is the PID's only element; otherwise it gets a new PID (a scaled copy of its property,
+    numbered from the model's largest PID + 1). Applied again to a member that was not split,
+    the factors multiply (each element's current property is scaled); a split member cannot be
+    changed again.
 ``member_curvature`` of a member, parameters ``bow_1``, ``bow_2``
-    A parabolic bow: the member's middle is offset laterally by bow_1 L along each element's y axis
-    (plane 1) and bow_2 L along its z axis (plane 2), L the member's length, by element end
-    offsets w(xi) = 4 bow L xi (1 - xi) added to WA/WB (a one-element member: its mid-length value
-    bow L at both ends), so bending couples with axial and torsion. Bounds [-0.15, 0.15].
+    A parabolic bow: the member's middle rises by bow_1 L along each element's y axis (plane 1)
+    and bow_2 L along its z axis (plane 2), L the member's length, the arc
+    w(xi) = 4 bow L xi (1 - xi) (:func:`pipeline.diagnose.members.remesh`): the member's grids
+    reach it by end offsets added to WA/WB, and a member of fewer than
+    :data:`~pipeline.diagnose.members.MIN_SEGMENTS` elements is split in that many straight
+    pieces joined at new grids on the arc (one offset straight element cannot bow: its axial
+    load path stays straight). Bending then couples with axial and torsion, and the member's
+    axial stiffness falls with the square of the bow. Bounds [-0.15, 0.15].
 ``boundary_stiffness`` at a grid in direction x, y or z, parameter ``k_<direction>``
     A grounded CELAS2 of stiffness k times m_total (2 pi f_1)^2, f_1 the model's lowest elastic
     frequency and m_total its total mass (consistent units): at k = 1 the spring alone would carry
@@ -71,12 +78,10 @@ from pipeline.diagnose.effect_deck import (change_matrices, model_changes, small
                                            write_patched_deck)
 from pipeline.diagnose.edits import append_elements, next_eid, next_pid
 from pipeline.diagnose.joints import flexible_joint, joint_sites
-from pipeline.diagnose.members import Member, connectivity, find_members, grow
-from structures.assembly import line_offsets
+from pipeline.diagnose.members import connectivity, find_members, grow, remesh
 from structures.common.errors import InputError, card_message
-from structures.elements.beam import beam_axes
 from structures.massprops import mass_properties
-from structures.model import ElementSet, FEModel, Property
+from structures.model import FEModel, Property
 
 KINDS = ("lumped_mass", "joint_flexibility", "member_taper", "member_curvature",
          "boundary_stiffness")
@@ -242,8 +247,7 @@ def candidates(model: FEModel, kinds=KINDS, *, frequency: float | None = None
                     for grids_j, eid, label, detail in joint_sites(model)]
         else:
             for m in members:
-                names = PARAMETER_RANGES[kind] if kind == "member_curvature" or len(m.eids) > 1 \
-                    else ("scale",)
+                names = PARAMETER_RANGES[kind]
                 label = (f"member PID {m.pid} ({m.card} {m.eids[0]}" +
                          (f"..{m.eids[-1]}, grids {m.grids[0]}-{m.grids[-1]})"
                           if len(m.eids) > 1 else f", grids {m.grids[0]}-{m.grids[-1]})"))
@@ -321,23 +325,11 @@ def _joint(model, candidate, x):
                           candidate.get("k_rotation") / x[0], candidate.get("dependent"))
 
 
-def _member_rows(model: FEModel, member: Member):
-    es = model.elements.get(member.card)
-    pos = {} if es is None else {int(e): i for i, e in enumerate(es.eids)}
-    missing = [e for e in member.eids if e not in pos]
-    if missing:
-        raise InputError(card_message(f"the member's elements {missing} are not in the model.",
-                                      card=member.card, card_id=missing[0],
-                                      filename=model.filename,
-                                      fix="build the candidate with candidates() on this model."))
-    return es, np.array([pos[e] for e in member.eids])
-
-
 def _taper(model, candidate, x):
     member = candidate.get("member")
-    scale, taper = x[0], (x[1] if len(x) > 1 else 0.0)
-    es, rows = _member_rows(model, member)
-    s = 1.0 + taper * (member.xi_mid - 0.5)
+    model, rows, xi_mid = remesh(model, member)
+    es = model.elements[member.card]
+    s = 1.0 + x[1] * (xi_mid - 0.5)
     pids = np.array(es.pids)
     props = dict(model.properties)
     new_pid = next_pid(model)
@@ -346,7 +338,7 @@ def _taper(model, candidate, x):
         if np.count_nonzero(es.pids == base.pid) > 1:
             pids[row], new_pid = new_pid, new_pid + 1
         fields = {k: (None if base.fields.get(k) is None else
-                      base.fields[k] * (1.0 + scale) * s[i] ** n)
+                      base.fields[k] * (1.0 + x[0]) * s[i] ** n)
                   for k, n in TAPER_EXPONENTS.items()}
         props[int(pids[row])] = Property(int(pids[row]), base.card, {**base.fields, **fields})
     elements = dict(model.elements)
@@ -355,35 +347,7 @@ def _taper(model, candidate, x):
 
 
 def _curvature(model, candidate, x):
-    member = candidate.get("member")
-    es, rows = _member_rows(model, member)
-    sub = ElementSet(es.card, es.eids[rows], es.pids[rows], es.nodes[rows],
-                     {k: np.asarray(v)[rows] for k, v in es.data.items()})
-    gi = model.grids.index(sub.nodes, card=es.card, filename=model.filename)
-    v, wa, wb = line_offsets(model, sub, gi, model.filename)
-    xyz = model.grids.xyz
-    axes, _ = beam_axes(xyz[gi[:, 0]] + wa, xyz[gi[:, 1]] + wb, v)
-    lateral = x[0] * axes[:, 1] + x[1] * axes[:, 2]
-    if len(rows) == 1:
-        xi = np.array([[0.5, 0.5]])
-    else:
-        xi = np.stack([member.xi_a, member.xi_b], axis=1)
-    shift = 4.0 * member.length * (xi * (1.0 - xi))[:, :, None] * lateral[:, None, :]
-    offt = np.array(es.data["offt"]).astype("<U3")
-    w = {0: np.array(es.data["wa"], float), 1: np.array(es.data["wb"], float)}
-    for i, row in enumerate(rows):
-        flag = list(offt[row])
-        for end in (0, 1):
-            if flag[1 + end] == "O":
-                flag[1 + end] = "B"
-            d = shift[i, end]
-            if flag[1 + end] == "G":
-                d = model.grids.cd_axes[gi[i, end]].T @ d
-            w[end][row] = w[end][row] + d
-        offt[row] = "".join(flag)
-    elements = dict(model.elements)
-    elements[es.card] = replace(es, data={**es.data, "wa": w[0], "wb": w[1], "offt": offt})
-    return replace(model, elements=elements)
+    return remesh(model, candidate.get("member"), x)[0]
 
 
 #: The :attr:`Candidate.detail` keys each kind needs (set by :func:`candidates`).
@@ -427,7 +391,8 @@ def effect_matrices(model: FEModel, candidate: Candidate, values, *, mass: str =
     Parameters
     ----------
     model : FEModel
-    candidate : Candidate, not ``joint_flexibility`` (it changes the constraint equations).
+    candidate : Candidate, not ``joint_flexibility`` (it changes the constraint equations) nor
+        a taper or curvature of a member it splits (new grids): those raise InputError.
     values : (npar,)
     mass : {'deck', 'consistent', 'lumped'}, as in :func:`structures.assembly.assemble_g`.
 

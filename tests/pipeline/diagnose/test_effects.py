@@ -133,15 +133,23 @@ def test_taper_copies_a_shared_property(x56, x56_candidates):
     es = new.elements["CBAR"]
     pids = dict(zip(es.eids.tolist(), es.pids.tolist()))
     assert pids[5001] == pids[5101] == 101 and new.properties[101] == x56.properties[101]
-    # the six fuselage elements get PIDs 253..258 (the deck's largest PID is 252), in order
-    fresh = [pids[e] for e in (1003, 1004, 1005, 1006, 1007, 1008)]
-    assert max(x56.properties) == 252 and fresh == [253, 254, 255, 256, 257, 258]
-    # by hand: PBAR 101 is A 6, I1 60, I2 40, I12 0, J 60; xi_mid = 1/12, 3/12, .., 11/12 gives
-    # s = 1 + 0.5 (xi - 1/2) = 19/24, 21/24, .., 29/24; A 1.1 x 6 s^2, I 1.1 x I s^4
-    s = np.array([19.0, 21.0, 23.0, 25.0, 27.0, 29.0]) / 24.0
+    # the six fuselage elements are split in 2 (12 pieces: MIN_SEGMENTS 8), at new grids on
+    # their line (the deck's largest grid is 6203), and the pieces get PIDs 253..264 (the deck's
+    # largest PID is 252), in chain order
+    assert max(x56.grids.ids) == 6203 and new.grids.ids[-6:].tolist() == list(range(6204, 6210))
+    xyz = dict(zip(x56.grids.ids.tolist(), x56.grids.xyz))
+    np.testing.assert_allclose(new.grids.xyz[-6:], [(xyz[g] + xyz[g + 1]) / 2
+                                                    for g in range(1001, 1007)], atol=1e-12)
+    fuselage = [e for e in es.eids.tolist() if e in (1003, 1004, 1005, 1006, 1007, 1008)
+                or e > max(x56.elements["CBAR"].eids)]
+    fresh = sorted(pids[e] for e in fuselage)
+    assert max(x56.properties) == 252 and fresh == list(range(253, 265))
+    # by hand: PBAR 101 is A 6, I1 60, I2 40, I12 0, J 60; xi_mid = 1/24, 3/24, .., 23/24 gives
+    # s = 1 + 0.5 (xi - 1/2) = 37/48, 39/48, .., 59/48; A 1.1 x 6 s^2, I 1.1 x I s^4
+    s = (37.0 + 2.0 * np.arange(12)) / 48.0
     hand = {"A": 6.6 * s ** 2, "I1": 66.0 * s ** 4, "I2": 44.0 * s ** 4, "J": 66.0 * s ** 4,
-            "I12": np.zeros(6)}
-    assert hand["A"][0] == pytest.approx(4.1364583333, rel=1e-10)       # 6.6 x 361 / 576
+            "I12": np.zeros(12)}
+    assert hand["A"][0] == pytest.approx(3.9216145833, rel=1e-10)       # 6.6 x 1369 / 2304
     for key, values in hand.items():
         np.testing.assert_allclose([new.properties[p].fields[key] for p in fresh], values,
                                    rtol=1e-14, atol=0.0, err_msg=key)
@@ -150,6 +158,7 @@ def test_taper_copies_a_shared_property(x56, x56_candidates):
     again = apply_effect(new, cand, [0.1, 0.0])                # a second taper multiplies
     es2 = again.elements["CBAR"]
     assert es2.pids.tolist() == es.pids.tolist()              # the copies are now the only users
+    assert len(again.grids) == len(new.grids)                 # and the pieces are kept
     np.testing.assert_allclose([again.properties[p].fields["A"] for p in fresh],
                                1.21 * 6.0 * s ** 2, rtol=1e-14)
 
@@ -202,26 +211,95 @@ def test_tapered_cantilever_against_the_continuous_beam(tmp_path):
     assert abs(bending[0] / uniform - 1) > 0.05      # the taper is clearly visible
 
 
-def test_offset_bow_couples_axial_load_and_bending_by_hand(tmp_path):
-    """One-element member bowed by b in plane 1: its axis is offset e = b L along element y
-    from both grids. Axial P at the free grid gives the beam end a moment M_z = e P, so the grid
-    moves u_x = P L / EA + e^2 P L / E I1 and u_y = e P L^2 / (2 E I1)."""
-    e_mod, area, i1, i2, length, p, bow = 2.0e5, 3.0, 0.7, 1.3, 4.0, 10.0, 0.05
-    model = read_model(_deck(tmp_path, "offset.bdf", [
+def _one_bar(tmp_path, length, area, i1, i2):
+    """One CBAR along x from grid 1 (clamped) to grid 2, plane 1 = x-y."""
+    return read_model(_deck(tmp_path, "one_bar.bdf", [
         ("GRID", 1, None, 0.0, 0.0, 0.0, None, 123456), ("GRID", 2, None, length, 0.0, 0.0),
         ("CBAR", 10, 7, 1, 2, 0.0, 1.0, 0.0), ("PBAR", 7, 1, area, i1, i2, 1.0),
-        ("MAT1", 1, e_mod, None, 0.3, 1.0)]))
+        ("MAT1", 1, 2.0e5, None, 0.3, 0.0)]))
+
+
+def _tip_displacement(model, component, load):
+    system = assemble(model)
+    force = np.zeros(system.K.shape[0])
+    force[np.flatnonzero(system.a_dofs == 6 * 1 + component)] = load
+    return system.T @ spla.spsolve(system.K.tocsc(), force)
+
+
+def test_bowed_one_element_member_by_the_unit_load_method(tmp_path):
+    """A one-element member bowed by b in plane 1 becomes 8 chords of the parabola
+    y = 4 b L xi (1 - xi) through 7 new grids. Axial P at the free end, by virtual work on the
+    chords (N = P cos a, M = P y; unit loads n = cos a / sin a, m = y / (L - x)):
+    u_x = sum P cos^2 a l / EA + P l (y1^2 + y1 y2 + y2^2) / 3 E I1 and
+    u_y = sum P cos a sin a l / EA + P l (2 y1 m1 + y1 m2 + y2 m1 + 2 y2 m2) / 6 E I1."""
+    e_mod, area, i1, i2, length, p, bow = 2.0e5, 3.0, 0.7, 1.3, 4.0, 10.0, 0.05
+    model = _one_bar(tmp_path, length, area, i1, i2)
     cand = _pick(candidates(model, ["member_curvature"]), "member_curvature")
     bowed = apply_effect(model, cand, [bow, 0.0])
-    np.testing.assert_allclose(bowed.elements["CBAR"].data["wa"][0], [0.0, bow * length, 0.0])
-    system = assemble(bowed)
-    force = np.zeros(system.K.shape[0])
-    force[np.flatnonzero(system.a_dofs == 6 * 1 + 0)] = p
-    u = system.T @ spla.spsolve(system.K.tocsc(), force)
-    e = bow * length
-    np.testing.assert_allclose(u[6:8], [p * length / (e_mod * area) + e ** 2 * p * length /
-                                        (e_mod * i1), e * p * length ** 2 / (2 * e_mod * i1)],
-                               rtol=1e-10)
+    xs = np.linspace(0.0, length, 9)
+    ys = 4.0 * bow * length * xs / length * (1.0 - xs / length)       # 0, 0.0875, .., 0.2, .., 0
+    assert bowed.grids.ids.tolist() == list(range(1, 10))
+    np.testing.assert_allclose(bowed.grids.xyz[2:, :2], np.column_stack([xs, ys])[1:8],
+                               atol=1e-15)
+    assert bowed.elements["CBAR"].nodes.tolist() == [[1, 3], [3, 4], [4, 5], [5, 6], [6, 7],
+                                                     [7, 8], [8, 9], [9, 2]]
+    ux = uy = 0.0
+    for k in range(8):
+        dx, dy = xs[k + 1] - xs[k], ys[k + 1] - ys[k]
+        chord = np.hypot(dx, dy)
+        cos, sin = dx / chord, dy / chord
+        (y1, y2), (m1, m2) = ys[k:k + 2], length - xs[k:k + 2]
+        ux += p * cos ** 2 * chord / (e_mod * area) + \
+            p * chord * (y1 * y1 + y1 * y2 + y2 * y2) / (3.0 * e_mod * i1)
+        uy += p * cos * sin * chord / (e_mod * area) + \
+            p * chord * (2 * y1 * m1 + y1 * m2 + y2 * m1 + 2 * y2 * m2) / (6.0 * e_mod * i1)
+    u = _tip_displacement(bowed, 0, p)
+    np.testing.assert_allclose(u[6:8], [ux, uy], rtol=1e-9)
+    straight = p * length / (e_mod * area)
+    assert u[6] / straight > 1.07                  # the bow softens the member's axial load path
+
+
+def test_one_element_taper_is_resolved_by_eight_pieces(tmp_path):
+    """A one-element cantilever tapered by t: 8 uniform pieces with I(xi_k) = I (1 + t (xi_k -
+    1/2))^4 at their mid-lengths xi_k = 1/16 .. 15/16; tip load P: w = sum P int (L - x)^2 dx /
+    E I_k by hand, within 2 % of the continuous taper's P int (L - x)^2 / E I(x) dx."""
+    e_mod, area, i1, length, p, taper = 2.0e5, 3.0, 0.7, 4.0, 10.0, 0.6
+    model = _one_bar(tmp_path, length, area, i1, 100.0 * i1)
+    cand = _pick(candidates(model, ["member_taper"]), "member_taper")
+    assert cand.parameters == ("scale", "taper")
+    tapered = apply_effect(model, cand, [0.0, taper])
+    xi = (np.arange(8) + 0.5) / 8
+    inertia = i1 * (1.0 + taper * (xi - 0.5)) ** 4
+    edges = length * np.arange(9) / 8
+    hand = np.sum(p * ((length - edges[:-1]) ** 3 - (length - edges[1:]) ** 3)
+                  / (3.0 * e_mod * inertia))
+    w = _tip_displacement(tapered, 1, p)[7]
+    assert w == pytest.approx(hand, rel=1e-9)
+    x = np.linspace(0.0, length, 4001)
+    f = (length - x) ** 2 / (e_mod * i1 * (1.0 + taper * (x / length - 0.5)) ** 4)
+    continuous = p * np.sum((f[1:] + f[:-1]) / 2 * np.diff(x))
+    assert w == pytest.approx(continuous, rel=0.02)
+    assert abs(w / (p * length ** 3 / (3 * e_mod * i1)) - 1) > 0.2     # the taper is visible
+
+
+def test_a_split_member_keeps_its_pieces_and_bows_add(tmp_path):
+    """Taper then curvature on one split member: the pieces keep their tapered PIDs and the
+    new grids move onto the arc; two bows b1, b2 give the arc of b1 + b2."""
+    model = _one_bar(tmp_path, 4.0, 3.0, 0.7, 1.3)
+    taper, bow = candidates(model, ["member_taper", "member_curvature"])
+    tapered = apply_effect(model, taper, [0.1, 0.2])
+    both = apply_effect(tapered, bow, [0.05, 0.0])
+    assert both.grids.ids.tolist() == tapered.grids.ids.tolist()
+    assert both.elements["CBAR"].pids.tolist() == tapered.elements["CBAR"].pids.tolist()
+    twice = apply_effect(apply_effect(both, bow, [0.03, 0.0]), bow, [0.0, -0.02])
+    once = apply_effect(tapered, bow, [0.08, -0.02])
+    np.testing.assert_allclose(twice.grids.xyz, once.grids.xyz, atol=1e-15)
+    for got, want in zip(assemble_g(twice), assemble_g(once)):
+        assert abs(got - want).max() <= 1e-12 * abs(want).max()
+    xs = np.linspace(0.0, 4.0, 9)[1:-1]
+    np.testing.assert_allclose(once.grids.xyz[2:], np.column_stack(
+        [xs, 4 * 0.08 * 4.0 * xs / 4.0 * (1 - xs / 4.0), -4 * 0.02 * 4.0 * xs / 4.0 * (1 - xs / 4.0)]),
+        atol=1e-15)
 
 
 # ------------------------------------------------------------------------------- rigid joints
@@ -309,7 +387,19 @@ def test_whole_rbe2_hangs_on_one_spring(tmp_path):
         assert abs(got - want).max() <= 1e-12 * abs(want).max()
 
 
+def _condensed(system, n_grids):
+    """K statically condensed onto the DOFs of the first ``n_grids`` grids, and M there (the
+    rest must be massless)."""
+    keep = system.a_dofs < 6 * n_grids
+    k, m = system.K.tocsc(), system.M.tocsc()
+    assert m[:, ~keep].count_nonzero() == 0
+    k_on = k[keep][:, ~keep]
+    cond = k[keep][:, keep] - k_on @ spla.spsolve(k[~keep][:, ~keep].tocsc(), k_on.T.tocsc())
+    return system.a_dofs[keep], cond, m[keep][:, keep]
+
+
 def test_zero_values_leave_k_and_m_and_small_values_are_continuous(x56, x56_candidates):
+    """Members are split at new (massless) grids: their K condensed onto the model's grids."""
     base = assemble(x56, warn=False)
     picks = {"lumped_mass": "grid 3005", "joint_flexibility": "RBE2 7501",
              "member_taper": "PID 101 (CBAR 1003", "member_curvature": "PID 101 (CBAR 1003",
@@ -321,13 +411,16 @@ def test_zero_values_leave_k_and_m_and_small_values_are_continuous(x56, x56_cand
         if kind == "joint_flexibility":
             continue
         near = assemble(apply_effect(x56, cand, 1e-9 * np.array(cand.upper)), warn=False)
-        for a, b in ((near.K, base.K), (near.M, base.M)):
+        dofs, k, m = _condensed(near, len(x56.grids))
+        assert np.array_equal(dofs, base.a_dofs)
+        for a, b in ((k, base.K), (m, base.M)):
             assert abs(a - b).max() <= 1e-7 * abs(b).max()
 
 
 def test_effect_matrices_equal_the_difference_of_assembled_models(x56, x56_candidates):
-    picks = {"lumped_mass": "grid 3005", "member_taper": "PID 101 (CBAR 1003",
-             "member_curvature": "PID 132", "boundary_stiffness": "grid 3005 z"}
+    """Kinds that keep the grids; a member split by a first taper, then bowed (its new grids
+    move) and tapered again (its pieces own their PIDs: changed in place)."""
+    picks = {"lumped_mass": "grid 3005", "boundary_stiffness": "grid 3005 z"}
     k0, m0 = assemble_g(x56)
     for kind, label in picks.items():
         cand = _pick(x56_candidates, kind, label)
@@ -336,10 +429,16 @@ def test_effect_matrices_equal_the_difference_of_assembled_models(x56, x56_candi
         for got, want, base in ((dk, k1 - k0, k0), (dm, m1 - m0, m0)):
             assert abs(got - want).max() <= 1e-13 * abs(base).max()
         assert abs(dk).max() + abs(dm).max() > 0
-    own = _pick(x56_candidates, "member_taper", "PID 115")      # the PID's only element: in place
-    dk, _ = effect_matrices(x56, own, own.reference)
-    k1, _ = assemble_g(apply_effect(x56, own, own.reference))
-    assert abs(dk - (k1 - k0)).max() <= 1e-13 * abs(k0).max() and abs(dk).max() > 0
+    taper = _pick(x56_candidates, "member_taper", "PID 132")
+    with pytest.raises(InputError, match="grids"):
+        effect_matrices(x56, taper, taper.reference)
+    split = apply_effect(x56, taper, taper.reference)
+    k0, m0 = assemble_g(split)
+    for kind in ("member_curvature", "member_taper"):
+        cand = _pick(x56_candidates, kind, "PID 132")
+        dk, dm = effect_matrices(split, cand, cand.reference)
+        k1, m1 = assemble_g(apply_effect(split, cand, cand.reference))
+        assert abs(dk - (k1 - k0)).max() <= 1e-13 * abs(k0).max() and abs(dk).max() > 0
     with pytest.raises(InputError, match="rigid"):
         effect_matrices(x56, _pick(x56_candidates, "joint_flexibility", "RBE2 7501"), [1.0])
 
