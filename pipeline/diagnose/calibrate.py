@@ -5,11 +5,18 @@ so the Poisson ratio stays) and MAT8 (E1, E2, G12 linked) material that an eleme
 scale of all CONM2 masses, each a relative change theta (x = x0 (1 + theta)) within
 +-``CALIBRATION_BOUND``, shared by the configurations (one structure, several loadings), applied
 with :func:`structures.design.apply_design`. They are fitted by bounded least squares
-(``scipy.optimize.least_squares``) of the training residual (:mod:`pipeline.diagnose.evidence`).
+(``scipy.optimize.least_squares``) of the training residual (:mod:`pipeline.diagnose.evidence`)
+plus a Gaussian prior on the mass scale, theta_m / sigma_m (:func:`mass_prior_scale`): the CONM2s
+scatter independently (``DiagnoseSettings.model_scatter`` each), so the common part of their
+errors, all that a uniform scale can represent, is known sqrt(N_eff) times better than each mass. Without it the scale
+soaks up a missing mass and the weighing, the evidence that tells a mass from a stiffness error
+(issue 14 step 2), is gone after the calibration. A material's modulus is one value for all its
+elements (no averaging): it keeps the box bounds only.
 
 Model-form flags (the fit "stalls", DESIGN.md section 5): a parameter within ``BOUND_TOLERANCE``
-of its bound; configurations wanting values that differ by more than ``CONSISTENCY_SIGMAS`` times
-their uncertainty (one Gauss-Newton step per configuration from the joint solution, with the
+of its bound, or more than ``CONSISTENCY_SIGMAS`` prior standard deviations from nominal;
+configurations wanting values that differ by more than ``CONSISTENCY_SIGMAS`` times their
+uncertainty (one Gauss-Newton step per configuration from the joint solution, with the
 joint Jacobian's blocks: theta_c = theta - (J_c^T J_c)^-1 J_c^T r_c, covariance (J_c^T J_c)^-1);
 a residual that fails the goodness-of-fit test; frequency residuals whose signs run in long
 stretches along the modes (runs test p below ``RUNS_P``).
@@ -66,6 +73,35 @@ def _material_variables(model: FEModel) -> list:
     return out
 
 
+def mass_prior_scale(model: FEModel, scatter: float) -> float:
+    """Prior standard deviation sigma_m of the uniform CONM2 mass scale theta_m of a model.
+
+    Every CONM2 mass m_i is off by an independent relative error e_i of standard deviation
+    s = ``scatter``. A uniform scale (and the total mass) follows their mass-weighted mean
+    theta_m = sum m_i e_i / sum m_i, whose standard deviation is
+
+        sigma_m = s sqrt(sum m_i^2) / sum m_i = s / sqrt(N_eff),  N_eff = (sum m_i)^2 / sum m_i^2
+
+    (the variance of a weighted mean of independent errors; N_eff is Kish's (1965) effective
+    number: N equal masses give s / sqrt(N), one mass gives s).
+
+    Parameters
+    ----------
+    model : FEModel
+    scatter : float, s.
+
+    Returns
+    -------
+    float
+        sigma_m; nan without CONM2 mass.
+    """
+    m = np.asarray(model.masses.mass, float)
+    total = float(np.sum(m))
+    if total == 0.0:
+        return float("nan")
+    return float(scatter * np.sqrt(np.sum(m * m)) / total)       # weighted mean of independent e_i
+
+
 def _mass_variable(model: FEModel) -> list:
     hit = np.flatnonzero(np.asarray(model.masses.mass) != 0.0)
     if hit.size == 0:
@@ -111,6 +147,8 @@ class Problem:
     models : tuple of FEModel, nominal.
     spaces : tuple of DesignSpace, per configuration (the variables it has).
     index : tuple of int arrays, per configuration the theta index of each variable of its space.
+    prior : (n_theta,) standard deviation of every parameter's Gaussian prior (inf: box bounds
+        only).
     """
 
     names: tuple
@@ -118,20 +156,30 @@ class Problem:
     models: tuple
     spaces: tuple
     index: tuple
+    prior: np.ndarray
 
     @classmethod
-    def build(cls, refs, models) -> "Problem":
-        """Nominal parameters of every configuration's model (shared by name)."""
+    def build(cls, refs, models, scatter: float) -> "Problem":
+        """Nominal parameters of every configuration's model (shared by name).
+
+        The mass scale's prior is the largest :func:`mass_prior_scale` of the configurations (the
+        one with the fewest effective masses: one shared scale must fit all); with
+        ``scatter`` = 0 the masses are exact and the scale is not a parameter.
+        """
         names, spaces, index = [], [], []
+        sigma_m = max((s for s in (mass_prior_scale(m, scatter) for m in models)
+                       if np.isfinite(s)), default=0.0)
         for model in models:
-            variables = _material_variables(model) + _mass_variable(model)
+            variables = _material_variables(model) + (_mass_variable(model) if sigma_m > 0
+                                                       else [])
             space = bind(variables, [model])
             for var in variables:
                 if var.name not in names:
                     names.append(var.name)
             spaces.append(space)
             index.append(np.array([names.index(v.name) for v in variables], int))
-        return cls(tuple(names), tuple(refs), tuple(models), tuple(spaces), tuple(index))
+        prior = np.array([sigma_m if name == "mass" else np.inf for name in names], float)
+        return cls(tuple(names), tuple(refs), tuple(models), tuple(spaces), tuple(index), prior)
 
     @property
     def n_theta(self) -> int:
@@ -159,8 +207,18 @@ class Problem:
         return [evaluate(ref, self.model(i, theta, effects)) for i, ref in enumerate(self.refs)]
 
     def vector(self, evaluations) -> np.ndarray:
-        """Training residual vector over the configurations."""
+        """Training residual vector of the data over the configurations."""
         return np.concatenate([ev.vector(ref.train) for ev, ref in zip(evaluations, self.refs)])
+
+    def prior_residual(self, theta) -> np.ndarray:
+        """theta_i / sigma_i of every parameter with a finite prior, shape (n_prior,)."""
+        finite = np.isfinite(self.prior)
+        return np.asarray(theta, float)[finite] / self.prior[finite]
+
+    def residual(self, theta, evaluations) -> np.ndarray:
+        """Training residual: the data (:meth:`vector`) then the prior (:meth:`prior_residual`)
+        at the nominal parameters ``theta`` of ``evaluations``."""
+        return np.concatenate([self.vector(evaluations), self.prior_residual(theta)])
 
 
 @dataclass(frozen=True)
@@ -171,11 +229,12 @@ class Calibration:
     ----------
     theta : (n_theta,) relative changes of the nominal parameters.
     chi2 : float, training chi^2 at theta.
-    n_data : int
+    n_data : int, training residuals (the prior's included).
     evaluations : list of Evaluation at theta.
     flags : tuple of str, model-form warnings (empty when the fit is clean).
     per_configuration : {configuration: (n_theta,) estimates} from one Gauss-Newton step each.
-    jacobian : (n_data, n_theta) d r / d theta at the solution (reused by the refits).
+    jacobian : (n_data, n_theta) d r / d theta at the solution, prior rows included (reused by
+        the refits).
     """
 
     theta: np.ndarray
@@ -188,28 +247,35 @@ class Calibration:
 
 
 def calibrate(problem: Problem, effects=()) -> Calibration:
-    """Fit the nominal parameters within +-CALIBRATION_BOUND; flag model-form error."""
+    """Fit the nominal parameters within +-CALIBRATION_BOUND and their prior (:meth:`Problem.residual`);
+    flag model-form error."""
     n = problem.n_theta
     if n == 0:
         evs = problem.evaluate(np.zeros(0), effects)
-        r = problem.vector(evs)
+        r = problem.residual(np.zeros(0), evs)
         return Calibration(np.zeros(0), chi_square(r), r.size, evs, (), {}, np.zeros((r.size, 0)))
     bound = CALIBRATION_BOUND / THETA_SCALE
 
     def fun(z):
-        return problem.vector(problem.evaluate(z * THETA_SCALE, effects))
+        theta = z * THETA_SCALE
+        return problem.residual(theta, problem.evaluate(theta, effects))
 
     sol = least_squares(fun, np.zeros(n), bounds=(-bound, bound), method="trf",
                         diff_step=DIFF_STEP, max_nfev=CALIBRATION_NFEV)
     theta = sol.x * THETA_SCALE
     evs = problem.evaluate(theta, effects)
-    r = problem.vector(evs)
+    r = problem.residual(theta, evs)
     chi2 = chi_square(r)
     flags = []
-    for name, t in zip(problem.names, theta):
+    for name, t, sd in zip(problem.names, theta, problem.prior):
         if abs(abs(t) - CALIBRATION_BOUND) < BOUND_TOLERANCE * CALIBRATION_BOUND:
             flags.append(f"nominal parameter {name} sits on its bound ({100 * t:+.1f} %): the "
                          "calibration compensates for something it cannot represent.")
+        elif abs(t) > CONSISTENCY_SIGMAS * sd:
+            flags.append(f"nominal parameter {name} wants {100 * t:+.1f} %, {abs(t) / sd:.1f} "
+                         f"times its prior standard deviation ({100 * sd:.2f} %, independent "
+                         "scatter of the masses): the mass properties point at a missing or "
+                         "misplaced mass.")
     jac = sol.jac / THETA_SCALE
     per_conf = _per_configuration(problem, evs, jac, theta, flags)
     dof = r.size - n

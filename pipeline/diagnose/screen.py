@@ -160,7 +160,8 @@ def signatures(problem: Problem, theta, effects, evaluations, candidates, *, pro
 
     models = [problem.model(i, theta, effects) for i in range(len(problem.refs))]
     mats = [assemble_g(m)[1] for m in models]
-    r0 = problem.vector(evaluations)
+    r0 = problem.residual(theta, evaluations)
+    prior = problem.prior_residual(theta)                                  # a candidate keeps theta
 
     def residual(cand, step, exact):
         parts = []
@@ -171,7 +172,7 @@ def signatures(problem: Problem, theta, effects, evaluations, candidates, *, pro
             else:
                 e1 = _perturbed(ref, model, ev, m0, changed)
             parts.append(e1.vector(ref.train))
-        return np.concatenate(parts)
+        return np.concatenate(parts + [prior])
 
     def one_sided(cand):
         return cand.kind in LADDER_KINDS and cand.get("dependent") is not None
@@ -306,7 +307,7 @@ def refit(problem: Problem, theta0, effects, row: Screened | None, *, n_data: in
 
     def residual(z):
         theta, eff = split(z)
-        return problem.vector(problem.evaluate(theta, eff))
+        return problem.residual(theta, problem.evaluate(theta, eff))
 
     try:
         r_start = residual(z0)
@@ -342,6 +343,6 @@ def refit(problem: Problem, theta0, effects, row: Screened | None, *, n_data: in
         evs = problem.evaluate(theta, eff)
     except (SolverError, InputError):
         return None
-    chi2 = chi_square(problem.vector(evs))
+    chi2 = chi_square(problem.residual(theta, evs))
     p = npar + len(theta0)
     return Refitted(cand, (z * scale)[:npar], theta, chi2, bic(chi2, p, n_data), p, evs)

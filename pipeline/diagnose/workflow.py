@@ -397,7 +397,7 @@ def diagnose(configurations, settings: DiagnoseSettings = DiagnoseSettings(), *,
     refs, notes = preflight(configurations, settings)
     notes = list(notes)
     with threadpool_limits(limits=1):
-        problem = Problem.build(refs, [c.model for c in configurations])
+        problem = Problem.build(refs, [c.model for c in configurations], settings.model_scatter)
         _say(progress, "calibrating the nominal parameters")
         cal = calibrate(problem)
         n_data = cal.n_data
