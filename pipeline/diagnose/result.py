@@ -104,7 +104,12 @@ class DiagnoseResult:
     nominal : mapping {parameter: relative change} of the final model (``gap_after``'s).
     calibrated : mapping {parameter: relative change} of the nominal calibration without
         effects (``gap_before``'s model).
-    rounds : tuple of mapping, per look-again round: its verdict, best and runner-up.
+    rounds : tuple of mapping, per look-again round: its ``verdict``, ``n_data`` (training
+        residuals), ``n_held_out`` (held-out residual entries), "none"'s ``none_chi2``, ``none_bic``, ``none_n_params`` and
+        ``none_held_out_chi2``, and the refitted candidates (``fits``, the ``best`` and the
+        ``runner_up``: kind, label, chi2, bic, n_params, held_out_chi2, parameters); the
+        held-out chi^2 is over the held-out modes' residual entries
+        (:func:`pipeline.diagnose.workflow.held_out_vector`).
     """
 
     verdict: str

@@ -21,10 +21,13 @@ whose size exceeds what the nominal scatter could do by itself (:func:`within_sc
 
 - ``effect``: the best refitted candidate beats "none" (the model with its nominal parameters
   refitted) and the runner-up (the best candidate of another kind or at a location that is not
-  its neighbour, :func:`pipeline.diagnose.effects.neighbours`) by ``settings.margin``;
+  its neighbour, :func:`pipeline.diagnose.effects.neighbours`) by ``settings.margin``, and the
+  held-out modes do not contradict it by more than the margin (:func:`held_out_evidence`);
 - ``ambiguous``: it beats "none" but not the runner-up;
 - ``none``: no candidate beats "none" and "none" passes the goodness-of-fit test;
-- ``unexplained``: no candidate beats "none" and "none" fails the goodness-of-fit test.
+- ``unexplained``: no candidate beats "none" and "none" fails the goodness-of-fit test, or the
+  best beats both but the held-out modes contradict it (a fit that compensates on the training
+  modes for something the library cannot represent).
 A clear BIC gain is tested before the goodness of fit: an omnibus chi^2 test over hundreds of
 shape entries is blind to an effect that moves a few frequencies, which the BIC sees.
 
@@ -43,8 +46,8 @@ from threadpoolctl import threadpool_limits
 
 from pipeline.diagnose.calibrate import Problem, calibrate
 from pipeline.diagnose.effects import KINDS, candidates, neighbours
-from pipeline.diagnose.evidence import (SELF_ORTHOGONALITY_LIMIT, build_reference, elastic_index,
-                                        gof_limit)
+from pipeline.diagnose.evidence import (SELF_ORTHOGONALITY_LIMIT, build_reference, chi_square,
+                                        elastic_index, gof_limit)
 from pipeline.diagnose.gap import gap_metrics, separating_measurement
 from pipeline.diagnose.result import CandidateScore, DiagnoseResult, EffectRecord
 from pipeline.diagnose.screen import pick_for_refit, refit, screen, signatures
@@ -217,7 +220,8 @@ def round_scores(none_fit, fits, n_data: int, n_candidates: int = 1) -> tuple:
     return scores, float(none_score), float(c)
 
 
-def decide(none_fit, fits, margin: float, near, n_data: int, n_candidates: int = 1) -> tuple:
+def decide(none_fit, fits, margin: float, near, n_data: int, n_candidates: int = 1, *,
+           held_out=None) -> tuple:
     """Verdict of one round from its score table.
 
     Parameters
@@ -230,6 +234,8 @@ def decide(none_fit, fits, margin: float, near, n_data: int, n_candidates: int =
         True when b is a's neighbour (one element layer).
     n_data : int, training residuals.
     n_candidates : int, candidates screened (the prior odds of "none" against each one).
+    held_out : (chi2_none, (len(fits),) chi2 of each fit, n_ho entries) over the held-out
+        modes, optional (:func:`held_out_vector`); without it the predictive check is skipped.
 
     Returns
     -------
@@ -253,6 +259,13 @@ def decide(none_fit, fits, margin: float, near, n_data: int, n_candidates: int =
     n_candidates : 1 and its score gains 2 ln n_candidates (posterior odds = Bayes factor x prior
     odds, Kass & Raftery 1995 sec. 3; BIC approximates -2 ln of the Bayes factor): the best of
     many candidates fitted to noise does not look like evidence.
+
+    Predictive check (:func:`held_out_evidence`): a best fit that the held-out modes contradict
+    by more than ``margin`` gives ``unexplained`` instead of ``effect``: it fits the training
+    modes by distorting the model elsewhere (an effect outside the library, or the right kind at
+    the wrong place, absorbed by a candidate), so it does not explain the data. The held-out
+    modes then take part in the verdict as a veto only (they never choose the candidate); the
+    gap on them is still the prediction of a model whose parameters they never set.
     """
     none_chi2, none_p = none_fit
     fitting = gof_limit(n_data - none_p) >= none_chi2
@@ -269,7 +282,40 @@ def decide(none_fit, fits, margin: float, near, n_data: int, n_candidates: int =
         return ("none" if fitting else "unexplained"), best, runner, lead
     if runner is not None and not scores[best] + margin < scores[runner]:
         return "ambiguous", best, runner, lead
+    if held_out is not None and \
+            held_out_evidence(held_out[0], held_out[1][best], held_out[2]) < -margin:
+        return "unexplained", best, runner, lead
     return "effect", best, runner, lead
+
+
+def held_out_evidence(none_held_out: float, fit_held_out: float, n_held_out: int) -> float:
+    """Evidence of the held-out modes for a fitted effect against "none".
+
+    The held-out residual entries (:func:`held_out_vector`) were fitted by neither model, so
+    their chi^2 difference is -2 ln of the two fitted models' likelihood ratio on new data (no
+    parameter penalty; the predictive check of cross-validation, Stone 1974), on the scale of the
+    BIC differences of :func:`decide`. Like them it is divided by a dispersion, here the
+    held-out one of the fit, c_ho = max(1, chi^2_ho,fit / n_ho) (quasi-likelihood, Burnham &
+    Anderson 2002 sec. 6.2, estimated on the entries compared): a held-out mode that neither
+    model reproduces (a local mode the model lacks, paired with another mode) inflates both
+    chi^2 and makes their difference count for less instead of deciding the verdict. For a
+    right effect whose prediction on the held-out entries changes by delta the difference has
+    mean |delta|^2 and standard deviation 2 sqrt(c_ho) |delta|; for a wrong one its mean is
+    -|delta|^2 or less.
+
+    Parameters
+    ----------
+    none_held_out, fit_held_out : float, held-out chi^2 of "none" and of the fit.
+    n_held_out : int, held-out residual entries.
+
+    Returns
+    -------
+    float
+        (chi2_ho,none - chi2_ho,fit) / c_ho: positive when the effect predicts the held-out
+        modes better than "none", below -margin when they contradict it strongly.
+    """
+    c_ho = max(1.0, fit_held_out / max(n_held_out, 1))
+    return float((none_held_out - fit_held_out) / c_ho)
 
 
 # ------------------------------------------------------------------------------------ diagnose
@@ -437,11 +483,23 @@ def diagnose(configurations, settings: DiagnoseSettings = DiagnoseSettings(), *,
             def near(a, b):
                 return _overlaps(neighbours(model_k, a), b)
 
+            held = held_out_vector(problem, none.evaluations)
+            ho_none, n_ho = chi_square(held), held.size
+            ho = [chi_square(held_out_vector(problem, f.evaluations)) for f in fits]
             verdict, best, runner, lead = decide((none.chi2, none.n_params),
-                                           [(f.candidate.kind, f.candidate.location, f.chi2,
-                                             f.n_params) for f in fits],
-                                           settings.margin, near, n_data, len(cands))
-            rounds.append(_round_record(k, verdict, fits, best, runner, none))
+                                                 [(f.candidate.kind, f.candidate.location, f.chi2,
+                                                   f.n_params) for f in fits],
+                                                 settings.margin, near, n_data, len(cands),
+                                                 held_out=(ho_none, ho, n_ho))
+            rounds.append(_round_record(k, verdict, fits, best, runner, none, ho_none, ho,
+                                        n_data, n_ho))
+            if verdict == "unexplained" and lead > settings.margin:     # the held-out veto
+                cand = fits[best].candidate
+                notes.append(f"round {k + 1}: {cand.kind} {cand.label} fits the training modes "
+                             f"(chi^2 {none.chi2:.0f} -> {fits[best].chi2:.0f}) but not the "
+                             f"held-out ones (chi^2 {ho_none:.0f} -> {ho[best]:.0f}, evidence "
+                             f"{held_out_evidence(ho_none, ho[best], n_ho):.1f}): it compensates "
+                             "for something else; not named.")
             if k == 0:
                 first = verdict
                 table = _table(rows, fits, none, n_data, len(theta), len(cands))
@@ -480,13 +538,28 @@ def _none_fit(problem: Problem, cal, n_data: int):
                     len(cal.theta), cal.evaluations)
 
 
-def _round_record(k: int, verdict: str, fits, best, runner, none) -> dict:
+def held_out_vector(problem: Problem, evaluations) -> np.ndarray:
+    """Residual entries (frequency and shape) of the held-out modes of every configuration.
+
+    The same entries and scales as the training vector (:meth:`Problem.vector`) on the modes no
+    fit saw (``~ref.train``); unit variance each when the model is right.
+    """
+    return np.concatenate([np.concatenate([ev.frequency[~ref.train],
+                                           ev.shape[~ref.train].ravel()])
+                           for ev, ref in zip(evaluations, problem.refs)])
+
+
+def _round_record(k: int, verdict: str, fits, best, runner, none, ho_none: float, ho,
+                  n_data: int, n_ho: int) -> dict:
     def entry(i):
         if i is None:
             return None
         f = fits[i]
         return {"kind": f.candidate.kind, "label": f.candidate.label, "bic": f.bic,
-                "chi2": f.chi2, "parameters": dict(zip(f.candidate.parameters,
-                                                       map(float, f.values)))}
-    return {"round": k + 1, "verdict": verdict, "none_bic": none.bic, "none_chi2": none.chi2,
-            "best": entry(best), "runner_up": entry(runner)}
+                "chi2": f.chi2, "n_params": f.n_params, "held_out_chi2": ho[i],
+                "parameters": dict(zip(f.candidate.parameters, map(float, f.values)))}
+    return {"round": k + 1, "verdict": verdict, "n_data": n_data, "n_held_out": n_ho,
+            "none_bic": none.bic,
+            "none_chi2": none.chi2, "none_n_params": none.n_params,
+            "none_held_out_chi2": ho_none, "best": entry(best), "runner_up": entry(runner),
+            "fits": [entry(i) for i in range(len(fits))]}
