@@ -19,9 +19,12 @@ h_k = the candidate's ``reference`` size, r the training residual of every confi
   modes): reanalysis at every size of :data:`LADDER` (quarter decades of the parameter's range)
   and at the eighth decades either side of the best (:data:`LADDER_REFINE`); the best size x*
   and its exact chi^2 are the candidate's screening result, the secant (r(x*) - r0) / x* its
-  signature. The one-sided variants of a joint (one dependent grid on its spring) are screened
-  only for the ``ONE_SIDED_TOP`` best whole joints (cost: 23 reanalyses per joint and
-  configuration).
+  signature. The rungs are analysed on one Craig-Bampton basis per joint and configuration
+  (:mod:`pipeline.diagnose.ladder`, models of up to :data:`structures.modal.DENSE_LIMIT` free
+  DOFs) and the best size x* again exactly (the exact ladder when that fails). The one-sided
+  variants of a joint (one dependent grid on its spring) are screened only for the
+  ``ONE_SIDED_TOP`` best whole joints (cost per joint and configuration: two assemblies, one
+  truncated eigen-solution, 23 small ones and one exact reanalysis).
 
 **Linear fit**: min |r0 + S x|^2 within the candidate's bounds (``scipy.optimize.lsq_linear``);
 the candidates are ranked by the drop of chi^2.
@@ -40,6 +43,7 @@ from scipy.optimize import least_squares, lsq_linear
 from pipeline.diagnose.calibrate import CALIBRATION_BOUND, THETA_SCALE, Problem
 from pipeline.diagnose.effect_deck import change_matrices
 from pipeline.diagnose.evidence import bic, chi_square, evaluate, evaluate_modes
+from pipeline.diagnose.ladder import reduce_joint
 from structures.assembly import assemble_g
 from structures.common.errors import InputError, SolverError
 from structures.massprops import mass_properties
@@ -174,6 +178,25 @@ def signatures(problem: Problem, theta, effects, evaluations, candidates, *, pro
             parts.append(e1.vector(ref.train))
         return np.concatenate(parts + [prior])
 
+    def reduced(cand):
+        """size -> training residual on the candidate's Craig-Bampton bases, or None."""
+        bases = []
+        for ref, model in zip(problem.refs, models):
+            sensors = ref.sensor_index if ref.has_shapes else np.zeros(0, int)
+            bases.append(reduce_joint(model, cand, sensors, ref.nmodes))
+            if bases[-1] is None:
+                return None
+
+        def at(size):
+            parts = []
+            for ref, basis in zip(problem.refs, bases):
+                modes, shapes = basis.modes(size)
+                e1 = evaluate_modes(ref, modes["frequency"].values,
+                                    shapes if ref.has_shapes else None, basis.props, modes=modes)
+                parts.append(e1.vector(ref.train))
+            return np.concatenate(parts + [prior])
+        return at
+
     def one_sided(cand):
         return cand.kind in LADDER_KINDS and cand.get("dependent") is not None
 
@@ -185,7 +208,7 @@ def signatures(problem: Problem, theta, effects, evaluations, candidates, *, pro
                 progress(f"screening {n}/{len(cands)}")
             try:
                 if cand.kind in LADDER_KINDS:
-                    out.append(_ladder(cand, r0, residual))
+                    out.append(_ladder(cand, r0, residual, reduced(cand)))
                     continue
                 cols = []
                 for k, h in enumerate(cand.reference):
@@ -205,15 +228,18 @@ def signatures(problem: Problem, theta, effects, evaluations, candidates, *, pro
     return r0, out, skipped
 
 
-def _ladder(cand, r0, residual) -> tuple:
+def _ladder(cand, r0, residual, approximate=None) -> tuple:
     """(Candidate, secant S, (x*, chi2*)) of a one-parameter candidate sampled on :data:`LADDER`
-    (sizes whose model cannot be analysed are passed over)."""
+    (sizes whose model cannot be analysed are passed over). ``approximate`` (size -> residual,
+    :mod:`pipeline.diagnose.ladder`) samples the rungs; x* is then analysed again exactly, and the
+    exact ladder runs instead when that fails."""
     best, failure = None, None
 
     def rung(size):
         nonlocal best, failure
         try:
-            r = residual(cand, np.array([size]), True)
+            r = approximate(size) if approximate is not None else \
+                residual(cand, np.array([size]), True)
         except (InputError, SolverError) as exc:
             failure = exc
             return
@@ -227,6 +253,13 @@ def _ladder(cand, r0, residual) -> tuple:
     for size in best[0] * np.array(LADDER_REFINE):
         if size <= cand.upper[0]:
             rung(size)
+    size = best[0]
+    if approximate is not None:
+        try:
+            r = residual(cand, np.array([size]), True)
+        except (InputError, SolverError):
+            return _ladder(cand, r0, residual)
+        best = (size, r, chi_square(r))
     size, r, chi2 = best
     return cand, ((r - r0) / size)[:, None], (np.array([size]), chi2)
 

@@ -1,0 +1,143 @@
+"""Reanalysis of a joint over its ladder of compliances on one Craig-Bampton basis.
+
+A ``joint_flexibility`` candidate at compliance c hangs the joint's grids on CBUSHes of stiffness
+k_ref / c (:mod:`pipeline.diagnose.joints`). The changed model's a-set, constraint map T and mass
+M do not depend on c, and its stiffness is linear in 1 / c:
+
+    K(c) = K_0 + B / c,
+
+B the springs at k_ref (from two assemblies, c = 1 and 2: B = 2 (K(1) - K(2)), K_0 = K(1) - B),
+nonzero only on the nb DOFs of the springs' grids (the boundary b; the rest is the interior i).
+K_ii, K_ib and M do not depend on c, so one Craig-Bampton basis (Craig & Bampton 1968, AIAA J.
+6(7), the fixed-interface modes and the constraint modes)
+
+    Psi = [[Phi_i, -K_ii^-1 K_ib], [0, I_bb]]         (rows i, b)
+
+serves every rung: K_r(c) = Psi^T K_0 Psi + Psi^T B Psi / c, M_r = Psi^T M Psi, and the modes of
+the rung are those of (K_r(c), M_r), of size nf + nb. The constraint modes hold the static
+response of the boundary exactly, so the rigid-body motions, the rigid joint (c -> 0) and the
+free hung part (c -> infinity) are in the basis; the truncation to the nf lowest fixed-interface
+modes (:data:`FIXED_INTERFACE_FACTOR` x the modes asked for) is the only approximation. The
+screening takes the best rung from this basis and analyses that size again exactly
+(:func:`pipeline.diagnose.screen.signatures`).
+
+Used where the exact reanalysis is a dense eigen-solution of the whole a-set
+(na <= :data:`structures.modal.DENSE_LIMIT`: n^3 work and one assembly per rung, against one
+factorisation and one truncated eigen-solution per joint here); larger models keep the exact
+ladder.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg as sla
+import scipy.sparse as sp
+import xarray as xr
+
+from structures.assembly import assemble
+from structures.massprops import mass_properties
+from structures.modal import DEFAULT_SHIFT, DENSE_LIMIT, rigid_body_modes, solve_eigen
+from structures.model import FEModel
+
+#: Fixed-interface modes kept, per analysis mode asked for. Measured on the X-56A-class model
+#: (8 joints, compliances 1 to 1e5, both configurations, the 24 lowest elastic modes): largest
+#: frequency error 3.3e-6 with 3, 2.5e-5 with 2 (chi^2 off by 0.2 of 1937);
+#: tests/pipeline/diagnose/test_screen.py holds the frame's joints to 1e-5.
+FIXED_INTERFACE_FACTOR = 3
+#: Compliances of the two assemblies that separate K_0 and B.
+_C1, _C2 = 1.0, 2.0
+
+
+@dataclass(frozen=True)
+class ReducedJoint:
+    """A joint's changed model on its Craig-Bampton basis (module docstring).
+
+    Attributes
+    ----------
+    k0, b, m : (nr, nr) Psi^T K_0 Psi, Psi^T B Psi, Psi^T M Psi.
+    sensor : (n_dof, nr) basic-frame displacement of the measured DOFs per basis vector.
+    rigid : list of str, the rigid-body motions of the changed model (they come first).
+    props : MassProperties of the changed model (M does not depend on c).
+    nmodes : int, analysis modes per rung.
+    """
+
+    k0: np.ndarray
+    b: np.ndarray
+    m: np.ndarray
+    sensor: np.ndarray
+    rigid: list
+    props: object
+    nmodes: int
+
+    def modes(self, compliance: float) -> tuple[xr.Dataset, np.ndarray]:
+        """Modes of the rung at ``compliance`` (> 0).
+
+        Returns
+        -------
+        modes : xarray.Dataset, ``frequency(mode)`` [Hz] with the ``rigid_motion(mode)``
+            coordinate ("" for elastic modes), the rigid-body modes first at 0 Hz.
+        sensor_shapes : (nmodes, n_dof) mass-normalised shapes at the measured DOFs.
+        """
+        k = self.k0 + self.b / compliance                                  # K_r(c)
+        lam, y = solve_eigen(sp.csc_matrix(k), sp.csc_matrix(self.m), self.nmodes,
+                             shift=DEFAULT_SHIFT)
+        nr = len(self.rigid)
+        lam[:nr] = 0.0
+        freq = np.sqrt(np.clip(lam, 0.0, None)) / (2.0 * np.pi)
+        names = (self.rigid + [""] * len(lam))[:len(lam)]
+        ds = xr.Dataset({"frequency": ("mode", freq, {"units": "Hz"})},
+                        coords={"rigid_motion": ("mode", np.array(names, dtype=str))})
+        return ds, (self.sensor @ y).T
+
+
+def reduce_joint(model: FEModel, candidate, sensor_index, nmodes: int) -> ReducedJoint | None:
+    """The joint candidate's changed model on its Craig-Bampton basis.
+
+    Parameters
+    ----------
+    model : FEModel, the configuration's current model.
+    candidate : Candidate, ``joint_flexibility``.
+    sensor_index : (n_dof,) measured DOFs along the modes' ``dof`` (6 per grid, basic frame).
+    nmodes : int, analysis modes per rung.
+
+    Returns
+    -------
+    ReducedJoint, or None where the basis does not apply: an a-set above
+    :data:`structures.modal.DENSE_LIMIT`, an a-set that changes with the compliance (automatic
+    SPCs), or an interior that is not stiff once the boundary is clamped (a mechanism inside).
+    """
+    from pipeline.diagnose.effects import apply_effect
+
+    changed = apply_effect(model, candidate, [_C1])
+    s1 = assemble(changed, warn=False)
+    if s1.K.shape[0] > DENSE_LIMIT:
+        return None
+    s2 = assemble(apply_effect(model, candidate, [_C2]), warn=False)
+    if not np.array_equal(s1.a_dofs, s2.a_dofs):
+        return None
+    k1 = s1.K.toarray()
+    springs = (k1 - s2.K.toarray()) / (1.0 / _C1 - 1.0 / _C2)           # B
+    k0 = k1 - springs / _C1                                                # K_0
+    bound = np.flatnonzero(np.abs(springs).max(axis=1) > 1e-12 * np.abs(springs).max())
+    inner = np.setdiff1d(np.arange(k0.shape[0]), bound)
+    m = s1.M.toarray()
+    try:
+        factor = sla.cho_factor(k0[np.ix_(inner, inner)])
+    except np.linalg.LinAlgError:
+        return None
+    n_i, nb = inner.size, bound.size
+    nf = min(n_i, FIXED_INTERFACE_FACTOR * nmodes)
+    # fixed-interface modes as the largest 1 / lambda of (M_ii, K_ii): K_ii is positive definite
+    # once the boundary is clamped, M_ii may be singular (massless rotations)
+    _, phi_i = sla.eigh(m[np.ix_(inner, inner)], k0[np.ix_(inner, inner)],
+                        subset_by_index=[n_i - nf, n_i - 1])
+    psi = np.zeros((k0.shape[0], nf + nb))
+    psi[inner, :nf] = phi_i
+    psi[inner, nf:] = -sla.cho_solve(factor, k0[np.ix_(inner, bound)])   # constraint modes
+    psi[bound, nf:] = np.eye(nb)
+    rotate = (s1.rotation @ (s1.T @ psi))                                   # (n_g, nr) basic
+    _, rigid = rigid_body_modes(changed, s1)
+    return ReducedJoint(k0=psi.T @ k0 @ psi, b=psi.T @ springs @ psi, m=psi.T @ m @ psi,
+                        sensor=np.asarray(rotate)[np.asarray(sensor_index)], rigid=list(rigid),
+                        props=mass_properties(changed, m_basic=s1.m_basic), nmodes=nmodes)
