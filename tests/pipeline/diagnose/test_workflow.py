@@ -170,19 +170,16 @@ class GapDidNotShrink(AssertionError):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("kind", [
-    "lumped_mass", "boundary_stiffness",
-    pytest.param("member_taper", marks=pytest.mark.xfail(
-        strict=True, raises=GapDidNotShrink,
-        reason="measured on seed 0 (3 taper effects named, PID 23 first): held-out frequency RMS "
-               "1.48 -> 0.60 %, but the cross-orthogonality off-diagonal rises 0.692 -> 0.697 "
-               "(held-out rows 0.692 -> 0.694; MAC min 0.44 -> 0.41): close modes mixed by the "
-               "nominal scatter that the taper cannot undo"))])
+@pytest.mark.parametrize("kind", ["lumped_mass", "boundary_stiffness", "member_taper"])
 def test_frame_effect_named_where_it_is(tmp_path, kind):
     # 20-40 s each on shared cores. Measured on seed 0: lumped mass at grid 3009 (truth 3008,
     # 3009, 3209): held-out frequency RMS 10.4 -> 0.93 %, cross-orthogonality 0.707 -> 0.578
     # (held-out rows the same); boundary spring grid 5002 y (truth 5002): 1.01 -> 0.72 %,
-    # 0.671 -> 0.496 (held-out rows 0.671 -> 0.489); taper PID 23 (truth PID 23)
+    # 0.671 -> 0.496 (held-out rows 0.671 -> 0.489); taper PID 23 alone (truth PID 23, the
+    # member in 8 pieces): 1.48 -> 0.71 %, 0.692 -> 0.673 (held-out rows the same). The largest
+    # off-diagonal is a pair of close modes (7.36 / 7.59 Hz before, 9.21 / 9.32 Hz after) mixed
+    # by the nuisance scatter (the truth deck itself gives 0.044): the taper unmixes the first
+    # pair, the next one is the new largest, so the drop is small
     result, truth = _run(tmp_path, kind)
     assert result.verdict == "effect"
     first = result.effects[0]
