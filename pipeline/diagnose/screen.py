@@ -40,7 +40,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import least_squares, lsq_linear
 
-from pipeline.diagnose.calibrate import CALIBRATION_BOUND, THETA_SCALE, Problem
+from pipeline.diagnose.calibrate import THETA_SCALE, Problem
 from pipeline.diagnose.effect_deck import change_matrices
 from pipeline.diagnose.evidence import bic, chi_square, evaluate, evaluate_modes
 from pipeline.diagnose.ladder import reduce_joint
@@ -60,6 +60,10 @@ ONE_SIDED_TOP = 5
 LADDER = tuple(10.0 ** (-0.25 * np.arange(21)[::-1]))
 #: Refinement of the best rung (factors).
 LADDER_REFINE = (10.0 ** -0.125, 10.0 ** 0.125)
+#: A rung's chi^2 below the best one's by less than this fraction is round-off, not a better size
+#: (a joint whose hung grids carry no mass changes nothing: every rung gives the same chi^2 to
+#: ~1e-13, and the smallest size is kept rather than whichever rounds lowest).
+LADDER_ROUNDOFF = 1e-9
 #: Eigenvalue gaps below this fraction of the largest computed eigenvalue are treated as
 #: degenerate in the modal expansion (their coupling is left out instead of dividing by ~0).
 DEGENERATE_GAP = 1e-9
@@ -243,7 +247,7 @@ def _ladder(cand, r0, residual, approximate=None) -> tuple:
         except (InputError, SolverError) as exc:
             failure = exc
             return
-        if best is None or chi_square(r) < best[2]:
+        if best is None or chi_square(r) < best[2] * (1.0 - LADDER_ROUNDOFF):
             best = (size, r, chi_square(r))
 
     for size in cand.upper[0] * np.asarray(LADDER):
@@ -326,9 +330,9 @@ def refit(problem: Problem, theta0, effects, row: Screened | None, *, n_data: in
         else np.zeros(0)
     scale = np.concatenate([size, np.full(len(theta0), THETA_SCALE)])
     lo = np.concatenate([np.asarray(cand.lower, float) if cand else np.zeros(0),
-                         np.full(len(theta0), -CALIBRATION_BOUND)]) / scale
+                         -problem.bounds]) / scale
     hi = np.concatenate([np.asarray(cand.upper, float) if cand else np.zeros(0),
-                         np.full(len(theta0), CALIBRATION_BOUND)]) / scale
+                         problem.bounds]) / scale
     start = np.concatenate([row.values if cand else np.zeros(0), np.asarray(theta0, float)])
     z0 = np.clip(start / scale, lo, hi)
     j_theta = np.asarray(jacobian_theta, float) * THETA_SCALE

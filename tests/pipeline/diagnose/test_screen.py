@@ -107,15 +107,16 @@ def test_change_matrices_equal_full_assembly_difference(frame_reference):
 
 
 def test_reduced_joint_modes_match_exact_reanalysis(frame_reference):
-    """Every frame joint (whole and one-sided) at compliances 1, 100 and 1e5 (rigid-like to a
-    free hung part): the Craig-Bampton rung against the changed model's exact modes (assembly and
+    """A whole and a one-sided frame joint at compliances 1, 100 and 1e5 (rigid-like to a free
+    hung part): the Craig-Bampton rung against the changed model's exact modes (assembly and
     dense eigen-solution of the whole a-set). Tolerances: 1e-5 relative on the 26 modes the
     residual can pair (the truncation to 3 x 46 fixed-interface modes; measured 3.3e-6 at worst
     on the X-56A-class model's modes), MAC 1 - 1e-6 at the sensors."""
     model, modes0, ref = frame_reference
     joints = candidates(model, ("joint_flexibility",))
-    assert len(joints) >= 4 and any(c.get("dependent") is not None for c in joints)
-    for cand in joints:
+    whole = next(c for c in joints if c.get("dependent") is None)
+    one_sided = next(c for c in joints if c.get("dependent") is not None)
+    for cand in (whole, one_sided):
         basis = reduce_joint(model, cand, ref.sensor_index, ref.nmodes)
         assert basis is not None, cand.label
         for size in (1.0, 100.0, 1.0e5):
