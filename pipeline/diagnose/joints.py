@@ -89,6 +89,37 @@ def joint_sites(model: FEModel) -> list:
     return out
 
 
+def hangs_nothing(model: FEModel, eid: int, only=None) -> bool:
+    """True when the grids a joint candidate hangs on its springs carry nothing.
+
+    The hung grids (the rigid joint's dependent grids, or ``only``) then have no CONM2, no
+    element, no other rigid element and no SPC or PS: the springs carry no force in any mode
+    (nothing loads the hung grids), so every compliance gives the rigid joint's modes, the hung
+    grids following the independent grid as before.
+
+    Parameters
+    ----------
+    model : FEModel
+    eid : int, the RBE2 / RBAR.
+    only : int, optional, the one dependent grid of a one-sided candidate.
+    """
+    rigid = next((r for r in model.rigid if r.eid == eid), None)
+    joint = None if rigid is None else joint_grids(rigid)
+    if joint is None:
+        return False
+    hung = [only] if only is not None else [g for g, _ in joint[1]]
+    if np.isin(model.masses.grid, hung).any():
+        return False
+    if any(np.isin(es.nodes, hung).any() for es in model.elements.values()):
+        return False
+    if any(int(g) in hung for r in model.rigid if r.eid != eid
+           for g, _ in tuple(r.independent) + tuple(r.dependent)):
+        return False
+    if any(int(g) in hung for g, _ in model.spc):
+        return False
+    return not np.any(model.grids.ps[model.grids.index(hung)] != 0)
+
+
 def _k_rotation(model: FEModel, indep: int, hung, kt: float, kr: float) -> float:
     """k_ref,r of a joint: k_ref,t I / m for the CONM2s at the hung grids (m their mass, I
     their largest moment of inertia about the independent grid), so that one compliance puts the

@@ -24,7 +24,10 @@ h_k = the candidate's ``reference`` size, r the training residual of every confi
   DOFs) and the best size x* again exactly (the exact ladder when that fails). The one-sided
   variants of a joint (one dependent grid on its spring) are screened only for the
   ``ONE_SIDED_TOP`` best whole joints (cost per joint and configuration: two assemblies, one
-  truncated eigen-solution, 23 small ones and one exact reanalysis).
+  truncated eigen-solution, 23 small ones and one exact reanalysis). A joint whose hung grids
+  carry nothing (:func:`pipeline.diagnose.joints.hangs_nothing`, e.g. massless sensor or
+  attachment points on an RBE2) changes no mode at any size: it is not sampled (size the
+  smallest rung, chi^2 the current one, signature zero).
 
 **Linear fit**: min |r0 + S x|^2 within the candidate's bounds (``scipy.optimize.lsq_linear``);
 the candidates are ranked by the drop of chi^2.
@@ -43,6 +46,7 @@ from scipy.optimize import least_squares, lsq_linear
 from pipeline.diagnose.calibrate import THETA_SCALE, Problem
 from pipeline.diagnose.effect_deck import change_matrices
 from pipeline.diagnose.evidence import bic, chi_square, evaluate, evaluate_modes
+from pipeline.diagnose.joints import hangs_nothing
 from pipeline.diagnose.ladder import reduce_joint
 from structures.assembly import assemble_g
 from structures.common.errors import InputError, SolverError
@@ -211,6 +215,12 @@ def signatures(problem: Problem, theta, effects, evaluations, candidates, *, pro
             if progress is not None and n % 50 == 0:
                 progress(f"screening {n}/{len(cands)}")
             try:
+                if cand.kind in LADDER_KINDS and all(
+                        hangs_nothing(m, cand.location.elements[0], cand.get("dependent"))
+                        for m in models):
+                    out.append((cand, np.zeros((r0.size, 1)),
+                                (np.array([cand.upper[0] * LADDER[0]]), chi_square(r0))))
+                    continue
                 if cand.kind in LADDER_KINDS:
                     out.append(_ladder(cand, r0, residual, reduced(cand)))
                     continue

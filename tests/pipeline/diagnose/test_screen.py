@@ -168,3 +168,30 @@ def test_joint_ladder_on_basis_picks_the_exact_ladders_size(frame_reference, mon
         assert on_basis[label][0] == pytest.approx(x, rel=1e-12), label
         assert on_basis[label][1] == pytest.approx(chi2, rel=1e-9), label
     assert min(exact, key=lambda label: exact[label][1]) == joints[0].label
+
+
+def test_hangs_nothing_joint_changes_no_mode():
+    """X-56A-class deck: RBE2 7009 ties two bare sensor grids (3109, 3209) to the wing, RBE2 7501
+    the engine (a CONM2) to its pylon. Exact reanalysis: softening 7009 at any compliance leaves
+    every frequency (1e-9) and the bare grids' motion (1e-6 of the largest) as with the rigid
+    joint; 7501 moves the frequencies."""
+    from pathlib import Path
+
+    from pipeline.diagnose.joints import hangs_nothing
+
+    model = read_model(Path(__file__).parents[3] / "data" / "x56_like" / "x56_efew.bdf")
+    joints = {c.location.elements[0]: c for c in candidates(model, ("joint_flexibility",))
+              if c.get("dependent") is None}
+    assert hangs_nothing(model, 7009) and hangs_nothing(model, 7009, only=3109)
+    assert not hangs_nothing(model, 7501)
+    modes0 = compute_modes(model, 30)
+    dof = np.isin(modes0["grid"].values, [3109, 3209])
+    for size in (1.0, 1.0e3, 1.0e5):
+        soft = compute_modes(apply_effect(model, joints[7009], [size]), 30)
+        assert soft["frequency"].values[6:] == pytest.approx(modes0["frequency"].values[6:],
+                                                             rel=1e-9)
+        s0 = modes0["shape"].values[6:][:, dof]
+        s1 = soft["shape"].values[6:][:, np.isin(soft["grid"].values, [3109, 3209])]
+        assert np.abs(np.abs(s1) - np.abs(s0)).max() <= 1e-6 * np.abs(s0).max()
+    engine = compute_modes(apply_effect(model, joints[7501], [100.0]), 30)
+    assert np.abs(engine["frequency"].values[6:] / modes0["frequency"].values[6:] - 1).max() > 1e-3
