@@ -36,9 +36,11 @@ scale of the model (so that bounds do not depend on units):
     the X-56 wing ribs the rigid-body eigenvalues carry round-off of 2e-6 of the first elastic
     one, which :mod:`structures.modal` rejects; 1e-5 is fine there.
 ``member_taper`` of a member (:mod:`pipeline.diagnose.members`), parameters ``scale``, ``taper``
-    Each element's A times (1 + scale) (1 + taper (xi - 1/2))^2 and I1, I2, I12, J times
-    (1 + scale) (1 + taper (xi - 1/2))^4 at its mid-length xi: a solid section scaled in size s
-    (A ~ s^2, I ~ s^4) linearly along the member. Bounds scale [-0.3, 0.3], taper [-0.8, 0.8].
+    Each element's section scaled in size by s = (1 + scale) (1 + taper (xi - 1/2)) at its
+    mid-length xi, as a solid section is: A times s^2 and I1, I2, I12, J times s^4. ``scale``
+    is the member's mean size against the uniform section it was idealised with (the section
+    of one end or station, typically), ``taper`` its linear variation. Bounds scale
+    [-0.3, 0.3] (I times 0.24 .. 2.9), taper [-0.8, 0.8].
     A member of fewer than :data:`~pipeline.diagnose.members.MIN_SEGMENTS` elements is first
     split in that many straight pieces (:func:`pipeline.diagnose.members.remesh`, new grids on
     its line), so that a member one element long has a taper too. An element keeps its PID when
@@ -54,7 +56,14 @@ scale of the model (so that bounds do not depend on units):
     :data:`~pipeline.diagnose.members.MIN_SEGMENTS` elements is split in that many straight
     pieces joined at new grids on the arc (one offset straight element cannot bow: its axial
     load path stays straight). Bending then couples with axial and torsion, and the member's
-    axial stiffness falls with the square of the bow. Bounds [-0.15, 0.15].
+    axial stiffness falls with the square of the bow. Bounds [-0.15, 0.15], as two candidates
+    per member: bow_1 >= 0 with bow_2 >= 0 (label ``bow +y +z``) or bow_2 <= 0 (``bow +y -z``).
+    The member's stiffness changes to second order in the bow (the axial softening ~ bow^2 of
+    :mod:`pipeline.diagnose.members`) and only its couplings to first order, so the response
+    is nearly even in the bow: a linear signature through 0 would predict the opposite change
+    for the opposite bow. In one quadrant it is monotone in the bow's size; the other two
+    quadrants (bow_1 < 0) are the same bows turned over (their even part is the same, their
+    couplings change sign).
 ``boundary_stiffness`` at a grid in direction x, y or z, parameter ``k_<direction>``
     A grounded CELAS2 of stiffness k times m_total (2 pi f_1)^2, f_1 the model's lowest elastic
     frequency and m_total its total mass (consistent units): at k = 1 the spring alone would carry
@@ -251,9 +260,16 @@ def candidates(model: FEModel, kinds=KINDS, *, frequency: float | None = None
                 label = (f"member PID {m.pid} ({m.card} {m.eids[0]}" +
                          (f"..{m.eids[-1]}, grids {m.grids[0]}-{m.grids[-1]})"
                           if len(m.eids) > 1 else f", grids {m.grids[0]}-{m.grids[-1]})"))
-                out.append(_candidate(kind, Location(grids=m.grids, elements=m.eids,
-                                                     properties=(m.pid,)),
-                                      label, tuple(names), (("member", m),)))
+                location = Location(grids=m.grids, elements=m.eids, properties=(m.pid,))
+                if kind == "member_taper":
+                    out.append(_candidate(kind, location, label, tuple(names), (("member", m),)))
+                    continue
+                for side in (1.0, -1.0):
+                    cand = _candidate(kind, location, f"{label} bow +y {'+-'[side < 0]}z",
+                                      tuple(names), (("member", m),))
+                    out.append(replace(cand, lower=(0.0, min(0.0, side * cand.upper[1])),
+                                       upper=(cand.upper[0], max(0.0, side * cand.upper[1])),
+                                       reference=(cand.reference[0], side * cand.reference[1])))
     return tuple(out)
 
 
@@ -338,7 +354,7 @@ def _taper(model, candidate, x):
         if np.count_nonzero(es.pids == base.pid) > 1:
             pids[row], new_pid = new_pid, new_pid + 1
         fields = {k: (None if base.fields.get(k) is None else
-                      base.fields[k] * (1.0 + x[0]) * s[i] ** n)
+                      base.fields[k] * ((1.0 + x[0]) * s[i]) ** n)
                   for k, n in TAPER_EXPONENTS.items()}
         props[int(pids[row])] = Property(int(pids[row]), base.card, {**base.fields, **fields})
     elements = dict(model.elements)

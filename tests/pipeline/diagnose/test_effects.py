@@ -145,11 +145,11 @@ def test_taper_copies_a_shared_property(x56, x56_candidates):
     fresh = sorted(pids[e] for e in fuselage)
     assert max(x56.properties) == 252 and fresh == list(range(253, 265))
     # by hand: PBAR 101 is A 6, I1 60, I2 40, I12 0, J 60; xi_mid = 1/24, 3/24, .., 23/24 gives
-    # s = 1 + 0.5 (xi - 1/2) = 37/48, 39/48, .., 59/48; A 1.1 x 6 s^2, I 1.1 x I s^4
-    s = (37.0 + 2.0 * np.arange(12)) / 48.0
-    hand = {"A": 6.6 * s ** 2, "I1": 66.0 * s ** 4, "I2": 44.0 * s ** 4, "J": 66.0 * s ** 4,
+    # s = 1.1 (1 + 0.5 (xi - 1/2)) = 1.1 x 37/48, 39/48, .., 59/48; A 6 s^2, I s^4
+    s = 1.1 * (37.0 + 2.0 * np.arange(12)) / 48.0
+    hand = {"A": 6.0 * s ** 2, "I1": 60.0 * s ** 4, "I2": 40.0 * s ** 4, "J": 60.0 * s ** 4,
             "I12": np.zeros(12)}
-    assert hand["A"][0] == pytest.approx(3.9216145833, rel=1e-10)       # 6.6 x 1369 / 2304
+    assert hand["A"][0] == pytest.approx(4.31377604167, rel=1e-10)      # 7.26 x 1369 / 2304
     for key, values in hand.items():
         np.testing.assert_allclose([new.properties[p].fields[key] for p in fresh], values,
                                    rtol=1e-14, atol=0.0, err_msg=key)
@@ -160,7 +160,7 @@ def test_taper_copies_a_shared_property(x56, x56_candidates):
     assert es2.pids.tolist() == es.pids.tolist()              # the copies are now the only users
     assert len(again.grids) == len(new.grids)                 # and the pieces are kept
     np.testing.assert_allclose([again.properties[p].fields["A"] for p in fresh],
-                               1.21 * 6.0 * s ** 2, rtol=1e-14)
+                               1.21 * 6.0 * s ** 2, rtol=1e-14)       # A ~ 1.1^2 once more
 
 
 def _cantilever(tmp_path, n, length, props):
@@ -286,7 +286,9 @@ def test_a_split_member_keeps_its_pieces_and_bows_add(tmp_path):
     """Taper then curvature on one split member: the pieces keep their tapered PIDs and the
     new grids move onto the arc; two bows b1, b2 give the arc of b1 + b2."""
     model = _one_bar(tmp_path, 4.0, 3.0, 0.7, 1.3)
-    taper, bow = candidates(model, ["member_taper", "member_curvature"])
+    taper, up, bow = candidates(model, ["member_taper", "member_curvature"])
+    assert (up.lower, up.upper, bow.lower, bow.upper) == ((0.0, 0.0), (0.15, 0.15),
+                                                          (0.0, -0.15), (0.15, 0.0))
     tapered = apply_effect(model, taper, [0.1, 0.2])
     both = apply_effect(tapered, bow, [0.05, 0.0])
     assert both.grids.ids.tolist() == tapered.grids.ids.tolist()
@@ -479,8 +481,8 @@ def test_cbeam_members_round_trip(tmp_path):
     deck = _deck(tmp_path, "beams.bdf", cards)
     model = read_model(deck)
     cands = candidates(model, ["member_taper", "member_curvature"])
-    assert [c.location.elements for c in cands] == [(20, 21, 22, 23)] * 2
-    effects = [(cands[0], [-0.1, 0.4]), (cands[1], [0.08, -0.05])]
+    assert [c.location.elements for c in cands] == [(20, 21, 22, 23)] * 3
+    effects = [(cands[0], [-0.1, 0.4]), (cands[2], [0.08, -0.05])]
     combined = apply_effect(apply_effect(model, *effects[0]), *effects[1])
     back = read_model(write_effect_deck(deck, tmp_path / "beams_out.bdf", model, effects))
     for got, want in zip(assemble_g(back), assemble_g(combined)):
@@ -547,7 +549,7 @@ def test_effect_cards_against_mystran(x56, x56_candidates, tmp_path):
 
     picks = [("lumped_mass", "grid 5021", [0.03]), ("joint_flexibility", "RBE2 7501", [4.0]),
              ("member_taper", "PID 101 (CBAR 1003", [0.1, 0.5]),
-             ("member_curvature", "PID 132", [0.05, -0.05])]
+             ("member_curvature", "PID 132 (CBAR 5002, grids 5001-5011) bow +y -z", [0.05, -0.05])]
     model, texts = x56, []
     for kind, label, values in picks:
         cand = _pick(x56_candidates, kind, label)
@@ -573,7 +575,7 @@ def test_candidates_of_x56_and_neighbours(x56, x56_candidates):
     assert counts["joint_flexibility"] == 28 + 2 * 26
     assert counts["lumped_mass"] == len(x56.grids)     # every grid carries structure, none fixed
     assert counts["boundary_stiffness"] == 3 * len(x56.grids)
-    assert counts["member_taper"] == counts["member_curvature"] == len(find_members(x56))
+    assert counts["member_taper"] == counts["member_curvature"] / 2 == len(find_members(x56))
     grown = neighbours(x56, Location(grids=(3005,)))
     assert grown.grids == (3004, 3005, 3006, 3105, 3205)
     assert grown.elements == (3004, 3005, 7005)
