@@ -10,11 +10,15 @@ plus a Gaussian prior on the mass scale, theta_m / sigma_m (:func:`mass_prior_sc
 scatter independently (``DiagnoseSettings.model_scatter`` each), so the common part of their
 errors, all that a uniform scale can represent, is known sqrt(N_eff) times better than each mass. Without it the scale
 soaks up a missing mass and the weighing, the evidence that tells a mass from a stiffness error
-(issue 14 step 2), is gone after the calibration. A material's modulus is one value for all its
-elements (no averaging): it keeps the box bounds only.
+(issue 14 step 2), is gone after the calibration. The prior is truncated at ``PRIOR_SIGMAS``
+sigma_m (the scale's bounds, :attr:`Problem.bounds`): when the modal residual is far above its
+scales (a large missing effect, hundreds of times chi^2 / dof) a Gaussian prior row is outweighed
+and the scale would still run to +-10 %, which independent scatter of the masses cannot do. A
+material's modulus is one value for all its elements (no averaging): it keeps the box bounds
++-``CALIBRATION_BOUND`` only.
 
 Model-form flags (the fit "stalls", DESIGN.md section 5): a parameter within ``BOUND_TOLERANCE``
-of its bound, or more than ``CONSISTENCY_SIGMAS`` prior standard deviations from nominal;
+of its bound (for the mass scale: ``PRIOR_SIGMAS`` prior standard deviations from nominal);
 configurations wanting values that differ by more than ``CONSISTENCY_SIGMAS`` times their
 uncertainty (one Gauss-Newton step per configuration from the joint solution, with the
 joint Jacobian's blocks: theta_c = theta - (J_c^T J_c)^-1 J_c^T r_c, covariance (J_c^T J_c)^-1);
@@ -41,6 +45,9 @@ BOUND_TOLERANCE = 0.02
 CONSISTENCY_SIGMAS = 3.0
 #: Runs test p-value below which the frequency residual is structured.
 RUNS_P = 0.01
+#: Truncation of a parameter's Gaussian prior (its bounds): beyond 3 standard deviations
+#: (probability 0.27 %) a change is not the nominal scatter.
+PRIOR_SIGMAS = 3.0
 #: Optimiser scaling of the relative parameters (theta / THETA_SCALE is of order one).
 THETA_SCALE = 0.02
 #: Relative finite-difference step of the optimiser (large enough that a step never re-pairs modes
@@ -210,6 +217,12 @@ class Problem:
         """Training residual vector of the data over the configurations."""
         return np.concatenate([ev.vector(ref.train) for ev, ref in zip(evaluations, self.refs)])
 
+    @property
+    def bounds(self) -> np.ndarray:
+        """(n_theta,) bound b of every parameter, -b <= theta <= b: ``CALIBRATION_BOUND``, or
+        ``PRIOR_SIGMAS`` prior standard deviations when that is tighter."""
+        return np.minimum(CALIBRATION_BOUND, PRIOR_SIGMAS * self.prior)
+
     def prior_residual(self, theta) -> np.ndarray:
         """theta_i / sigma_i of every parameter with a finite prior, shape (n_prior,)."""
         finite = np.isfinite(self.prior)
@@ -247,14 +260,14 @@ class Calibration:
 
 
 def calibrate(problem: Problem, effects=()) -> Calibration:
-    """Fit the nominal parameters within +-CALIBRATION_BOUND and their prior (:meth:`Problem.residual`);
-    flag model-form error."""
+    """Fit the nominal parameters within their bounds (:attr:`Problem.bounds`) and their prior
+    (:meth:`Problem.residual`); flag model-form error."""
     n = problem.n_theta
     if n == 0:
         evs = problem.evaluate(np.zeros(0), effects)
         r = problem.residual(np.zeros(0), evs)
         return Calibration(np.zeros(0), chi_square(r), r.size, evs, (), {}, np.zeros((r.size, 0)))
-    bound = CALIBRATION_BOUND / THETA_SCALE
+    bound = problem.bounds / THETA_SCALE
 
     def fun(z):
         theta = z * THETA_SCALE
@@ -267,15 +280,17 @@ def calibrate(problem: Problem, effects=()) -> Calibration:
     r = problem.residual(theta, evs)
     chi2 = chi_square(r)
     flags = []
-    for name, t, sd in zip(problem.names, theta, problem.prior):
-        if abs(abs(t) - CALIBRATION_BOUND) < BOUND_TOLERANCE * CALIBRATION_BOUND:
+    for name, t, b, sd in zip(problem.names, theta, problem.bounds, problem.prior):
+        if abs(abs(t) - b) >= BOUND_TOLERANCE * b:
+            continue
+        if np.isfinite(sd):
+            flags.append(f"nominal parameter {name} sits on its bound ({100 * t:+.2f} %, "
+                         f"{PRIOR_SIGMAS:g} times its prior standard deviation {100 * sd:.2f} % "
+                         "from independent scatter of the masses): a missing or misplaced mass, "
+                         "or a model-form error the scale compensates for.")
+        else:
             flags.append(f"nominal parameter {name} sits on its bound ({100 * t:+.1f} %): the "
                          "calibration compensates for something it cannot represent.")
-        elif abs(t) > CONSISTENCY_SIGMAS * sd:
-            flags.append(f"nominal parameter {name} wants {100 * t:+.1f} %, {abs(t) / sd:.1f} "
-                         f"times its prior standard deviation ({100 * sd:.2f} %, independent "
-                         "scatter of the masses): the mass properties point at a missing or "
-                         "misplaced mass.")
     jac = sol.jac / THETA_SCALE
     per_conf = _per_configuration(problem, evs, jac, theta, flags)
     dof = r.size - n

@@ -34,7 +34,7 @@ def test_calibration_runs_test_sees_the_training_modes_only():
 
     ref = SimpleNamespace(train=train, name="c")
     problem = SimpleNamespace(n_theta=1, names=("E1",), refs=(ref,), evaluate=evaluate,
-                              prior=np.array([np.inf]),
+                              prior=np.array([np.inf]), bounds=np.array([0.1]),
                               residual=lambda theta, evs: evs[0].vector(train))
     cal = calibrate(problem)
     assert abs(cal.theta[0]) < 1e-6                       # ten +1, ten -1: no shift
@@ -83,9 +83,9 @@ def test_calibration_keeps_the_weighing(tmp_path):
         + (theta / sigma_m)^2
     over the training modes (1-D minimisation here, eigen-solves in the code). A free scale
     (no prior) would take the 6 % within its +-10 % bound and leave the weighing nothing; with
-    the prior the weighing and prior rows keep at least their own minimum
-    0.06^2 / ((0.005 W / W0)^2 + sigma_m^2) = 19.9 (the frequencies only add to it), and theta
-    sits more than 3 sigma_m from nominal: flagged."""
+    the prior, truncated at 3 sigma_m = 3.708 %, the weighing and prior rows keep at least their
+    own minimum 0.06^2 / ((0.005 W / W0)^2 + sigma_m^2) = 19.9 (the frequencies and the
+    truncation only add to it), and theta sits on its 3 sigma_m bound: flagged."""
     problem, ref, w0 = _chain_problem(tmp_path, 1.06)
     w, sd_m = 1.06 * w0, problem.prior[0]
     sigma = ref.frequency_sigma[ref.train]
@@ -94,7 +94,9 @@ def test_calibration_keeps_the_weighing(tmp_path):
         r_f = ((1.0 + t) ** -0.5 - 1.0) / sigma
         return np.sum(r_f ** 2) + (((1.0 + t) * w0 - w) / (0.005 * w)) ** 2 + (t / sd_m) ** 2
 
-    hand = minimize_scalar(chi2, bounds=(-0.1, 0.1), method="bounded", options={"xatol": 1e-9})
+    hand = minimize_scalar(chi2, bounds=(-3 * sd_m, 3 * sd_m), method="bounded",
+                           options={"xatol": 1e-9})
+    assert problem.bounds[0] == pytest.approx(3 * 0.0123603, rel=1e-5)
     cal = calibrate(problem)
     assert cal.theta[0] == pytest.approx(hand.x, abs=2e-4)
     assert cal.chi2 == pytest.approx(hand.fun, rel=1e-2)
@@ -102,4 +104,5 @@ def test_calibration_keeps_the_weighing(tmp_path):
     floor = 0.06 ** 2 / ((0.005 * w / w0) ** 2 + sd_m ** 2)
     assert floor == pytest.approx(19.9, abs=0.05)
     assert kept >= floor * (1.0 - 1e-6)
-    assert any("prior standard deviation" in flag for flag in cal.flags)
+    assert cal.theta[0] == pytest.approx(3 * sd_m, rel=1e-6)   # the data want ~5 %
+    assert any("mass sits on its bound" in flag for flag in cal.flags)
