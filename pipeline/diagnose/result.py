@@ -105,11 +105,14 @@ class DiagnoseResult:
     calibrated : mapping {parameter: relative change} of the nominal calibration without
         effects (``gap_before``'s model).
     rounds : tuple of mapping, per look-again round: its ``verdict``, ``n_data`` (training
-        residuals), ``n_held_out`` (held-out residual entries), "none"'s ``none_chi2``, ``none_bic``, ``none_n_params`` and
-        ``none_held_out_chi2``, and the refitted candidates (``fits``, the ``best`` and the
-        ``runner_up``: kind, label, chi2, bic, n_params, held_out_chi2, parameters); the
-        held-out chi^2 is over the held-out modes' residual entries
-        (:func:`pipeline.diagnose.workflow.held_out_vector`).
+        residuals), ``n_held_out`` (held-out residual entries) and ``held_out_modes_entries``
+        (per held-out mode), "none"'s ``none_chi2``, ``none_bic``, ``none_n_params``,
+        ``none_held_out_chi2`` and ``none_held_out_modes_chi2`` (per mode), and the refitted
+        candidates (``fits``, the ``best`` and the ``runner_up``: kind, label, chi2, bic,
+        n_params, held_out_chi2, held_out_modes_chi2, held_out_modes_kept (the modes either
+        model reproduces), held_out_evidence, parameters); the held-out chi^2 is over the
+        held-out modes' residual entries (:func:`pipeline.diagnose.workflow.held_out_modes`,
+        :func:`pipeline.diagnose.workflow.held_out_evidence`).
     """
 
     verdict: str

@@ -22,7 +22,9 @@ whose size exceeds what the nominal scatter could do by itself (:func:`within_sc
 - ``effect``: the best refitted candidate beats "none" (the model with its nominal parameters
   refitted) and the runner-up (the best candidate of another kind or at a location that is not
   its neighbour, :func:`pipeline.diagnose.effects.neighbours`) by ``settings.margin``, and the
-  held-out modes do not contradict it by more than the margin (:func:`held_out_evidence`);
+  held-out modes do not contradict it by more than the margin
+  (:func:`pipeline.diagnose.predictive.held_out_evidence`: on the modes that "none" or the fit
+  reproduces; a mode neither reproduces is a mis-paired one and is left out);
 - ``ambiguous``: it beats "none" but not the runner-up;
 - ``none``: no candidate beats "none" and "none" passes the goodness-of-fit test;
 - ``unexplained``: no candidate beats "none" and "none" fails the goodness-of-fit test, or the
@@ -46,9 +48,10 @@ from threadpoolctl import threadpool_limits
 
 from pipeline.diagnose.calibrate import Problem, calibrate
 from pipeline.diagnose.effects import KINDS, candidates, neighbours
-from pipeline.diagnose.evidence import (SELF_ORTHOGONALITY_LIMIT, build_reference, chi_square,
+from pipeline.diagnose.evidence import (SELF_ORTHOGONALITY_LIMIT, build_reference,
                                         elastic_index, gof_limit)
 from pipeline.diagnose.gap import gap_metrics, separating_measurement
+from pipeline.diagnose.predictive import held_out_evidence, held_out_modes, reproduced
 from pipeline.diagnose.result import CandidateScore, DiagnoseResult, EffectRecord
 from pipeline.diagnose.screen import pick_for_refit, refit, screen, signatures
 from structures.common.errors import InputError
@@ -234,8 +237,10 @@ def decide(none_fit, fits, margin: float, near, n_data: int, n_candidates: int =
         True when b is a's neighbour (one element layer).
     n_data : int, training residuals.
     n_candidates : int, candidates screened (the prior odds of "none" against each one).
-    held_out : (chi2_none, (len(fits),) chi2 of each fit, n_ho entries) over the held-out
-        modes, optional (:func:`held_out_vector`); without it the predictive check is skipped.
+    held_out : ((n_ho_modes,) chi^2 of "none", per fit a (n_ho_modes,) chi^2, (n_ho_modes,)
+        entries) of the held-out modes, optional
+        (:func:`pipeline.diagnose.predictive.held_out_modes`); without it the predictive check
+        is skipped.
 
     Returns
     -------
@@ -260,12 +265,13 @@ def decide(none_fit, fits, margin: float, near, n_data: int, n_candidates: int =
     odds, Kass & Raftery 1995 sec. 3; BIC approximates -2 ln of the Bayes factor): the best of
     many candidates fitted to noise does not look like evidence.
 
-    Predictive check (:func:`held_out_evidence`): a best fit that the held-out modes contradict
-    by more than ``margin`` gives ``unexplained`` instead of ``effect``: it fits the training
-    modes by distorting the model elsewhere (an effect outside the library, or the right kind at
-    the wrong place, absorbed by a candidate), so it does not explain the data. The held-out
-    modes then take part in the verdict as a veto only (they never choose the candidate); the
-    gap on them is still the prediction of a model whose parameters they never set.
+    Predictive check (:func:`pipeline.diagnose.predictive.held_out_evidence`): a best fit that
+    the held-out modes contradict by more than ``margin`` gives ``unexplained`` instead of
+    ``effect``: it fits the training modes by distorting the model elsewhere (an effect outside
+    the library, or the right kind at the wrong place, absorbed by a candidate), so it does not
+    explain the data. The held-out modes then take part in the verdict as a veto only (they
+    never choose the candidate); the gap on them is still the prediction of a model whose
+    parameters they never set.
     """
     none_chi2, none_p = none_fit
     fitting = gof_limit(n_data - none_p) >= none_chi2
@@ -286,36 +292,6 @@ def decide(none_fit, fits, margin: float, near, n_data: int, n_candidates: int =
             held_out_evidence(held_out[0], held_out[1][best], held_out[2]) < -margin:
         return "unexplained", best, runner, lead
     return "effect", best, runner, lead
-
-
-def held_out_evidence(none_held_out: float, fit_held_out: float, n_held_out: int) -> float:
-    """Evidence of the held-out modes for a fitted effect against "none".
-
-    The held-out residual entries (:func:`held_out_vector`) were fitted by neither model, so
-    their chi^2 difference is -2 ln of the two fitted models' likelihood ratio on new data (no
-    parameter penalty; the predictive check of cross-validation, Stone 1974), on the scale of the
-    BIC differences of :func:`decide`. Like them it is divided by a dispersion, here the
-    held-out one of the fit, c_ho = max(1, chi^2_ho,fit / n_ho) (quasi-likelihood, Burnham &
-    Anderson 2002 sec. 6.2, estimated on the entries compared): a held-out mode that neither
-    model reproduces (a local mode the model lacks, paired with another mode) inflates both
-    chi^2 and makes their difference count for less instead of deciding the verdict. For a
-    right effect whose prediction on the held-out entries changes by delta the difference has
-    mean |delta|^2 and standard deviation 2 sqrt(c_ho) |delta|; for a wrong one its mean is
-    -|delta|^2 or less.
-
-    Parameters
-    ----------
-    none_held_out, fit_held_out : float, held-out chi^2 of "none" and of the fit.
-    n_held_out : int, held-out residual entries.
-
-    Returns
-    -------
-    float
-        (chi2_ho,none - chi2_ho,fit) / c_ho: positive when the effect predicts the held-out
-        modes better than "none", below -margin when they contradict it strongly.
-    """
-    c_ho = max(1.0, fit_held_out / max(n_held_out, 1))
-    return float((none_held_out - fit_held_out) / c_ho)
 
 
 # ------------------------------------------------------------------------------------ diagnose
@@ -483,23 +459,25 @@ def diagnose(configurations, settings: DiagnoseSettings = DiagnoseSettings(), *,
             def near(a, b):
                 return _overlaps(neighbours(model_k, a), b)
 
-            held = held_out_vector(problem, none.evaluations)
-            ho_none, n_ho = chi_square(held), held.size
-            ho = [chi_square(held_out_vector(problem, f.evaluations)) for f in fits]
+            modes_none, entries = held_out_modes(problem, none.evaluations)
+            modes = [held_out_modes(problem, f.evaluations)[0] for f in fits]
             verdict, best, runner, lead = decide((none.chi2, none.n_params),
                                                  [(f.candidate.kind, f.candidate.location, f.chi2,
                                                    f.n_params) for f in fits],
                                                  settings.margin, near, n_data, len(cands),
-                                                 held_out=(ho_none, ho, n_ho))
-            rounds.append(_round_record(k, verdict, fits, best, runner, none, ho_none, ho,
-                                        n_data, n_ho))
+                                                 held_out=(modes_none, modes, entries))
+            rounds.append(_round_record(k, verdict, fits, best, runner, none,
+                                        (modes_none, modes, entries), n_data))
             if verdict == "unexplained" and lead > settings.margin:     # the held-out veto
                 cand = fits[best].candidate
+                kept = reproduced(modes_none, entries) | reproduced(modes[best], entries)
                 notes.append(f"round {k + 1}: {cand.kind} {cand.label} fits the training modes "
                              f"(chi^2 {none.chi2:.0f} -> {fits[best].chi2:.0f}) but not the "
-                             f"held-out ones (chi^2 {ho_none:.0f} -> {ho[best]:.0f}, evidence "
-                             f"{held_out_evidence(ho_none, ho[best], n_ho):.1f}): it compensates "
-                             "for something else; not named.")
+                             f"{int(kept.sum())} held-out modes either model reproduces (chi^2 "
+                             f"{modes_none[kept].sum():.0f} -> {modes[best][kept].sum():.0f}, "
+                             f"evidence {held_out_evidence(modes_none, modes[best], entries):.1f}; "
+                             "per mode in the round record): it compensates for something "
+                             "else; not named.")
             if k == 0:
                 first = verdict
                 table = _table(rows, fits, none, n_data, len(theta), len(cands))
@@ -538,28 +516,25 @@ def _none_fit(problem: Problem, cal, n_data: int):
                     len(cal.theta), cal.evaluations)
 
 
-def held_out_vector(problem: Problem, evaluations) -> np.ndarray:
-    """Residual entries (frequency and shape) of the held-out modes of every configuration.
+def _round_record(k: int, verdict: str, fits, best, runner, none, held_out, n_data: int) -> dict:
+    modes_none, modes, entries = held_out
+    keep_none = reproduced(modes_none, entries)
 
-    The same entries and scales as the training vector (:meth:`Problem.vector`) on the modes no
-    fit saw (``~ref.train``); unit variance each when the model is right.
-    """
-    return np.concatenate([np.concatenate([ev.frequency[~ref.train],
-                                           ev.shape[~ref.train].ravel()])
-                           for ev, ref in zip(evaluations, problem.refs)])
-
-
-def _round_record(k: int, verdict: str, fits, best, runner, none, ho_none: float, ho,
-                  n_data: int, n_ho: int) -> dict:
     def entry(i):
         if i is None:
             return None
         f = fits[i]
         return {"kind": f.candidate.kind, "label": f.candidate.label, "bic": f.bic,
-                "chi2": f.chi2, "n_params": f.n_params, "held_out_chi2": ho[i],
+                "chi2": f.chi2, "n_params": f.n_params, "held_out_chi2": float(modes[i].sum()),
+                "held_out_modes_chi2": modes[i].tolist(),
+                "held_out_modes_kept": (keep_none | reproduced(modes[i], entries)).tolist(),
+                "held_out_evidence": held_out_evidence(modes_none, modes[i], entries),
                 "parameters": dict(zip(f.candidate.parameters, map(float, f.values)))}
-    return {"round": k + 1, "verdict": verdict, "n_data": n_data, "n_held_out": n_ho,
+    return {"round": k + 1, "verdict": verdict, "n_data": n_data,
+            "n_held_out": int(np.sum(entries)), "held_out_modes_entries": entries.tolist(),
             "none_bic": none.bic,
             "none_chi2": none.chi2, "none_n_params": none.n_params,
-            "none_held_out_chi2": ho_none, "best": entry(best), "runner_up": entry(runner),
+            "none_held_out_chi2": float(modes_none.sum()),
+            "none_held_out_modes_chi2": modes_none.tolist(),
+            "best": entry(best), "runner_up": entry(runner),
             "fits": [entry(i) for i in range(len(fits))]}

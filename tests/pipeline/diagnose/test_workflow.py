@@ -14,8 +14,7 @@ from pipeline.case import read_case
 from pipeline.diagnose.effects import Candidate, Location
 from pipeline.diagnose import DiagnoseSettings, diagnose, preflight
 from pipeline.diagnose.inputs import configurations_from_case, settings_from_case
-from pipeline.diagnose.workflow import (_table, decide, held_out_evidence, held_out_vector,
-                                        within_scatter)
+from pipeline.diagnose.workflow import _table, decide, within_scatter
 from structures.common.errors import InputError
 from structures.common.files import read_dataset, write_dataset
 from tests.pipeline.diagnose.truth import make_case
@@ -88,40 +87,36 @@ def test_dispersion_shrinks_the_lead_of_a_poor_best_fit():
 
 
 def test_held_out_modes_veto_a_compensating_fit():
-    """The best (chi^2 390 vs none 600) beats none and the runner-up by far. 100 held-out
-    entries: held-out chi^2 100 -> 115 gives c_ho = 1.15 and evidence -15 / 1.15 = -13.04
-    < -10: unexplained; 100 -> 108 (-8) or a fall keeps the name; a rise 2000 -> 2300 of a
-    held-out mode neither model reproduces counts -300 / 23 = -13.04 too, 2000 -> 2200 only
-    -200 / 22 = -9.09: named."""
+    """The best (chi^2 390 vs none 600) beats none and the runner-up by far. Three held-out
+    modes of 10 entries each (chi^2_0.999(10) = 29.588, statistical tables): "none" gives
+    8, 10, 12. The fit giving 8, 60, 12 worsens a mode "none" reproduces: all kept,
+    c_ho = 80 / 30, evidence (30 - 80) / (8 / 3) = -18.75 < -10: unexplained."""
     fits = [("member_taper", 7, 420.0, 3), ("lumped_mass", 1, 390.0, 3)]
-    verdict, best, runner, lead = decide((600.0, 2), fits, 10.0, _never_near, N,
-                                         held_out=(100.0, [90.0, 115.0], 100))
+    entries = np.array([10, 10, 10])
+    held = (np.array([8.0, 10.0, 12.0]), [np.array([9.0, 9.0, 9.0]), np.array([8.0, 60.0, 12.0])],
+            entries)
+    verdict, best, runner, lead = decide((600.0, 2), fits, 10.0, _never_near, N, held_out=held)
     assert (verdict, best, runner) == ("unexplained", 1, 0)
     assert lead == pytest.approx(30.0, rel=1e-12)
-    for held, named in (((100.0, [300.0, 108.0], 100), "effect"),
-                        ((100.0, [300.0, 60.0], 100), "effect"),
-                        ((2000.0, [300.0, 2300.0], 100), "unexplained"),
-                        ((2000.0, [300.0, 2200.0], 100), "effect")):
-        assert decide((600.0, 2), fits, 10.0, _never_near, N, held_out=held)[0] == named
-    assert held_out_evidence(100.0, 115.0, 100) == pytest.approx(-15.0 / 1.15, rel=1e-12)
-    assert held_out_evidence(2000.0, 2200.0, 100) == pytest.approx(-200.0 / 22.0, rel=1e-12)
-    assert held_out_evidence(100.0, 50.0, 100) == pytest.approx(50.0, rel=1e-12)   # c_ho >= 1
-    # the veto never turns an ambiguous or a none verdict into a name
+
+
+def test_a_held_out_mode_neither_model_reproduces_does_not_veto():
+    """Mode 2 is a local mode both models pair with the wrong analysis mode (chi^2 3000 and
+    5000 > 29.588): summed, the evidence would be (3020 - 5018) / (5018 / 30) = -11.95, a
+    veto; over modes 1 and 3 it is +2: named. When "none" reproduces mode 2 (chi^2 25) and
+    the fit does not (3000), the mode is kept: evidence -29.55, unexplained. The veto never
+    turns an ambiguous verdict into a name."""
+    fits = [("member_taper", 7, 420.0, 3), ("joint_flexibility", 1, 390.0, 3)]
+    entries = np.array([10, 10, 10])
+    fit = np.array([8.0, 5000.0, 10.0])
+    assert decide((600.0, 2), fits, 10.0, _never_near, N,
+                  held_out=(np.array([8.0, 3000.0, 12.0]), [fit, fit], entries))[0] == "effect"
+    none_fits, fit_not = np.array([8.0, 25.0, 12.0]), np.array([8.0, 3000.0, 12.0])
+    assert decide((600.0, 2), fits, 10.0, _never_near, N,
+                  held_out=(none_fits, [fit_not, fit_not], entries))[0] == "unexplained"
     assert decide((600.0, 2), [("lumped_mass", 1, 390.0, 3), ("lumped_mass", 2, 395.0, 3)],
-                  10.0, _never_near, N, held_out=(200.0, [100.0, 100.0], 100))[0] == "ambiguous"
-
-
-def test_held_out_vector_takes_the_held_out_modes_of_every_configuration():
-    """Two configurations, modes (f residual, two shape entries): the held-out rows' entries in
-    configuration order, frequency first."""
-    def ev(f, shape):
-        return SimpleNamespace(frequency=np.array(f), shape=np.array(shape))
-
-    refs = (SimpleNamespace(train=np.array([True, False, True])),
-            SimpleNamespace(train=np.array([False, True])))
-    evs = [ev([1.0, 2.0, 3.0], [[10, 11], [20, 21], [30, 31]]), ev([4.0, 5.0], [[40, 41], [50, 51]])]
-    got = held_out_vector(SimpleNamespace(refs=refs), evs)
-    assert got.tolist() == [2.0, 20.0, 21.0, 4.0, 40.0, 41.0]
+                  10.0, _never_near, N, held_out=(none_fits, [fit_not, fit_not], entries))[0] \
+        == "ambiguous"
 
 
 @pytest.mark.parametrize("field, value", [("kinds", ("bogus",)), ("max_effects", 0),
