@@ -25,20 +25,30 @@ from structures.model import ConcentratedMass
 from tests.pipeline.diagnose.truth import frame
 
 
+def _perfect_reference(truth, model, nmodes: int = 46):
+    """``model`` against the modes 7..26 of ``truth`` at the frame's 120 sensors and its weighing
+    (no noise); returns (model's modes, reference)."""
+    truth_modes = compute_modes(truth, nmodes)
+    modes = truth_modes if truth is model else compute_modes(model, nmodes)
+    grid, comp = np.array(frame.sensors()).T
+    dof = np.array([np.flatnonzero((truth_modes["grid"].values == g)
+                                   & (truth_modes["component"].values == c))[0]
+                    for g, c in zip(grid, comp)])
+    gvt = make_gvt_dataset(truth_modes["frequency"].values[6:26],
+                           truth_modes["shape"].values[6:26][:, dof], grid, comp,
+                           mode=np.arange(7, 27))
+    props = mass_properties(truth).as_dict()
+    measured = {k: props[k] for k in ("weight", "x_cg", "y_cg", "z_cg", "Ixx", "Iyy", "Izz")}
+    ref, _ = build_reference("frame", model, gvt, measured, modes, frequency_noise=0.01,
+                             shape_noise_value=0.05, model_scatter=0.03, holdout=3, nmodes=nmodes)
+    return modes, ref
+
+
 @pytest.fixture(scope="module")
 def frame_reference(tmp_path_factory):
     """The frame model against its own modes 7..26 at the 120 sensors (a perfect test)."""
     model = read_model(frame.write_frame(tmp_path_factory.mktemp("frame")))
-    modes = compute_modes(model, 46)
-    grid, comp = np.array(frame.sensors()).T
-    dof = np.array([np.flatnonzero((modes["grid"].values == g) & (modes["component"].values == c))[0]
-                    for g, c in zip(grid, comp)])
-    gvt = make_gvt_dataset(modes["frequency"].values[6:26], modes["shape"].values[6:26][:, dof],
-                           grid, comp, mode=np.arange(7, 27))
-    props = mass_properties(model).as_dict()
-    measured = {k: props[k] for k in ("weight", "x_cg", "y_cg", "z_cg", "Ixx", "Iyy", "Izz")}
-    ref, _ = build_reference("frame", model, gvt, measured, modes, frequency_noise=0.01,
-                             shape_noise_value=0.05, model_scatter=0.03, holdout=3, nmodes=46)
+    modes, ref = _perfect_reference(model, model)
     return model, modes, ref
 
 
@@ -140,17 +150,7 @@ def test_joint_ladder_on_basis_picks_the_exact_ladders_size(frame_reference, mon
     model, _, ref0 = frame_reference
     joints = [c for c in candidates(model, ("joint_flexibility",)) if c.get("dependent") is None][:3]
     truth = apply_effect(model, joints[0], [300.0])
-    modes = compute_modes(truth, ref0.nmodes)
-    grid, comp = ref0.sensor_grid, ref0.sensor_component
-    dof = np.array([np.flatnonzero((modes["grid"].values == g) & (modes["component"].values == c))[0]
-                    for g, c in zip(grid, comp)])
-    gvt = make_gvt_dataset(modes["frequency"].values[6:26], modes["shape"].values[6:26][:, dof],
-                           grid, comp, mode=np.arange(7, 27))
-    props = mass_properties(truth).as_dict()
-    measured = {k: props[k] for k in ("weight", "x_cg", "y_cg", "z_cg", "Ixx", "Iyy", "Izz")}
-    ref, _ = build_reference("frame", model, gvt, measured, compute_modes(model, ref0.nmodes),
-                             frequency_noise=0.01, shape_noise_value=0.05, model_scatter=0.03,
-                             holdout=3, nmodes=ref0.nmodes)
+    _, ref = _perfect_reference(truth, model, ref0.nmodes)
     problem = Problem.build([ref], [model], 0.03)
     theta = np.zeros(len(problem.names))
     evs = problem.evaluate(theta)
