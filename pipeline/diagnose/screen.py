@@ -336,7 +336,7 @@ def refit(problem: Problem, theta0, effects, row: Screened | None, *, n_data: in
     """
     cand = None if row is None else row.candidate
     npar = 0 if cand is None else len(cand.parameters)
-    size = np.maximum(np.asarray(cand.reference, float), np.abs(row.values)) if cand \
+    size = np.maximum(np.abs(np.asarray(cand.reference, float)), np.abs(row.values)) if cand \
         else np.zeros(0)
     scale = np.concatenate([size, np.full(len(theta0), THETA_SCALE)])
     lo = np.concatenate([np.asarray(cand.lower, float) if cand else np.zeros(0),

@@ -195,3 +195,28 @@ def test_hangs_nothing_joint_changes_no_mode():
         assert np.abs(np.abs(s1) - np.abs(s0)).max() <= 1e-6 * np.abs(s0).max()
     engine = compute_modes(apply_effect(model, joints[7501], [100.0]), 30)
     assert np.abs(engine["frequency"].values[6:] / modes0["frequency"].values[6:] - 1).max() > 1e-3
+
+
+def test_refit_of_a_negative_quadrant_candidate_from_zero(frame_reference):
+    """A member_curvature candidate of the ``bow +y -z`` quadrant has a negative reference step for
+    bow_2; refitted from a start with bow_2 = 0, its parameter scale is the step's size (not 0, which
+    made the bounds 0 / 0 and dropped the candidate). The refit returns finite parameters within
+    the quadrant's bounds and a chi^2 no worse than the start's."""
+    model, _, ref = frame_reference
+    cand = next(c for c in candidates(model, ("member_curvature",)) if c.reference[1] < 0)
+    problem = Problem.build([ref], [model], 0.03)
+    theta0 = np.zeros(len(problem.names))
+    evs = problem.evaluate(theta0)
+    r0 = problem.residual(theta0, evs)
+    start = np.array([0.02, 0.0])
+    row = Screened(cand, start, 0.0, 0.0, np.zeros((r0.size, 2)))
+    start_chi2 = float(np.sum(problem.residual(theta0, problem.evaluate(
+        theta0, ((cand, start),))) ** 2))
+    with np.errstate(divide="raise", invalid="raise"):
+        fit = screen.refit(problem, theta0, (), row, n_data=r0.size,
+                           jacobian_theta=np.zeros((r0.size, len(theta0))))
+    assert fit is not None
+    assert np.all(np.isfinite(fit.values))
+    assert cand.lower[0] <= fit.values[0] <= cand.upper[0]
+    assert cand.lower[1] <= fit.values[1] <= cand.upper[1] == 0.0
+    assert fit.chi2 <= start_chi2 * (1 + 1e-9)
