@@ -135,7 +135,9 @@ def condense_pins(k, m, pins):
 
     The released DOFs follow the kept ones statically, u_r = -K_rr^-1 K_rk u_k, so with
     T = [I; -K_rr^-1 K_rk] the element matrices become T^T K T (exact static condensation) and
-    T^T M T (the mass consistent with that motion; lumped translational mass is unchanged).
+    T^T M T (the mass consistent with that motion: a released translation's lumped mass moves
+    to the DOFs it follows, e.g. end A's axial mass to end B's with PA = 1; released rotations
+    leave lumped translational mass unchanged).
 
     Parameters
     ----------
@@ -228,10 +230,12 @@ def beam_matrices(x_a, x_b, v, offset_a, offset_b, e, g, area, i1, i2, i12, j, n
         k_local, m_local = condense_pins(k_elem, m_local, np.asarray(pins))
         principal_axes = axes
     k = to_grids(k_local, principal_axes, offset_a, offset_b)
-    # Lumped mass is m I on the translations at each end, the same in every axes: rotating it
-    # would only add round-off couplings (1e-33 of the diagonal) that make M look non-diagonal
-    # to the eigensolver (structures.modal's lumped path).
-    mass_axes = np.broadcast_to(np.eye(3), principal_axes.shape) if lumped else principal_axes
+    # Lumped mass without pin flags is m I on the translations at each end, the same in every
+    # axes: rotating it would only add round-off couplings (1e-33 of the diagonal) that make M
+    # look non-diagonal to the eigensolver (structures.modal's lumped path). Condensed pins can
+    # move a translation's mass (condense_pins): then it is rotated like the stiffness.
+    isotropic = lumped and (pins is None or not np.any(pins))
+    mass_axes = np.broadcast_to(np.eye(3), principal_axes.shape) if isotropic else principal_axes
     m = to_grids(m_local, mass_axes, offset_a, offset_b)
     return k, m
 

@@ -119,3 +119,22 @@ def test_pbarl_section_type_without_properties_is_refused(tmp_path):
                     "CBAR,1,1,1,2,0.,1.,0.\nPBARL,1,1,,I\n,0.2,0.1,0.1,0.01,0.01,0.01\n")
     with pytest.raises(UnsupportedCardError, match=r"i\.bdf.*PBARL 1.*TYPE I.*Fix"):
         read_model(path)
+
+
+def test_pinned_lumped_bar_mass_moves_along_its_axis():
+    """A lumped CBAR along (1, 1, 0)/sqrt 2 with end A's axial translation released (PA = 1):
+    end A follows end B axially (rigid in that direction), so by hand end A keeps m/2 across the
+    bar, m/2 (I - x x^T), and end B carries m/2 I + m/2 x x^T (x the bar's axis), in basic axes."""
+    from structures.elements.beam import beam_matrices
+
+    x = np.array([1.0, 1.0, 0.0]) / np.sqrt(2.0)
+    one = np.ones(1)
+    rho, area, length = 2700.0, 1.0e-4, 2.0
+    _, m = beam_matrices(np.zeros((1, 3)), length * x[None], np.array([[0.0, 0.0, 1.0]]),
+                         np.zeros((1, 3)), np.zeros((1, 3)), 7e10 * one, 2.6e10 * one,
+                         area * one, 1e-8 * one, 2e-8 * one, 0 * one, 1e-8 * one, 0 * one,
+                         rho * one, pins=np.array([1]), lumped=True)
+    half = 0.5 * rho * area * length
+    np.testing.assert_allclose(m[0, :3, :3], half * (np.eye(3) - np.outer(x, x)), atol=1e-12)
+    np.testing.assert_allclose(m[0, 6:9, 6:9], half * (np.eye(3) + np.outer(x, x)), atol=1e-12)
+    assert np.trace(m[0, :3, :3]) + np.trace(m[0, 6:9, 6:9]) == pytest.approx(6 * half)
