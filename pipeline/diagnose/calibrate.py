@@ -92,6 +92,13 @@ def mass_prior_scale(model: FEModel, scatter: float) -> float:
     (the variance of a weighted mean of independent errors; N_eff is Kish's (1965) effective
     number: N equal masses give s / sqrt(N), one mass gives s).
 
+    The residual scales (:func:`pipeline.diagnose.evidence.scatter_scales`) already count the
+    same per-mass scatter as noise, its uniform part included, so along the direction of a
+    uniform scale the data and this prior both carry it. That uniform part is the share
+    1 / N_eff of the mass scatter's variance (0.04 on the frame, N_eff = 23.3): counted twice, a
+    uniform mass change is allowed the variance 2 sigma_m^2 instead of sigma_m^2 (sqrt(2) in
+    standard deviation), while the per-mass noise that hides single masses is unchanged.
+
     Parameters
     ----------
     model : FEModel
