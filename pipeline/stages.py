@@ -38,11 +38,13 @@ from __future__ import annotations
 import json
 from dataclasses import replace
 from functools import partial
+from pathlib import Path
 
 import numpy as np
 
 from flutter.results import is_flutter
 from pipeline.graph import Stage, StageContext
+from structures.common.errors import InputError
 from structures.common.files import read_dataset, write_dataset, write_json, write_text
 from structures.common.nastran import deck_files
 from structures.units import unit_labels
@@ -269,12 +271,20 @@ def _before_tuning(case) -> bool:
 def _start_decks(ctx: StageContext, case) -> dict:
     """configuration -> the deck every tuning stage starts from (its design applies to it): with
     ``before_tuning``, the model the diagnosis ended with (the named effects added to the
-    calibrated deck, :func:`pipeline.diagnose.outputs.final_deck`), else the case's deck."""
+    calibrated deck, :func:`pipeline.diagnose.outputs.final_deck`, among the outputs of the
+    ``diagnose`` stage, which every tuning stage then declares upstream), else the case's deck."""
     if not _before_tuning(case):
         return {c.name: c.deck for c in case.configurations}
     from pipeline.diagnose.outputs import final_deck
 
-    return {c.name: final_deck(ctx.run_dir, c.name) for c in case.configurations}
+    outputs = {Path(p).resolve() for p in ctx.input("diagnose")}
+    decks = {c.name: final_deck(ctx.run_dir, c.name) for c in case.configurations}
+    missing = [str(d) for d in decks.values() if d.resolve() not in outputs]
+    if missing:
+        raise InputError(f"the diagnose stage of {ctx.run_dir} did not write {missing}, which the "
+                         "tuning starts from ([diagnose] before_tuning). Fix: run the same "
+                         "command again with --from diagnose.")
+    return decks
 
 
 # ------------------------------------------------------------------------------------ the plan
@@ -307,7 +317,7 @@ def stage_plan(case, n: int, display=None, aero: dict | None = None) -> list[Sta
         files = tuple(f for c in case.configurations for f in (*deck_files(c.deck), c.gvt))
         files += (case.tuning.restart,) if case.tuning.restart is not None and n == 1 else ()
         after = (f"stage{n - 1}/selection",) + ((f"stage{n - 1}/tuning",) if n > 1 else ())
-        after += ("diagnose",) if n == 1 and _before_tuning(case) else ()
+        after += ("diagnose",) if _before_tuning(case) else ()
         out.append(Stage(f"stage{n}/tuning", partial(_tuning, case=case, n=n, progress=iteration),
                          settings=_tuning_settings(case), files=files, after=after))
         after_deck = (f"stage{n}/tuning",)

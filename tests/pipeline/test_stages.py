@@ -15,6 +15,7 @@ from pathlib import Path
 import pytest
 
 from pipeline.case import read_case
+from structures.common.errors import InputError
 from pipeline.graph import file_hash
 from pipeline.stages import final_stages, stage_plan
 from structures.common.nastran import deck_files
@@ -166,14 +167,22 @@ def test_tuning_starts_from_the_model_the_diagnosis_ended_with(case, tmp_path):
 
     early = replace(case, diagnose=diagnose_case_settings(
         {"before_tuning": True}, CASE, case.configurations, True))
-    assert "diagnose" in _stage(early, "stage1/tuning").after
-    assert "diagnose" not in _stage(case, "stage1/tuning").after
+    for n in (1, 2):
+        assert "diagnose" in next(s for s in stage_plan(early, n) if s.name.endswith("tuning")).after
+        assert "diagnose" not in next(s for s in stage_plan(case, n)
+                                      if s.name.endswith("tuning")).after
     ctx = StageContext(Stage("stage1/tuning", print), tmp_path / "staging", tmp_path)
     assert _start_decks(ctx, case) == {c.name: c.deck for c in case.configurations}
     first, second = (c.name for c in case.configurations)
     folder = tmp_path / "diagnose"
     folder.mkdir()
-    for name in (f"{first}_calibrated", f"{second}_calibrated", f"{second}_diagnosed"):
-        (folder / f"{name}.bdf").write_text("BEGIN BULK\nENDDATA\n")
+    written = [folder / f"{name}.bdf" for name in (f"{first}_calibrated", f"{second}_calibrated",
+                                                   f"{second}_diagnosed")]
+    for path in written:
+        path.write_text("BEGIN BULK\nENDDATA\n")
+    ctx.upstream["diagnose"] = written
     assert _start_decks(ctx, early) == {first: folder / f"{first}_calibrated.bdf",
                                         second: folder / f"{second}_diagnosed.bdf"}
+    ctx.upstream["diagnose"] = written[1:]       # a manifest without the first's deck
+    with pytest.raises(InputError, match=f"{first}_calibrated.bdf.*--from diagnose"):
+        _start_decks(ctx, early)
