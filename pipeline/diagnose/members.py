@@ -249,9 +249,10 @@ def remesh(model: FEModel, member: Member, bow=(0.0, 0.0)):
 
     The arc runs through P(xi) = chord point + 4 xi (1 - xi) L (bow_1 y + bow_2 z), y, z the
     axes of each element's chord, L the member's length: the member's own grids keep their
-    position and reach the arc by end offsets (added to WA / WB, in the grid's displacement
-    frame); an element of a member with ne < MIN_SEGMENTS elements is split in
-    ceil(MIN_SEGMENTS / ne) elements at equal steps of xi, joined at new grids on the arc (basic
+    position and reach the arc by end offsets (added to WA / WB in the end's offset frame: the
+    grid's displacement frame, or basic for an end flagged 'B' as
+    :func:`structures.assembly.line_offsets` reads it); an element of a member with
+    ne < MIN_SEGMENTS elements is split in ceil(MIN_SEGMENTS / ne) elements at equal steps of xi, joined at new grids on the arc (basic
     frame), with the element's property, its basic orientation vector and no offsets or pin
     flags at the new grids. The first piece keeps the element's id, the others get new ids. A
     member split before keeps its pieces and its new grids move by the arc (bows add). Without
@@ -302,7 +303,10 @@ def remesh(model: FEModel, member: Member, bow=(0.0, 0.0)):
             if flag[1 + end] == "O":                 # zero (line_offsets): now in G
                 flag[1 + end] = "G"
             offt[row] = "".join(flag)
-            data[key][row] = data[key][row] + model.grids.cd_axes[gi[i, end]].T @ shift[i, -end]
+            step = shift[i, -end]                    # basic, as line_offsets reads a 'B' end
+            if flag[1 + end] == "G":                 # u_cd = cd_axes^T u_basic
+                step = model.grids.cd_axes[gi[i, end]].T @ step
+            data[key][row] = data[key][row] + step
     data["offt"] = offt
     if done or per == 1:
         if done:

@@ -2,6 +2,7 @@
 computations, the rigid-joint limit and the written deck read back."""
 import re
 import subprocess
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -14,7 +15,7 @@ from pipeline.diagnose.effects import (KINDS, Candidate, Location, apply_effect,
                                        effect_cards, effect_matrices, neighbours,
                                        write_effect_deck)
 from pipeline.diagnose.members import find_members
-from structures.assembly import assemble, assemble_g
+from structures.assembly import assemble, assemble_g, line_offsets
 from structures.bdf import read_model
 from structures.bulk_text import card
 from structures.common.errors import InputError
@@ -302,6 +303,38 @@ def test_a_split_member_keeps_its_pieces_and_bows_add(tmp_path):
     np.testing.assert_allclose(once.grids.xyz[2:], np.column_stack(
         [xs, 4 * 0.08 * 4.0 * xs / 4.0 * (1 - xs / 4.0), -4 * 0.02 * 4.0 * xs / 4.0 * (1 - xs / 4.0)]),
         atol=1e-15)
+
+
+@pytest.mark.parametrize("ends", ["GG", "BB"])
+def test_bow_offsets_of_grids_in_a_rotated_displacement_frame(tmp_path, ends):
+    """Eight CBARs along x on grids whose CD frame is turned 30 deg about z, bowed by b in
+    plane 1 (basic y): every end offset, read in basic by line_offsets, is the parabola's
+    (0, 4 b L xi (1 - xi), 0) at the end's xi = k / 8, whether the offsets are in the grid's CD
+    frame ('G', stored as R^T times that) or in basic ('B', read as given by line_offsets; the
+    reader accepts only G / O end flags, so that one is set on the model)."""
+    length, bow, turn = 4.0, 0.05, np.radians(30.0)
+    cards = [("CORD2R", 5, None, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, np.cos(turn), np.sin(turn), 0.0)]
+    cards += [("GRID", i + 1, None, length * i / 8, 0.0, 0.0, 5, 123456 if i == 0 else None)
+              for i in range(9)]
+    cards += [("CBAR", 100 + i, 7, i + 1, i + 2, 0.0, 1.0, 0.0, "BGG") for i in range(8)]
+    cards += [("PBAR", 7, 1, 3.0, 0.7, 1.3, 1.0), ("MAT1", 1, 2.0e5, None, 0.3, 0.0)]
+    model = read_model(_deck(tmp_path, "turned.bdf", cards))
+    es = model.elements["CBAR"]
+    data = {**es.data, "offt": np.array(["B" + ends] * 8)}
+    model = replace(model, elements={"CBAR": replace(es, data=data)})
+    cand = _pick(candidates(model, ["member_curvature"]), "member_curvature", "+y +z")
+    bowed = apply_effect(model, cand, [bow, 0.0]).elements["CBAR"]
+    assert bowed.data["offt"].tolist() == ["B" + ends] * 8
+    _, wa, wb = line_offsets(model, bowed, model.grids.index(bowed.nodes), model.filename)
+    xi = np.arange(9) / 8
+    rise = np.zeros((9, 3))
+    rise[:, 1] = 4.0 * bow * length * xi * (1.0 - xi)
+    np.testing.assert_allclose(wa, rise[:-1], atol=1e-15)
+    np.testing.assert_allclose(wb, rise[1:], atol=1e-15)
+    turned = np.array([[np.cos(turn), np.sin(turn), 0.0], [-np.sin(turn), np.cos(turn), 0.0],
+                       [0.0, 0.0, 1.0]])                          # rows: the CD axes in basic
+    stored = rise[:-1] @ turned.T if ends == "GG" else rise[:-1]
+    np.testing.assert_allclose(bowed.data["wa"], stored, atol=1e-7)
 
 
 # ------------------------------------------------------------------------------- rigid joints
