@@ -105,7 +105,8 @@ def reduce_joint(model: FEModel, candidate, sensor_index, nmodes: int) -> Reduce
     -------
     ReducedJoint, or None where the basis does not apply: an a-set above
     :data:`structures.modal.DENSE_LIMIT`, an a-set that changes with the compliance (automatic
-    SPCs), or an interior that is not stiff once the boundary is clamped (a mechanism inside).
+    SPCs), an interior that is not stiff once the boundary is clamped (a mechanism inside), or
+    no fixed-interface mode to keep (``nmodes`` 0, or every DOF on the springs).
     """
     from pipeline.diagnose.effects import apply_effect
 
@@ -119,15 +120,22 @@ def reduce_joint(model: FEModel, candidate, sensor_index, nmodes: int) -> Reduce
     k1 = s1.K.toarray()
     springs = (k1 - s2.K.toarray()) / (1.0 / _C1 - 1.0 / _C2)           # B
     k0 = k1 - springs / _C1                                                # K_0
+    # Off the springs' DOFs K(1) and K(2) are the same sums of the same numbers, so B is exactly
+    # 0 there; on them its rows are k_ref-sized (smallest row 1.6e-3 of max|B| over the X-56A-
+    # class and frame joints). The cut lies far below that and far above the round-off an entry
+    # of B = 2 (K(1) - K(2)) can carry, eps max|K(1)| (6e-15 of max|B| on the X-56A-class
+    # model); a round-off row taken into b would only enlarge the exact part of the basis.
     bound = np.flatnonzero(np.abs(springs).max(axis=1) > 1e-12 * np.abs(springs).max())
     inner = np.setdiff1d(np.arange(k0.shape[0]), bound)
+    n_i, nb = inner.size, bound.size
+    nf = min(n_i, FIXED_INTERFACE_FACTOR * nmodes)
+    if nf < 1:
+        return None
     m = s1.M.toarray()
     try:
         factor = sla.cho_factor(k0[np.ix_(inner, inner)])
     except np.linalg.LinAlgError:
         return None
-    n_i, nb = inner.size, bound.size
-    nf = min(n_i, FIXED_INTERFACE_FACTOR * nmodes)
     # fixed-interface modes as the largest 1 / lambda of (M_ii, K_ii): K_ii is positive definite
     # once the boundary is clamped, M_ii may be singular (massless rotations)
     _, phi_i = sla.eigh(m[np.ix_(inner, inner)], k0[np.ix_(inner, inner)],

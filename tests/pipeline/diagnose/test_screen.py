@@ -18,6 +18,7 @@ from pipeline.diagnose.ladder import reduce_joint
 from pipeline.diagnose.screen import Screened, _perturbed, linear_fit, pick_for_refit
 from structures.assembly import assemble_g
 from structures.bdf import read_model
+from structures.bulk_text import card
 from structures.gvt import make_gvt_dataset
 from structures.massprops import mass_properties
 from structures.modal import compute_modes
@@ -168,6 +169,40 @@ def test_joint_ladder_on_basis_picks_the_exact_ladders_size(frame_reference, mon
         assert on_basis[label][0] == pytest.approx(x, rel=1e-12), label
         assert on_basis[label][1] == pytest.approx(chi2, rel=1e-9), label
     assert min(exact, key=lambda label: exact[label][1]) == joints[0].label
+
+
+def _store_deck(folder, clamp_4: bool):
+    """Grids 2 (5 kg) and 3 (2 kg) on RBE2 10 at the clamped grid 1; a bar 1-4, grid 4 clamped
+    or free."""
+    rows = [("GRID", 1, None, 0.0, 0.0, 0.0, None, 123456), ("GRID", 2, None, 0.3, 0.0, 0.0),
+            ("GRID", 3, None, -0.75, 0.0, 0.0),
+            ("GRID", 4, None, 0.0, 1.0, 0.0, None, 123456 if clamp_4 else None),
+            ("RBE2", 10, 1, 123456, 2, 3), ("CONM2", 22, 3, None, 2.0),
+            ("CONM2", 21, 2, None, 5.0, 0.0, 0.0, 0.0, None, 0.01, 0.0, 0.01, 0.0, 0.0, 0.01),
+            ("CBAR", 31, 41, 1, 4, 0.0, 0.0, 1.0), ("PBAR", 41, 51, 1e-3, 2e-7, 4e-7, 3e-7),
+            ("MAT1", 51, 7.0e10, None, 0.33)]
+    path = folder / f"store_{clamp_4}.bdf"
+    path.write_text("SOL 103\nCEND\nBEGIN BULK\n" + "\n".join(card(*r) for r in rows)
+                    + "\nENDDATA\n")
+    return read_model(path)
+
+
+def test_reduce_joint_without_fixed_interface_modes_is_none(tmp_path):
+    """No fixed-interface mode to keep: nmodes 0 (scipy's eigh rejected the empty index range
+    with a ValueError the screening does not catch) or every a-set DOF on the springs (grid 4
+    clamped: the a-set is the hung RBE2's new grid alone). reduce_joint returns None, so the
+    screening runs the exact ladder; with grid 4 free and nmodes 3 the basis is built."""
+    free, clamped = _store_deck(tmp_path, False), _store_deck(tmp_path, True)
+    for model in (free, clamped):
+        joints = candidates(model, ("joint_flexibility",))
+        assert len(joints) == 3
+        for cand in joints:
+            assert reduce_joint(model, cand, np.arange(6), 0) is None, cand.label
+            if model is clamped:
+                assert reduce_joint(model, cand, np.arange(6), 3) is None, cand.label
+            else:
+                basis = reduce_joint(model, cand, np.arange(6), 3)
+                assert basis.k0.shape == (12, 12), cand.label     # nf 6 interior + nb 6
 
 
 def test_hangs_nothing_joint_changes_no_mode():
