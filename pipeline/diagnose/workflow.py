@@ -15,24 +15,7 @@
    (:mod:`pipeline.diagnose.screen`) and the verdict (:func:`decide`).
 6. Look again: the named effect is added and steps 4-5 repeat, up to ``settings.max_effects``.
 
-Verdict of a round (:func:`decide`), BIC = chi^2 + p ln n (Schwarz 1978), margins after Kass &
-Raftery (1995, a BIC difference above 10 is very strong evidence), among the refitted candidates
-whose size exceeds what the nominal scatter could do by itself (:func:`within_scatter`):
-
-- ``effect``: the best refitted candidate beats "none" (the model with its nominal parameters
-  refitted) and the runner-up (the best candidate of another kind or at a location that is not
-  its neighbour, :func:`pipeline.diagnose.effects.neighbours`) by ``settings.margin``, and the
-  held-out modes do not contradict it by more than the margin
-  (:func:`pipeline.diagnose.predictive.held_out_evidence`: on the modes that "none" or the fit
-  reproduces; a mode neither reproduces is a mis-paired one and is left out);
-- ``ambiguous``: it beats "none" but not the runner-up;
-- ``none``: no candidate beats "none" and "none" passes the goodness-of-fit test;
-- ``unexplained``: no candidate beats "none" and "none" fails the goodness-of-fit test, or the
-  best beats both but the held-out modes contradict it (a fit that compensates on the training
-  modes for something the library cannot represent).
-A clear BIC gain is tested before the goodness of fit: an omnibus chi^2 test over hundreds of
-shape entries is blind to an effect that moves a few frequencies, which the BIC sees.
-
+The verdict of each round is :func:`pipeline.diagnose.verdict.decide`.
 The overall verdict is ``effect`` when at least one effect was named, else the first round's.
 """
 from __future__ import annotations
@@ -48,12 +31,12 @@ from threadpoolctl import threadpool_limits
 
 from pipeline.diagnose.calibrate import Problem, calibrate
 from pipeline.diagnose.effects import KINDS, candidates, neighbours
-from pipeline.diagnose.evidence import (SELF_ORTHOGONALITY_LIMIT, build_reference,
-                                        elastic_index, gof_limit)
+from pipeline.diagnose.evidence import SELF_ORTHOGONALITY_LIMIT, build_reference, elastic_index
 from pipeline.diagnose.gap import gap_metrics, separating_measurement
-from pipeline.diagnose.predictive import held_out_evidence, held_out_modes, reproduced
+from pipeline.diagnose.predictive import held_out_evidence, held_out_modes, kept_modes
 from pipeline.diagnose.result import CandidateScore, DiagnoseResult, EffectRecord
 from pipeline.diagnose.screen import pick_for_refit, refit, screen, signatures
+from pipeline.diagnose.verdict import SCATTER_SIGMAS, decide, round_scores, within_scatter
 from structures.common.errors import InputError
 from structures.massprops import check_measured_mass
 from structures.modal import compute_modes
@@ -63,9 +46,6 @@ from structures.model import FEModel
 N_RIGID = 6
 #: A fitted parameter within this share of its range from a (non-zero) bound sits on it.
 BOUND_SHARE = 0.01
-#: A fitted effect no larger than this many standard deviations of the nominal scatter of what it
-#: changes is the scatter, not a missing effect (:func:`within_scatter`).
-SCATTER_SIGMAS = 3.0
 
 
 @dataclass(frozen=True)
@@ -156,145 +136,18 @@ class DiagnoseSettings:
             raise InputError(f"diagnose: nmodes = {self.nmodes!r} must be a positive integer.")
 
 
-# ----------------------------------------------------------------------------------- verdict
-def within_scatter(model: FEModel, candidate, values, scatter: float) -> bool:
-    """True when a fitted effect is a change the nominal scatter could make by itself.
-
-    The residual scales treat the nominal scatter (``DiagnoseSettings.model_scatter``: every
-    property and CONM2 by a relative s) as independent noise, but the scatter of one heavy CONM2
-    or one member's section is a single structured change that the candidate at that spot fits
-    exactly. Such a fit is not a missing effect when it stays within ``SCATTER_SIGMAS`` x s of
-    what it changes:
-
-    - ``lumped_mass``: the added mass against the CONM2 mass already at its grid;
-    - ``member_taper``: the largest change of a section field, (1 + |scale|)^4 (1 + |taper| / 2)^4
-      - 1 (I ~ s^4 at the member's ends), against s.
-    Other kinds change nothing the scatter changes (False).
-
-    Parameters
-    ----------
-    model : FEModel, the current model (the one the candidate is applied to).
-    candidate : Candidate
-    values : (npar,) fitted parameters.
-    scatter : float, s.
-    """
-    limit = SCATTER_SIGMAS * scatter
-    x = dict(zip(candidate.parameters, np.abs(np.asarray(values, float))))
-    if candidate.kind == "lumped_mass":
-        cm = model.masses
-        local = float(cm.mass[cm.grid == candidate.location.grids[0]].sum())
-        return bool(x["mass"] * candidate.get("total_mass") <= limit * local)
-    if candidate.kind == "member_taper":
-        change = (1.0 + x["scale"]) ** 4 * (1.0 + x.get("taper", 0.0) / 2.0) ** 4 - 1.0
-        return bool(change <= limit)
-    return False
-
-
+# ------------------------------------------------------------------------------------ diagnose
 def _overlaps(a, b) -> bool:
     return bool(set(a.grids) & set(b.grids) or set(a.elements) & set(b.elements)
                 or set(a.properties) & set(b.properties))
 
 
-def round_scores(none_fit, fits, n_data: int, n_candidates: int = 1) -> tuple:
-    """The scores a round's verdict compares (:func:`decide`'s Notes).
-
-    Parameters
-    ----------
-    none_fit : (chi2, n_params) of the model without a further effect.
-    fits : sequence of (kind, location, chi2, n_params), the refitted candidates.
-    n_data : int, training residuals.
-    n_candidates : int, candidates screened.
-
-    Returns
-    -------
-    scores : (len(fits),) chi^2 / c + p ln n of each fit.
-    none_score : float, chi^2 / c + p ln n - 2 ln n_candidates of "none".
-    c : float, the dispersion max(1, chi^2_best / (n - p_best)) (1 without fits).
-    """
-    none_chi2, none_p = none_fit
-    chi2 = np.array([f[2] for f in fits], float)
-    p = np.array([f[3] for f in fits], float)
-    c = 1.0
-    if fits:
-        best = int(np.argmin(chi2 + p * np.log(n_data)))
-        c = max(1.0, chi2[best] / max(n_data - p[best], 1.0))
-    scores = chi2 / c + p * np.log(n_data)                                  # Schwarz 1978
-    none_score = none_chi2 / c + none_p * np.log(n_data) - 2.0 * np.log(max(n_candidates, 1))
-    return scores, float(none_score), float(c)
+def _score_rows(refits) -> list:
+    """The (kind, location, chi2, n_params) rows of refitted candidates that
+    :func:`pipeline.diagnose.verdict.decide` and :func:`round_scores` take."""
+    return [(f.candidate.kind, f.candidate.location, f.chi2, f.n_params) for f in refits]
 
 
-def decide(none_fit, fits, margin: float, near, n_data: int, n_candidates: int = 1, *,
-           held_out=None) -> tuple:
-    """Verdict of one round from its score table.
-
-    Parameters
-    ----------
-    none_fit : (chi2, n_params) of the model without a further effect.
-    fits : sequence of (kind, location, chi2, n_params)
-        Refitted candidates.
-    margin : float
-    near : callable(location_a, location_b) -> bool
-        True when b is a's neighbour (one element layer).
-    n_data : int, training residuals.
-    n_candidates : int, candidates screened (the prior odds of "none" against each one).
-    held_out : ((n_ho_modes,) chi^2 of "none", per fit a (n_ho_modes,) chi^2, (n_ho_modes,)
-        entries) of the held-out modes, optional
-        (:func:`pipeline.diagnose.predictive.held_out_modes`); without it the predictive check
-        is skipped.
-
-    Returns
-    -------
-    verdict : str
-    best : int or None, index into ``fits``.
-    runner : int or None, index of the runner-up (another kind or a location that is not a
-        neighbour of the best's).
-    lead : float, score of the better of "none" and the runner-up minus the best's (nan without
-        fits).
-
-    Notes
-    -----
-    The scores are BIC = chi^2 / c + p ln n (Schwarz 1978) with the dispersion
-    c = max(1, chi^2_best / (n - p_best)) of the best fit (quasi-likelihood, Burnham & Anderson
-    2002 sec. 6.2): a residual the best candidate leaves far above its scales (a second effect,
-    or one outside the library) makes every chi^2 difference count for less, so that fitting
-    that remainder with a wrong candidate does not look decisive.
-
-    "none" and "some effect" are given equal prior probability, shared equally by the
-    ``n_candidates`` candidates, so the prior odds of "none" against one candidate are
-    n_candidates : 1 and its score gains 2 ln n_candidates (posterior odds = Bayes factor x prior
-    odds, Kass & Raftery 1995 sec. 3; BIC approximates -2 ln of the Bayes factor): the best of
-    many candidates fitted to noise does not look like evidence.
-
-    Predictive check (:func:`pipeline.diagnose.predictive.held_out_evidence`): a best fit that
-    the held-out modes contradict by more than ``margin`` gives ``unexplained`` instead of
-    ``effect``: it fits the training modes by distorting the model elsewhere (an effect outside
-    the library, or the right kind at the wrong place, absorbed by a candidate), so it does not
-    explain the data. The held-out modes then take part in the verdict as a veto only (they
-    never choose the candidate); the gap on them is still the prediction of a model whose
-    parameters they never set.
-    """
-    none_chi2, none_p = none_fit
-    fitting = gof_limit(n_data - none_p) >= none_chi2
-    if not fits:
-        return ("none" if fitting else "unexplained"), None, None, float("nan")
-    scores, none_score, _ = round_scores(none_fit, fits, n_data, n_candidates)
-    best = int(np.argmin(scores))
-    kind, loc = fits[best][0], fits[best][1]
-    rivals = [i for i, f in enumerate(fits)
-              if i != best and (f[0] != kind or not near(loc, f[1]))]
-    runner = min(rivals, key=lambda i: scores[i]) if rivals else None
-    lead = float(min(none_score, scores[runner] if runner is not None else np.inf) - scores[best])
-    if not scores[best] + margin < none_score:
-        return ("none" if fitting else "unexplained"), best, runner, lead
-    if runner is not None and not scores[best] + margin < scores[runner]:
-        return "ambiguous", best, runner, lead
-    if held_out is not None and \
-            held_out_evidence(held_out[0], held_out[1][best], held_out[2]) < -margin:
-        return "unexplained", best, runner, lead
-    return "effect", best, runner, lead
-
-
-# ------------------------------------------------------------------------------------ diagnose
 def _say(progress, text: str) -> None:
     if progress is not None:
         progress(text)
@@ -381,8 +234,8 @@ def _table(rows, refits, none, n_data: int, n_theta: int, n_candidates: int) -> 
     """The first round's ranked candidates by the scores :func:`decide` compared
     (:func:`round_scores`: refitted ones from their refit, the rest from their linearised chi^2
     with the same dispersion c, "none" with its prior odds), minus the best."""
-    fits = [(f.candidate.kind, f.candidate.location, f.chi2, f.n_params) for f in refits]
-    scores, none_score, c = round_scores((none.chi2, none.n_params), fits, n_data, n_candidates)
+    scores, none_score, c = round_scores((none.chi2, none.n_params), _score_rows(refits), n_data,
+                                         n_candidates)
     scored = [(b, fit.candidate, True) for b, fit in zip(scores, refits)]
     done = {id(fit.candidate) for fit in refits}
     for row in rows:
@@ -461,23 +314,20 @@ def diagnose(configurations, settings: DiagnoseSettings = DiagnoseSettings(), *,
 
             modes_none, entries = held_out_modes(problem, none.evaluations)
             modes = [held_out_modes(problem, f.evaluations)[0] for f in fits]
-            verdict, best, runner, lead = decide((none.chi2, none.n_params),
-                                                 [(f.candidate.kind, f.candidate.location, f.chi2,
-                                                   f.n_params) for f in fits],
-                                                 settings.margin, near, n_data, len(cands),
-                                                 held_out=(modes_none, modes, entries))
+            verdict, best, runner, lead, reason = decide(
+                (none.chi2, none.n_params), _score_rows(fits), settings.margin, near, n_data,
+                len(cands), held_out=(modes_none, modes, entries))
             rounds.append(_round_record(k, verdict, fits, best, runner, none,
                                         (modes_none, modes, entries), n_data))
-            if verdict == "unexplained" and lead > settings.margin:     # the held-out veto
-                cand = fits[best].candidate
-                kept = reproduced(modes_none, entries) | reproduced(modes[best], entries)
+            if reason == "held_out":
+                cand, vetoed = fits[best].candidate, rounds[-1]["best"]
+                kept = np.asarray(vetoed["held_out_modes_kept"])
                 notes.append(f"round {k + 1}: {cand.kind} {cand.label} fits the training modes "
                              f"(chi^2 {none.chi2:.0f} -> {fits[best].chi2:.0f}) but not the "
                              f"{int(kept.sum())} held-out modes either model reproduces (chi^2 "
                              f"{modes_none[kept].sum():.0f} -> {modes[best][kept].sum():.0f}, "
-                             f"evidence {held_out_evidence(modes_none, modes[best], entries):.1f}; "
-                             "per mode in the round record): it compensates for something "
-                             "else; not named.")
+                             f"evidence {vetoed['held_out_evidence']:.1f}; per mode in the round "
+                             "record): it compensates for something else; not named.")
             if k == 0:
                 first = verdict
                 table = _table(rows, fits, none, n_data, len(theta), len(cands))
@@ -518,7 +368,7 @@ def _none_fit(problem: Problem, cal, n_data: int):
 
 def _round_record(k: int, verdict: str, fits, best, runner, none, held_out, n_data: int) -> dict:
     modes_none, modes, entries = held_out
-    keep_none = reproduced(modes_none, entries)
+    c = round_scores((none.chi2, none.n_params), _score_rows(fits), n_data)[2]
 
     def entry(i):
         if i is None:
@@ -527,10 +377,10 @@ def _round_record(k: int, verdict: str, fits, best, runner, none, held_out, n_da
         return {"kind": f.candidate.kind, "label": f.candidate.label, "bic": f.bic,
                 "chi2": f.chi2, "n_params": f.n_params, "held_out_chi2": float(modes[i].sum()),
                 "held_out_modes_chi2": modes[i].tolist(),
-                "held_out_modes_kept": (keep_none | reproduced(modes[i], entries)).tolist(),
-                "held_out_evidence": held_out_evidence(modes_none, modes[i], entries),
+                "held_out_modes_kept": kept_modes(modes_none, modes[i], entries).tolist(),
+                "held_out_evidence": held_out_evidence(modes_none, modes[i], entries, c),
                 "parameters": dict(zip(f.candidate.parameters, map(float, f.values)))}
-    return {"round": k + 1, "verdict": verdict, "n_data": n_data,
+    return {"round": k + 1, "verdict": verdict, "n_data": n_data, "dispersion": c,
             "n_held_out": int(np.sum(entries)), "held_out_modes_entries": entries.tolist(),
             "none_bic": none.bic,
             "none_chi2": none.chi2, "none_n_params": none.n_params,

@@ -1,5 +1,6 @@
-"""diagnose(): the verdict rules on constructed score tables, settings, and end-to-end blind cases
-of the truth generator's frame (tests/pipeline/diagnose/truth, never imported by the workflow)."""
+"""diagnose(): settings, the published ranking and the round record on constructed tables, and
+end-to-end blind cases of the truth generator's frame (tests/pipeline/diagnose/truth, never
+imported by the workflow). The verdict rules are in test_verdict.py."""
 from __future__ import annotations
 
 import json
@@ -14,109 +15,14 @@ from pipeline.case import read_case
 from pipeline.diagnose.effects import Candidate, Location
 from pipeline.diagnose import DiagnoseSettings, diagnose, preflight
 from pipeline.diagnose.inputs import configurations_from_case, settings_from_case
-from pipeline.diagnose.workflow import _table, decide, within_scatter
+from pipeline.diagnose.verdict import decide
+from pipeline.diagnose.workflow import _round_record, _table
 from structures.common.errors import InputError
 from structures.common.files import read_dataset, write_dataset
 from tests.pipeline.diagnose.truth import make_case
 
-N = 400                      # training residuals of the tables
-LN = log(N)
-
-
 def _never_near(a, b):
     return False
-
-
-def _same_grid(a, b):
-    return a == b
-
-
-def test_none_when_nothing_beats_none_and_it_fits():
-    # chi^2 400 on 398 dof passes (99.9 % limit ~ 494); the best candidate gains 5 < 10 + ln n
-    verdict, best, runner, _ = decide((400.0, 2), [("lumped_mass", 1, 395.0, 3),
-                                                   ("member_taper", 2, 398.0, 4)],
-                                      10.0, _never_near, N)
-    assert verdict == "none" and best == 0 and runner == 1
-
-
-def test_unexplained_when_nothing_beats_a_failing_none():
-    verdict, *_ = decide((900.0, 2), [("lumped_mass", 1, 895.0, 3)], 10.0, _never_near, N)
-    assert verdict == "unexplained"
-    assert decide((900.0, 2), [], 10.0, _never_near, N)[0] == "unexplained"
-    assert decide((300.0, 2), [], 10.0, _never_near, N)[0] == "none"
-
-
-def test_effect_when_the_best_beats_none_and_the_runner_up():
-    # best chi^2 390 (c = 1): BIC 390 + 3 ln n; none 600 + 2 ln n; runner 420 + 3 ln n (30 > 10)
-    verdict, best, runner, lead = decide((600.0, 2), [("member_taper", 7, 420.0, 3),
-                                                      ("lumped_mass", 1, 390.0, 3)],
-                                         10.0, _never_near, N)
-    assert (verdict, best, runner) == ("effect", 1, 0)
-    assert lead == pytest.approx(30.0, rel=1e-12)
-
-
-def test_ambiguous_when_the_runner_up_is_close_and_not_a_neighbour():
-    fits = [("lumped_mass", 1, 390.0, 3), ("lumped_mass", 2, 395.0, 3)]
-    assert decide((600.0, 2), fits, 10.0, _never_near, N)[0] == "ambiguous"
-    # the same rival at a neighbouring location does not compete with the best
-    near_all = lambda a, b: True  # noqa: E731
-    verdict, best, runner, lead = decide((600.0, 2), fits, 10.0, near_all, N)
-    assert (verdict, best, runner) == ("effect", 0, None)
-    assert lead == pytest.approx(600.0 + 2 * LN - 390.0 - 3 * LN, rel=1e-12)
-    # another kind at the same spot always competes
-    fits = [("lumped_mass", 1, 390.0, 3), ("boundary_stiffness", 1, 392.0, 3)]
-    assert decide((600.0, 2), fits, 10.0, near_all, N)[0] == "ambiguous"
-
-
-def test_many_candidates_raise_the_bar_over_none():
-    # a gain of 25 over none (+1 parameter): 25 - ln n = 19 > 10 names it among 1 candidate,
-    # but not among 100 (prior odds 100 : 1 cost 2 ln 100 = 9.2; 19 - 9.2 < 10)
-    fits = [("lumped_mass", 1, 375.0, 3)]
-    assert decide((400.0, 2), fits, 10.0, _never_near, N, 1)[0] == "effect"
-    assert decide((400.0, 2), fits, 10.0, _never_near, N, 100)[0] == "none"
-
-
-def test_dispersion_shrinks_the_lead_of_a_poor_best_fit():
-    # the best leaves chi^2 4000 on 397 dof: c = 4000/397 ~ 10.08, a raw gain of 60 over the
-    # runner-up is ~6 after scaling, below the margin: ambiguous, not a name
-    fits = [("lumped_mass", 1, 4000.0, 3), ("member_taper", 2, 4060.0, 3)]
-    assert decide((8000.0, 2), fits, 10.0, _never_near, N)[0] == "ambiguous"
-    # the same raw gain on a good fit (c = 1) names it
-    fits = [("lumped_mass", 1, 390.0, 3), ("member_taper", 2, 450.0, 3)]
-    assert decide((8000.0, 2), fits, 10.0, _never_near, N)[0] == "effect"
-
-
-def test_held_out_modes_veto_a_compensating_fit():
-    """The best (chi^2 390 vs none 600) beats none and the runner-up by far. Three held-out
-    modes of 10 entries each (chi^2_0.999(10) = 29.588, statistical tables): "none" gives
-    8, 10, 12. The fit giving 8, 60, 12 worsens a mode "none" reproduces: all kept,
-    c_ho = 80 / 30, evidence (30 - 80) / (8 / 3) = -18.75 < -10: unexplained."""
-    fits = [("member_taper", 7, 420.0, 3), ("lumped_mass", 1, 390.0, 3)]
-    entries = np.array([10, 10, 10])
-    held = (np.array([8.0, 10.0, 12.0]), [np.array([9.0, 9.0, 9.0]), np.array([8.0, 60.0, 12.0])],
-            entries)
-    verdict, best, runner, lead = decide((600.0, 2), fits, 10.0, _never_near, N, held_out=held)
-    assert (verdict, best, runner) == ("unexplained", 1, 0)
-    assert lead == pytest.approx(30.0, rel=1e-12)
-
-
-def test_a_held_out_mode_neither_model_reproduces_does_not_veto():
-    """Mode 2 is a local mode both models pair with the wrong analysis mode (chi^2 3000 and
-    5000 > 29.588): summed, the evidence would be (3020 - 5018) / (5018 / 30) = -11.95, a
-    veto; over modes 1 and 3 it is +2: named. When "none" reproduces mode 2 (chi^2 25) and
-    the fit does not (3000), the mode is kept: evidence -29.55, unexplained. The veto never
-    turns an ambiguous verdict into a name."""
-    fits = [("member_taper", 7, 420.0, 3), ("joint_flexibility", 1, 390.0, 3)]
-    entries = np.array([10, 10, 10])
-    fit = np.array([8.0, 5000.0, 10.0])
-    assert decide((600.0, 2), fits, 10.0, _never_near, N,
-                  held_out=(np.array([8.0, 3000.0, 12.0]), [fit, fit], entries))[0] == "effect"
-    none_fits, fit_not = np.array([8.0, 25.0, 12.0]), np.array([8.0, 3000.0, 12.0])
-    assert decide((600.0, 2), fits, 10.0, _never_near, N,
-                  held_out=(none_fits, [fit_not, fit_not], entries))[0] == "unexplained"
-    assert decide((600.0, 2), [("lumped_mass", 1, 390.0, 3), ("lumped_mass", 2, 395.0, 3)],
-                  10.0, _never_near, N, held_out=(none_fits, [fit_not, fit_not], entries))[0] \
-        == "ambiguous"
 
 
 @pytest.mark.parametrize("field, value", [("kinds", ("bogus",)), ("max_effects", 0),
@@ -247,29 +153,32 @@ def test_published_ranking_is_the_one_that_decided():
     for t in table:
         assert t.score == pytest.approx(hand[t.kind], rel=1e-12, abs=1e-12)
     assert [t.refitted for t in table] == [True, True, False, True]
-    _, best, runner, lead = decide((500.0, 2), [(x.candidate.kind, x.candidate.location, x.chi2,
+    _, best, runner, lead, _ = decide((500.0, 2), [(x.candidate.kind, x.candidate.location, x.chi2,
                                                  x.n_params) for x in refits], 10.0, _never_near,
                                    100, 10)
     assert (best, runner) == (0, 1) and lead == pytest.approx(table[1].score, rel=1e-12)
 
 
-def test_an_effect_within_the_nominal_scatter_is_not_named():
-    """3 x s = 9 % of what the effect changes (s = 0.03): a mass at a grid carrying a 40 kg CONM2
-    (total 500 kg) is scatter up to 3.6 kg; a member's scale up to 1.09^(1/4) - 1 = 2.18 %."""
-    model = SimpleNamespace(masses=SimpleNamespace(grid=np.array([7, 7, 9]),
-                                                   mass=np.array([30.0, 10.0, 5.0])))
+def test_round_record_judges_held_out_modes_on_the_training_dispersion():
+    """n = 400: fits A chi^2 794 and B 1000 (p 3), "none" 2000 (p 2): c = 794 / 397 = 2.
+    Held-out modes (10 entries each) "none" 8, 3000, 12; A 8, 25, 12 reproduces mode 2: all
+    kept, (3020 - 45) / 2 = 1487.5; B 8, 5000, 10: mode 2 left out, (20 - 18) / 2 = 1."""
+    def fit(label, chi2):
+        cand = Candidate("lumped_mass", Location(grids=(1,)), label, ("mass",), (0.0,), (1.0,),
+                         (0.1,))
+        return SimpleNamespace(candidate=cand, chi2=chi2, n_params=3, bic=0.0,
+                               values=np.array([0.01]))
 
-    def cand(kind, grid, names):
-        return Candidate(kind, Location(grids=(grid,)), "c", names, (-1.0,) * len(names),
-                         (1.0,) * len(names), (0.1,) * len(names), (("total_mass", 500.0),))
-
-    assert within_scatter(model, cand("lumped_mass", 7, ("mass",)), [3.5 / 500], 0.03)
-    assert not within_scatter(model, cand("lumped_mass", 7, ("mass",)), [3.7 / 500], 0.03)
-    assert not within_scatter(model, cand("lumped_mass", 8, ("mass",)), [1e-4], 0.03)
-    taper = cand("member_taper", 7, ("scale", "taper"))
-    assert within_scatter(model, taper, [-0.0215, 0.0], 0.03)
-    assert not within_scatter(model, taper, [0.0, 0.05], 0.03)       # 1.025^4 - 1 = 10.4 %
-    assert not within_scatter(model, cand("boundary_stiffness", 7, ("k_z",)), [1e-6], 0.03)
+    none = SimpleNamespace(chi2=2000.0, n_params=2, bic=0.0)
+    held = (np.array([8.0, 3000.0, 12.0]), [np.array([8.0, 25.0, 12.0]),
+                                            np.array([8.0, 5000.0, 10.0])], np.array([10, 10, 10]))
+    record = _round_record(0, "effect", [fit("A", 794.0), fit("B", 1000.0)], 0, 1, none, held,
+                           400)
+    assert record["dispersion"] == pytest.approx(2.0, rel=1e-12)
+    assert record["best"]["held_out_modes_kept"] == [True, True, True]
+    assert record["best"]["held_out_evidence"] == pytest.approx(1487.5, rel=1e-12)
+    assert record["runner_up"]["held_out_modes_kept"] == [True, False, True]
+    assert record["runner_up"]["held_out_evidence"] == pytest.approx(1.0, rel=1e-12)
 
 
 def test_separating_measurement_across_an_added_grid():

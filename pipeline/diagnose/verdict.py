@@ -1,0 +1,167 @@
+"""The verdict rules of a diagnose round (DESIGN.md section 5, issue 14 step 5).
+
+Verdict of one round of :func:`pipeline.diagnose.workflow.diagnose` (:func:`decide`), BIC =
+chi^2 + p ln n (Schwarz 1978), margins after Kass & Raftery (1995, a BIC difference above 10 is
+very strong evidence), among the refitted candidates whose size exceeds what the nominal scatter
+could do by itself (:func:`within_scatter`):
+
+- ``effect``: the best refitted candidate beats "none" (the model with its nominal parameters
+  refitted) and the runner-up (the best candidate of another kind or at a location that is not
+  its neighbour, :func:`pipeline.diagnose.effects.neighbours`) by ``settings.margin``, and the
+  held-out modes do not contradict it by more than the margin
+  (:func:`pipeline.diagnose.predictive.held_out_evidence`: on the modes that "none" or the fit
+  reproduces; a mode neither reproduces is a mis-paired one and is left out);
+- ``ambiguous``: it beats "none" but not the runner-up;
+- ``none``: no candidate beats "none" and "none" passes the goodness-of-fit test;
+- ``unexplained``: no candidate beats "none" and "none" fails the goodness-of-fit test, or the
+  best beats both but the held-out modes contradict it (a fit that compensates on the training
+  modes for something the library cannot represent).
+A clear BIC gain is tested before the goodness of fit: an omnibus chi^2 test over hundreds of
+shape entries is blind to an effect that moves a few frequencies, which the BIC sees.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from pipeline.diagnose.evidence import gof_limit
+from pipeline.diagnose.predictive import held_out_evidence
+from structures.model import FEModel
+
+#: A fitted effect no larger than this many standard deviations of the nominal scatter of what it
+#: changes is the scatter, not a missing effect (:func:`within_scatter`).
+SCATTER_SIGMAS = 3.0
+
+
+def within_scatter(model: FEModel, candidate, values, scatter: float) -> bool:
+    """True when a fitted effect is a change the nominal scatter could make by itself.
+
+    The residual scales treat the nominal scatter (``DiagnoseSettings.model_scatter``: every
+    property and CONM2 by a relative s) as independent noise, but the scatter of one heavy CONM2
+    or one member's section is a single structured change that the candidate at that spot fits
+    exactly. Such a fit is not a missing effect when it stays within ``SCATTER_SIGMAS`` x s of
+    what it changes:
+
+    - ``lumped_mass``: the added mass against the CONM2 mass already at its grid;
+    - ``member_taper``: the largest change of a section field, (1 + |scale|)^4 (1 + |taper| / 2)^4
+      - 1 (I ~ s^4 at the member's ends), against s.
+    Other kinds change nothing the scatter changes (False).
+
+    Parameters
+    ----------
+    model : FEModel, the current model (the one the candidate is applied to).
+    candidate : Candidate
+    values : (npar,) fitted parameters.
+    scatter : float, s.
+    """
+    limit = SCATTER_SIGMAS * scatter
+    x = dict(zip(candidate.parameters, np.abs(np.asarray(values, float))))
+    if candidate.kind == "lumped_mass":
+        cm = model.masses
+        local = float(cm.mass[cm.grid == candidate.location.grids[0]].sum())
+        return bool(x["mass"] * candidate.get("total_mass") <= limit * local)
+    if candidate.kind == "member_taper":
+        change = (1.0 + x["scale"]) ** 4 * (1.0 + x.get("taper", 0.0) / 2.0) ** 4 - 1.0
+        return bool(change <= limit)
+    return False
+
+
+def round_scores(none_fit, fits, n_data: int, n_candidates: int = 1) -> tuple:
+    """The scores a round's verdict compares (:func:`decide`'s Notes).
+
+    Parameters
+    ----------
+    none_fit : (chi2, n_params) of the model without a further effect.
+    fits : sequence of (kind, location, chi2, n_params), the refitted candidates.
+    n_data : int, training residuals.
+    n_candidates : int, candidates screened.
+
+    Returns
+    -------
+    scores : (len(fits),) chi^2 / c + p ln n of each fit.
+    none_score : float, chi^2 / c + p ln n - 2 ln n_candidates of "none".
+    c : float, the dispersion max(1, chi^2_best / (n - p_best)) (1 without fits).
+    """
+    none_chi2, none_p = none_fit
+    chi2 = np.array([f[2] for f in fits], float)
+    p = np.array([f[3] for f in fits], float)
+    c = 1.0
+    if fits:
+        best = int(np.argmin(chi2 + p * np.log(n_data)))
+        c = max(1.0, chi2[best] / max(n_data - p[best], 1.0))
+    scores = chi2 / c + p * np.log(n_data)                                  # Schwarz 1978
+    none_score = none_chi2 / c + none_p * np.log(n_data) - 2.0 * np.log(max(n_candidates, 1))
+    return scores, float(none_score), float(c)
+
+
+def decide(none_fit, fits, margin: float, near, n_data: int, n_candidates: int = 1, *,
+           held_out=None) -> tuple:
+    """Verdict of one round from its score table.
+
+    Parameters
+    ----------
+    none_fit : (chi2, n_params) of the model without a further effect.
+    fits : sequence of (kind, location, chi2, n_params)
+        Refitted candidates.
+    margin : float
+    near : callable(location_a, location_b) -> bool
+        True when b is a's neighbour (one element layer).
+    n_data : int, training residuals.
+    n_candidates : int, candidates screened (the prior odds of "none" against each one).
+    held_out : ((n_ho_modes,) chi^2 of "none", per fit a (n_ho_modes,) chi^2, (n_ho_modes,)
+        entries) of the held-out modes, optional
+        (:func:`pipeline.diagnose.predictive.held_out_modes`); without it the predictive check
+        is skipped.
+
+    Returns
+    -------
+    verdict : str
+    best : int or None, index into ``fits``.
+    runner : int or None, index of the runner-up (another kind or a location that is not a
+        neighbour of the best's).
+    lead : float, score of the better of "none" and the runner-up minus the best's (nan without
+        fits).
+    reason : str, why: ``"gain"`` (the best beats "none" and the runner-up, no veto: effect),
+        ``"no_gain"`` (nothing beats "none" by the margin: none or unexplained by the goodness
+        of fit), ``"runner_up"`` (ambiguous), ``"held_out"`` (the held-out veto: unexplained).
+
+    Notes
+    -----
+    The scores are BIC = chi^2 / c + p ln n (Schwarz 1978) with the dispersion
+    c = max(1, chi^2_best / (n - p_best)) of the best fit (quasi-likelihood, Burnham & Anderson
+    2002 sec. 6.2): a residual the best candidate leaves far above its scales (a second effect,
+    or one outside the library) makes every chi^2 difference count for less, so that fitting
+    that remainder with a wrong candidate does not look decisive.
+
+    "none" and "some effect" are given equal prior probability, shared equally by the
+    ``n_candidates`` candidates, so the prior odds of "none" against one candidate are
+    n_candidates : 1 and its score gains 2 ln n_candidates (posterior odds = Bayes factor x prior
+    odds, Kass & Raftery 1995 sec. 3; BIC approximates -2 ln of the Bayes factor): the best of
+    many candidates fitted to noise does not look like evidence.
+
+    Predictive check (:func:`pipeline.diagnose.predictive.held_out_evidence`, divided by the
+    same dispersion c): a best fit that the held-out modes contradict by more than ``margin``
+    gives ``unexplained`` instead of ``effect``: it fits the training modes by distorting the
+    model elsewhere (an effect outside the library, or the right kind at the wrong place,
+    absorbed by a candidate), so it does not explain the data. The held-out modes then take part
+    in the verdict as a veto only (they never choose the candidate); the gap on them is still the
+    prediction of a model whose parameters they never set.
+    """
+    none_chi2, none_p = none_fit
+    fitting = gof_limit(n_data - none_p) >= none_chi2
+    if not fits:
+        return ("none" if fitting else "unexplained"), None, None, float("nan"), "no_gain"
+    scores, none_score, c = round_scores(none_fit, fits, n_data, n_candidates)
+    best = int(np.argmin(scores))
+    kind, loc = fits[best][0], fits[best][1]
+    rivals = [i for i, f in enumerate(fits)
+              if i != best and (f[0] != kind or not near(loc, f[1]))]
+    runner = min(rivals, key=lambda i: scores[i]) if rivals else None
+    lead = float(min(none_score, scores[runner] if runner is not None else np.inf) - scores[best])
+    if not scores[best] + margin < none_score:
+        return ("none" if fitting else "unexplained"), best, runner, lead, "no_gain"
+    if runner is not None and not scores[best] + margin < scores[runner]:
+        return "ambiguous", best, runner, lead, "runner_up"
+    if held_out is not None and \
+            held_out_evidence(held_out[0], held_out[1][best], held_out[2], c) < -margin:
+        return "unexplained", best, runner, lead, "held_out"
+    return "effect", best, runner, lead, "gain"
