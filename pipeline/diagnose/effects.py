@@ -145,7 +145,7 @@ class Candidate:
     label : str, human text (``"RBE2 7501 (5011-5021)"``, ``"grid 3005 z"``).
     parameters : tuple of str, parameter names.
     lower, upper : tuple of float, bounds of each parameter (0 inside).
-    reference : tuple of float, a plausible, clearly visible size (the screening step).
+    reference : tuple of float, a plausible, clearly visible size (the screening step), not 0.
     detail : tuple of (key, value) pairs the kind needs (scales, direction, member geometry).
     """
 
@@ -171,6 +171,12 @@ class Candidate:
                    for lo, hi, ref in zip(self.lower, self.upper, self.reference)):
             raise InputError(f"candidate {self.label!r}: bounds {self.lower}..{self.upper} must "
                              f"contain 0 and the reference {self.reference}. Fix: widen them.")
+        zero = [p for p, ref in zip(self.parameters, self.reference) if ref == 0.0]
+        if zero:
+            raise InputError(f"candidate {self.label!r}: reference 0 for {zero}: the screening "
+                             "step and the refit's parameter scale (pipeline.diagnose.screen) "
+                             "would be 0. Fix: give every parameter a nonzero reference "
+                             "inside its bounds.")
 
     def get(self, key: str, default=None):
         """The value of ``key`` in :attr:`detail`."""

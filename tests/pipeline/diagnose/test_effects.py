@@ -625,6 +625,9 @@ def test_bad_kinds_and_values_raise(x56, x56_candidates):
         Candidate("cable_mass", Location(grids=(1,)), "x", ("m",), (0.0,), (1.0,), (0.1,))
     with pytest.raises(InputError, match="bounds"):
         Candidate("lumped_mass", Location(grids=(1,)), "x", ("mass",), (0.1,), (1.0,), (0.2,))
+    with pytest.raises(InputError, match=r"'PID 7 bow \+y -z': reference 0 for \['bow_2'\]"):
+        Candidate("member_curvature", Location(properties=(7,)), "PID 7 bow +y -z",
+                  ("bow_1", "bow_2"), (0.0, -0.15), (0.15, 0.0), (0.05, 0.0))
     bare = Candidate("boundary_stiffness", Location(grids=(3005,)), "grid 3005 z", ("k_z",),
                      (0.0,), (1.0,), (0.1,))
     with pytest.raises(InputError, match="candidates"):
