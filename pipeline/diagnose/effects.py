@@ -45,9 +45,10 @@ scale of the model (so that bounds do not depend on units):
     split in that many straight pieces (:func:`pipeline.diagnose.members.remesh`, new grids on
     its line), so that a member one element long has a taper too. An element keeps its PID when
     it is the PID's only element; otherwise it gets a new PID (a scaled copy of its property,
-    numbered from the model's largest PID + 1). Applied again to a member that was not split,
-    the factors multiply (each element's current property is scaled); a split member cannot be
-    changed again.
+    numbered from the model's largest PID + 1). Applied again, to a member split or not, the
+    factors multiply (each element's or piece's current property is scaled at its mid-length);
+    a split member keeps its pieces, and a later ``member_curvature`` moves their grids onto
+    its arc (bows add).
 ``member_curvature`` of a member, parameters ``bow_1``, ``bow_2``
     A parabolic bow: the member's middle rises by bow_1 L along each element's y axis (plane 1)
     and bow_2 L along its z axis (plane 2), L the member's length, the arc
