@@ -8,7 +8,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from pipeline.diagnose.edits import add_bushes
+from pipeline.diagnose.edits import add_bushes, add_grids
 from structures.common.errors import InputError, card_message
 from structures.model import FEModel
 
@@ -184,13 +184,7 @@ def flexible_joint(model: FEModel, eid: int, kt: float, kr: float, only=None) ->
 def _hang_whole(model: FEModel, rigid, indep: int, kt: float, kr: float) -> FEModel:
     """The RBE2 kept rigid but moved onto a new grid at its independent grid, which hangs on a
     CBUSH (all six components) to the independent grid."""
-    g = model.grids
-    new = int(g.ids.max()) + 1
-    i = int(g.index([indep])[0])
-    grids = replace(g, ids=np.append(g.ids, new), xyz=np.vstack([g.xyz, g.xyz[i]]),
-                    cd_axes=np.concatenate([g.cd_axes, np.eye(3)[None]]), cd=np.append(g.cd, 0),
-                    ps=np.append(g.ps, 0))
-    moved = tuple(replace(r, independent=((new, "123456"),)) if r.eid == rigid.eid else r
+    model, (new,) = add_grids(model, model.grids.xyz[model.grids.index([indep])])
+    moved = tuple(replace(r, independent=((int(new), "123456"),)) if r.eid == rigid.eid else r
                   for r in model.rigid)
-    model = replace(model, grids=grids, rigid=moved)
-    return add_bushes(model, [(indep, new)], [[kt] * 3 + [kr] * 3])
+    return add_bushes(replace(model, rigid=moved), [(indep, int(new))], [[kt] * 3 + [kr] * 3])
