@@ -4,6 +4,7 @@ basis against exact reanalysis."""
 from __future__ import annotations
 
 from dataclasses import replace
+from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
@@ -14,6 +15,7 @@ from pipeline.diagnose.calibrate import Problem
 from pipeline.diagnose.effect_deck import change_matrices
 from pipeline.diagnose.effects import apply_effect, candidates
 from pipeline.diagnose.evidence import build_reference, evaluate
+from pipeline.diagnose.joints import hangs_nothing
 from pipeline.diagnose.ladder import reduce_joint
 from pipeline.diagnose.screen import Screened, _perturbed, linear_fit, pick_for_refit
 from structures.assembly import assemble_g
@@ -171,18 +173,20 @@ def test_joint_ladder_on_basis_picks_the_exact_ladders_size(frame_reference, mon
     assert min(exact, key=lambda label: exact[label][1]) == joints[0].label
 
 
-def _store_deck(folder, clamp_4: bool):
-    """Grids 2 (5 kg) and 3 (2 kg) on RBE2 10 at the clamped grid 1; a bar 1-4, grid 4 clamped
-    or free."""
+def _joint_deck(folder, name, *, clamp_4=True, masses=True, cm=123456, ps_3=None, extra=()):
+    """Grids 2 and 3 (PS ``ps_3``) on RBE2 10 (components ``cm``) at the clamped grid 1, with
+    CONM2s of 5 and 2 kg (``masses``); a bar 1-4, grid 4 clamped or free; ``extra`` cards."""
     rows = [("GRID", 1, None, 0.0, 0.0, 0.0, None, 123456), ("GRID", 2, None, 0.3, 0.0, 0.0),
-            ("GRID", 3, None, -0.75, 0.0, 0.0),
+            ("GRID", 3, None, -0.75, 0.0, 0.0, None, ps_3),
             ("GRID", 4, None, 0.0, 1.0, 0.0, None, 123456 if clamp_4 else None),
-            ("RBE2", 10, 1, 123456, 2, 3), ("CONM2", 22, 3, None, 2.0),
-            ("CONM2", 21, 2, None, 5.0, 0.0, 0.0, 0.0, None, 0.01, 0.0, 0.01, 0.0, 0.0, 0.01),
-            ("CBAR", 31, 41, 1, 4, 0.0, 0.0, 1.0), ("PBAR", 41, 51, 1e-3, 2e-7, 4e-7, 3e-7),
-            ("MAT1", 51, 7.0e10, None, 0.33)]
-    path = folder / f"store_{clamp_4}.bdf"
-    path.write_text("SOL 103\nCEND\nBEGIN BULK\n" + "\n".join(card(*r) for r in rows)
+            ("RBE2", 10, 1, cm, 2, 3), ("CBAR", 31, 41, 1, 4, 0.0, 0.0, 1.0),
+            ("PBAR", 41, 51, 1e-3, 2e-7, 4e-7, 3e-7), ("MAT1", 51, 7.0e10, None, 0.33),
+            *extra]
+    if masses:
+        rows += [("CONM2", 22, 3, None, 2.0),
+                 ("CONM2", 21, 2, None, 5.0, 0.0, 0.0, 0.0, None, 0.01, 0.0, 0.01, 0.0, 0.0, 0.01)]
+    path = folder / name
+    path.write_text("SOL 103\nCEND\nSPC = 1\nBEGIN BULK\n" + "\n".join(card(*r) for r in rows)
                     + "\nENDDATA\n")
     return read_model(path)
 
@@ -192,7 +196,8 @@ def test_reduce_joint_without_fixed_interface_modes_is_none(tmp_path):
     with a ValueError the screening does not catch) or every a-set DOF on the springs (grid 4
     clamped: the a-set is the hung RBE2's new grid alone). reduce_joint returns None, so the
     screening runs the exact ladder; with grid 4 free and nmodes 3 the basis is built."""
-    free, clamped = _store_deck(tmp_path, False), _store_deck(tmp_path, True)
+    free = _joint_deck(tmp_path, "free.bdf", clamp_4=False)
+    clamped = _joint_deck(tmp_path, "clamped.bdf")
     for model in (free, clamped):
         joints = candidates(model, ("joint_flexibility",))
         assert len(joints) == 3
@@ -210,10 +215,6 @@ def test_hangs_nothing_joint_changes_no_mode():
     the engine (a CONM2) to its pylon. Exact reanalysis: softening 7009 at any compliance leaves
     every frequency (1e-9) and the bare grids' motion (1e-6 of the largest) as with the rigid
     joint; 7501 moves the frequencies."""
-    from pathlib import Path
-
-    from pipeline.diagnose.joints import hangs_nothing
-
     model = read_model(Path(__file__).parents[3] / "data" / "x56_like" / "x56_efew.bdf")
     joints = {c.location.elements[0]: c for c in candidates(model, ("joint_flexibility",))
               if c.get("dependent") is None}
@@ -230,6 +231,21 @@ def test_hangs_nothing_joint_changes_no_mode():
         assert np.abs(np.abs(s1) - np.abs(s0)).max() <= 1e-6 * np.abs(s0).max()
     engine = compute_modes(apply_effect(model, joints[7501], [100.0]), 30)
     assert np.abs(engine["frequency"].values[6:] / modes0["frequency"].values[6:] - 1).max() > 1e-3
+
+
+def test_hangs_nothing_with_an_spc_or_a_ps_on_a_hung_grid(tmp_path):
+    """Bare grids 2 and 3 on RBE2 10 (translations): nothing hung, until an SPC (grid 2,
+    component 4) or a GRID PS (grid 3, component 5) sits on one of them; then the whole joint
+    and that grid's one-sided candidate hang something, the other grid's still nothing. (An SPC
+    on a dependent component is rejected by the assembly, so these are off the RBE2's
+    components.) A CONM2 on the hung grids hangs something too."""
+    bare = _joint_deck(tmp_path, "bare.bdf", masses=False, cm=123)
+    spc = _joint_deck(tmp_path, "spc.bdf", masses=False, cm=123, extra=[("SPC", 1, 2, 4, 0.0)])
+    ps = _joint_deck(tmp_path, "ps.bdf", masses=False, cm=123, ps_3=5)
+    assert [hangs_nothing(bare, 10, only) for only in (None, 2, 3)] == [True, True, True]
+    assert [hangs_nothing(spc, 10, only) for only in (None, 2, 3)] == [False, False, True]
+    assert [hangs_nothing(ps, 10, only) for only in (None, 2, 3)] == [False, True, False]
+    assert hangs_nothing(_joint_deck(tmp_path, "mass.bdf", cm=123), 10) is False
 
 
 def test_refit_of_a_negative_quadrant_candidate_from_zero(frame_reference):
