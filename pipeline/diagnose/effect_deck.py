@@ -173,14 +173,15 @@ def model_changes(old: FEModel, new: FEModel) -> tuple[dict, list]:
         ``new`` made from ``old`` by diagnose effects (elements and properties added or changed in
         the families of :data:`CHANGED_FAMILIES`, CONM2s added, grids added (basic frame),
         rigid elements removed, RBE2s with fewer dependent grids of one component set or a new
-        independent grid: removed and written again; grids of the basic frame moved).
+        independent grid: removed and written again; grids moved).
 
     Returns
     -------
     removed : dict with ``rigid``, ``elements``, ``properties``, ``grids``: sorted ids of cards
         to delete (changed cards are deleted and written again).
     cards : list of field lists (card name first), in the order grids, properties, elements,
-        masses.
+        masses. A new or moved GRID is written at its basic position (CP blank) with its CD and
+        PS.
     """
     new_rigid = {r.eid: r for r in new.rigid}
     removed = {"rigid": sorted(r.eid for r in old.rigid if new_rigid.get(r.eid) != r),
@@ -189,8 +190,10 @@ def model_changes(old: FEModel, new: FEModel) -> tuple[dict, list]:
     moved = _moved_grids(old, new)
     removed["grids"] = moved.tolist()
     added = ~np.isin(new.grids.ids, old.grids.ids) | np.isin(new.grids.ids, moved)
-    grid_cards = [["GRID", int(gid), None, *map(float, xyz)]
-                  for gid, xyz in zip(new.grids.ids[added], new.grids.xyz[added])]
+    grids = new.grids
+    grid_cards = [["GRID", int(gid), None, *map(float, xyz), int(cd) or None, _components(ps)]
+                  for gid, xyz, cd, ps in zip(grids.ids[added], grids.xyz[added],
+                                              grids.cd[added], grids.ps[added])]
     for eid in removed["rigid"]:
         rigid = new_rigid.get(eid)
         if rigid is not None:                                  # an RBE2 with fewer dependents

@@ -14,6 +14,7 @@ from scipy.optimize import brentq
 from pipeline.diagnose.effects import (KINDS, Candidate, Location, apply_effect, candidates,
                                        effect_cards, effect_matrices, neighbours,
                                        write_effect_deck)
+from pipeline.diagnose.effect_deck import model_changes, write_patched_deck
 from pipeline.diagnose.members import find_members
 from structures.assembly import assemble, assemble_g, line_offsets
 from structures.bdf import read_model
@@ -527,6 +528,33 @@ def test_cbeam_members_round_trip(tmp_path):
     np.testing.assert_allclose(compute_modes(read_model(path), 6)["frequency"].values,
                                compute_modes(apply_effect(model, *effects[0]), 6)
                                ["frequency"].values, rtol=1e-5)
+
+
+def test_a_moved_grid_keeps_its_cd_and_ps(tmp_path):
+    """Grid 2 given in CP 5 with CD 5 (a frame turned 30 deg about z, origin (1, 2, 0)) and PS 4,
+    moved by (0.1, -0.2, 0.3): its card is written at the basic position with CD 5 and PS 4, and
+    the patched deck reads back to the moved model's grids and K, M (CD sets the g-set axes)."""
+    turn = np.radians(30.0)
+    deck = _deck(tmp_path, "turned.bdf", [
+        ("CORD2R", 5, None, 1.0, 2.0, 0.0, 1.0, 2.0, 1.0, 1.0 + np.cos(turn), 2.0 + np.sin(turn),
+         0.0),
+        ("GRID", 1, None, 0.0, 0.0, 0.0, None, 123456), ("GRID", 2, 5, 2.0, 0.0, 0.0, 5, 4),
+        ("CBAR", 10, 7, 1, 2, 0.0, 0.0, 1.0), ("PBAR", 7, 1, 3.0, 0.7, 1.3, 1.0),
+        ("MAT1", 1, 2.0e5, None, 0.3, 7.8e-9)])
+    model = read_model(deck)
+    assert model.grids.cd.tolist() == [0, 5] and model.grids.ps.tolist() == [63, 8]
+    xyz = model.grids.xyz.copy()
+    xyz[1] += [0.1, -0.2, 0.3]
+    moved = replace(model, grids=replace(model.grids, xyz=xyz))
+    removed, cards = model_changes(model, moved)
+    assert removed["grids"] == [2]
+    assert cards == [["GRID", 2, None, *xyz[1].tolist(), 5, 4]]
+    back = read_model(write_patched_deck(deck, tmp_path / "turned_out.bdf", [(removed, cards)]))
+    np.testing.assert_allclose(back.grids.xyz, xyz, atol=1e-14)
+    assert back.grids.cd.tolist() == [0, 5] and back.grids.ps.tolist() == [63, 8]
+    np.testing.assert_allclose(back.grids.cd_axes, model.grids.cd_axes, atol=1e-15)
+    for got, want in zip(assemble_g(back), assemble_g(moved)):
+        assert abs(got - want).max() <= 1e-12 * abs(want).max()
 
 
 def test_effect_cards_are_readable_small_field_bulk_data(x56, x56_candidates, tmp_path):
