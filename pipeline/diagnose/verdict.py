@@ -30,6 +30,23 @@ from structures.model import FEModel
 #: A fitted effect no larger than this many standard deviations of the nominal scatter of what it
 #: changes is the scatter, not a missing effect (:func:`within_scatter`).
 SCATTER_SIGMAS = 3.0
+#: A fitted parameter within this share of its range from a non-zero bound sits on it
+#: (:func:`on_bound`).
+BOUND_SHARE = 0.01
+
+
+def on_bound(value: float, lower: float, upper: float) -> bool:
+    """True when a fitted effect parameter sits on the bound nearest to it and that bound is not
+    0 (0 is "no effect": a parameter at 0 on a one-sided range is no sign that the library is too
+    small, whatever its round-off, e.g. -4e-14).
+
+    Parameters
+    ----------
+    value : float
+    lower, upper : float, the parameter's bounds (lower < upper).
+    """
+    edge = lower if abs(value - lower) <= abs(value - upper) else upper
+    return edge != 0.0 and abs(value - edge) <= BOUND_SHARE * (upper - lower)
 
 
 def within_scatter(model: FEModel, candidate, values, scatter: float) -> bool:

@@ -36,7 +36,8 @@ from pipeline.diagnose.gap import gap_metrics, separating_measurement
 from pipeline.diagnose.predictive import held_out_evidence, held_out_modes, kept_modes
 from pipeline.diagnose.result import CandidateScore, DiagnoseResult, EffectRecord
 from pipeline.diagnose.screen import pick_for_refit, refit, screen, signatures
-from pipeline.diagnose.verdict import SCATTER_SIGMAS, decide, round_scores, within_scatter
+from pipeline.diagnose.verdict import (SCATTER_SIGMAS, decide, on_bound, round_scores,
+                                        within_scatter)
 from structures.common.errors import InputError
 from structures.massprops import check_measured_mass
 from structures.modal import compute_modes
@@ -44,8 +45,6 @@ from structures.model import FEModel
 
 #: Rigid-body modes added to twice the test modes for the default analysis mode count.
 N_RIGID = 6
-#: A fitted parameter within this share of its range from a (non-zero) bound sits on it.
-BOUND_SHARE = 0.01
 
 
 @dataclass(frozen=True)
@@ -338,7 +337,7 @@ def diagnose(configurations, settings: DiagnoseSettings = DiagnoseSettings(), *,
             chosen = fits[best]
             cand = chosen.candidate
             for name, v, lo, hi in zip(cand.parameters, chosen.values, cand.lower, cand.upper):
-                if abs(v) > 0 and min(abs(v - lo), abs(v - hi)) <= BOUND_SHARE * (hi - lo):
+                if on_bound(v, lo, hi):
                     notes.append(f"round {k + 1}: {cand.kind} {cand.label} {name} = {v:.3g} sits on "
                                  "its bound: the effect may be larger than the library allows, or "
                                  "a different effect.")

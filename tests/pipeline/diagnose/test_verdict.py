@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from pipeline.diagnose.effects import Candidate, Location
-from pipeline.diagnose.verdict import decide, round_scores, within_scatter
+from pipeline.diagnose.verdict import decide, on_bound, round_scores, within_scatter
 
 N = 400                      # training residuals of the tables
 LN = log(N)
@@ -160,3 +160,14 @@ def test_reason_without_a_gain():
     held = (np.array([8.0]), [np.array([1e6])], np.array([10]))
     assert decide((900.0, 2), [("lumped_mass", 1, 895.0, 3)], 10.0, _never_near, N,
                   held_out=held)[::4] == ("unexplained", "no_gain")
+
+
+def test_on_bound_only_at_a_non_zero_bound():
+    """A bow of the +y -z quadrant (bounds [-0.15, 0]) at -4e-14 is at 0, "no effect", not on a
+    bound; at -0.1499 it is on -0.15 (1 % of the range is 0.0015); a mass fraction (bounds
+    [0, 0.10]) at 0.0995 is on 0.10, at 0.098 it is not (0.002 > 0.001)."""
+    assert not on_bound(-4.2e-14, -0.15, 0.0)
+    assert on_bound(-0.1499, -0.15, 0.0)
+    assert on_bound(0.0995, 0.0, 0.10)
+    assert not on_bound(0.098, 0.0, 0.10)
+    assert not on_bound(0.0, 0.0, 0.10)
