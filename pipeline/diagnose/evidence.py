@@ -21,7 +21,7 @@ from the nominal model):
   does not matter;
 - **mass** properties present in the measured mass (the paper's J1..J10, eqs. 1-10): weight and
   inertias relative to the measured value, CG relative to the radius of gyration, each divided by
-  its stated accuracy (``WEIGHT_ACCURACY``, ``CG_ACCURACY``, ``INERTIA_ACCURACY``).
+  its stated accuracy (:mod:`pipeline.diagnose.weighing`).
 
 chi^2 = |r|^2 over the training modes; BIC = chi^2 + p ln n (Schwarz 1978), n the number of
 training residuals; a BIC difference above 10 is "very strong" evidence (Kass & Raftery 1995).
@@ -38,6 +38,7 @@ import scipy.stats
 import xarray as xr
 from scipy.optimize import linear_sum_assignment
 
+from pipeline.diagnose.weighing import mass_residual, mass_scales
 from structures.common.errors import InputError
 from structures.correlation import (mac, measured_dof_index, orthogonality, serep_coordinates,
                                     serep_pseudo_inverse)
@@ -47,13 +48,6 @@ from structures.modal import compute_modes
 from structures.model import FEModel
 from structures.pairing import pair_modes
 
-#: Weighing accuracy of the total weight (load cells, 0.5 %).
-WEIGHT_ACCURACY = 0.005
-#: CG accuracy as a fraction of the radius of gyration (0.5 %: a few mm on a 1 m radius).
-CG_ACCURACY = 0.005
-#: Accuracy of measured moments and products of inertia (pendulum / swing tests, 2 % of the
-#: principal moments).
-INERTIA_ACCURACY = 0.02
 #: Largest standard deviation of a mixing coefficient (unit-RMS shapes): two modes closer than
 #: the nominal scatter can mix in any proportion.
 MIXING_CAP = 1.0
@@ -71,9 +65,6 @@ SELF_ORTHOGONALITY_LIMIT = 0.2
 #: An analysis mode whose RMS at the sensors is below this share of the largest elastic mode's
 #: (mass-normalised) is invisible to them: its MAC is rounding noise, it is not paired.
 INVISIBLE = 1e-6
-_INERTIA_NAMES = ("Ixx", "Iyy", "Izz", "Ixy", "Iyz", "Izx")
-_DIAGONAL = {"Ixx": 0, "Iyy": 1, "Izz": 2}
-_PRODUCTS = {"Ixy": (0, 1), "Iyz": (1, 2), "Izx": (2, 0)}
 
 
 # ------------------------------------------------------------------------------------ kernels
@@ -261,45 +252,6 @@ def scatter_scales(model: FEModel, phi, lam, own, rho, scatter: float) -> tuple:
         c = np.where(gap > 0, np.sqrt(var) / gap, np.inf)
     c = (c * np.asarray(rho, float)[:, None] / np.asarray(rho, float)[own][None, :]).T
     return freq, np.minimum(c, MIXING_CAP)
-
-
-_ACCURACY = {"weight": WEIGHT_ACCURACY, "x_cg": CG_ACCURACY, "y_cg": CG_ACCURACY,
-             "z_cg": CG_ACCURACY, **{k: INERTIA_ACCURACY for k in _INERTIA_NAMES}}
-
-
-def mass_references(measured: Mapping, model_props: MassProperties) -> dict:
-    """Reference size of every measured mass quantity (errors are stated relative to it).
-
-    Weight and moments of inertia: their measured value; CG: the radius of gyration
-    sqrt(I_max / m); products of inertia: the largest moment I_max. I_max and m are the measured
-    ones, or the model's (``model_props``) when the file does not give them.
-    """
-    values = model_props.as_dict()
-    moments = [abs(measured[k]) for k in _DIAGONAL if k in measured]
-    i_max = max(moments) if moments else max(abs(values[k]) for k in _DIAGONAL)
-    mass = measured["weight"] * model_props.wtmass if "weight" in measured else model_props.mass
-    out = {}
-    for key in measured:
-        if key == "weight" or key in _DIAGONAL:
-            out[key] = abs(measured[key])
-        elif key in _PRODUCTS:
-            out[key] = i_max
-        else:
-            out[key] = float(np.sqrt(i_max / mass))
-    return out
-
-
-def mass_scales(measured: Mapping, model_props: MassProperties) -> dict:
-    """Stated standard deviation of every measured quantity: its accuracy (``WEIGHT_ACCURACY``,
-    ``CG_ACCURACY``, ``INERTIA_ACCURACY``) times its reference (:func:`mass_references`)."""
-    refs = mass_references(measured, model_props)
-    return {k: _ACCURACY[k] * refs[k] for k in measured}
-
-
-def mass_residual(props: MassProperties, measured: Mapping, scales: Mapping) -> np.ndarray:
-    """(model - measured) / scale for every measured quantity, in ``scales`` order."""
-    values = props.as_dict()
-    return np.array([(values[k] - measured[k]) / scales[k] for k in scales])
 
 
 def self_orthogonality(phi_m, shapes) -> float:

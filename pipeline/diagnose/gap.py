@@ -12,7 +12,7 @@ Gap metrics (issue 14 step 6, the contract's JSON keys), over all configurations
 - ``mac_min``, ``mac_mean``: of the paired modes (paper eq. 23); ``mac_min_held_out`` of the
   held-out ones (None when no mode is held out);
 - ``mass``: error [%] of every measured quantity relative to its reference size
-  (:func:`pipeline.diagnose.evidence.mass_references`: weight and moments themselves, CG the
+  (:func:`pipeline.diagnose.weighing.mass_references`: weight and moments themselves, CG the
   radius of gyration, products the largest moment), from the configuration with the largest
   |error|; ``mass_by_configuration`` all of them;
 - ``flutter_speed``: None (the pipeline stage fills it).
@@ -22,7 +22,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from pipeline.diagnose.evidence import elastic_index, mass_references
+from pipeline.diagnose.evidence import elastic_index
+from pipeline.diagnose.weighing import mass_references
 from structures.correlation import cross_orthogonality, mac, serep_coordinates
 
 
