@@ -235,6 +235,19 @@ class Problem:
         finite = np.isfinite(self.prior)
         return np.asarray(theta, float)[finite] / self.prior[finite]
 
+    def modal_rows(self) -> np.ndarray:
+        """(n_data,) bool: the entries of :meth:`residual` that are modal (the training modes'
+        frequencies and shapes, whose scales assume a model scatter and noise level), in its
+        order; the others (each configuration's weighing, :mod:`pipeline.diagnose.weighing`,
+        and :meth:`prior_residual`) have stated scales
+        (:func:`pipeline.diagnose.verdict.round_scores`)."""
+        parts = []
+        for ref in self.refs:
+            n_shape = int(ref.shape_keep[0].sum()) if ref.has_shapes else 0
+            parts += [np.ones(int(ref.train.sum()) * (1 + n_shape), bool),
+                      np.zeros(len(ref.mass_scale), bool)]
+        return np.concatenate(parts + [np.zeros(int(np.isfinite(self.prior).sum()), bool)])
+
     def residual(self, theta, evaluations) -> np.ndarray:
         """Training residual: the data (:meth:`vector`) then the prior (:meth:`prior_residual`)
         at the nominal parameters ``theta`` of ``evaluations``."""

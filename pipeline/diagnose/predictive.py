@@ -38,9 +38,10 @@ def held_out_evidence(none_modes, fit_modes, entries, dispersion: float) -> floa
     The held-out residual entries (:func:`held_out_modes`) were fitted by neither model, so
     their chi^2 difference is -2 ln of the two fitted models' likelihood ratio on new data (no
     parameter penalty; the predictive check of cross-validation, Stone 1974). Divided by the
-    round's training dispersion c (:func:`pipeline.diagnose.verdict.round_scores`: the
-    quasi-likelihood dispersion of the best fit on the training data, Burnham & Anderson 2002
-    sec. 6.2) it is on the scale of the BIC differences of
+    round's modal dispersion c (:func:`pipeline.diagnose.verdict.round_scores`: the
+    quasi-likelihood dispersion of the best fit's training modal rows, Burnham & Anderson 2002
+    sec. 6.2; the held-out rows are modal rows, frequencies and shapes, with the same scales) it
+    is on the scale of the BIC differences of
     :func:`pipeline.diagnose.verdict.decide`, and set by the training data alone, not by how
     well the fit predicts the modes it is judged on. That likelihood assumes each test mode is
     paired with the analysis mode it measures. A held-out mode that neither model reproduces
@@ -58,7 +59,7 @@ def held_out_evidence(none_modes, fit_modes, entries, dispersion: float) -> floa
     none_modes, fit_modes : (n_ho_modes,) float, held-out chi^2 of each mode for "none" and the
         fit (frequency and shape entries of the mode).
     entries : (n_ho_modes,) int, residual entries of each held-out mode.
-    dispersion : float, the round's training dispersion c >= 1.
+    dispersion : float, the round's modal dispersion c >= 1.
 
     Returns
     -------

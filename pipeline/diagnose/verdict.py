@@ -1,9 +1,11 @@
 """The verdict rules of a diagnose round (DESIGN.md section 5, issue 14 step 5).
 
 Verdict of one round of :func:`pipeline.diagnose.workflow.diagnose` (:func:`decide`), BIC =
-chi^2 + p ln n (Schwarz 1978), margins after Kass & Raftery (1995, a BIC difference above 10 is
-very strong evidence), among the refitted candidates whose size exceeds what the nominal scatter
-could do by itself (:func:`within_scatter`):
+chi^2 + p ln n (Schwarz 1978) with the modal rows' chi^2 divided by their dispersion c
+(:func:`round_scores`; the weighing and prior rows at their stated scales), margins after
+Kass & Raftery (1995, a BIC difference above 10 is very strong evidence), among the refitted
+candidates whose size exceeds what the nominal scatter could do by itself
+(:func:`within_scatter`):
 
 - ``effect``: the best refitted candidate beats "none" (the model with its nominal parameters
   refitted) and the runner-up (the best candidate of another kind or at a location that is not
@@ -82,48 +84,56 @@ def within_scatter(model: FEModel, candidate, values, scatter: float) -> bool:
     return False
 
 
-def round_scores(none_fit, fits, n_data: int, n_candidates: int = 1) -> tuple:
+def round_scores(none_fit, fits, n_data: int, n_candidates: int = 1, *, n_modal: int) -> tuple:
     """The scores a round's verdict compares (:func:`decide`'s Notes).
 
     Parameters
     ----------
-    none_fit : (chi2, n_params) of the model without a further effect.
-    fits : sequence of (kind, location, chi2, n_params), the refitted candidates.
-    n_data : int, training residuals.
+    none_fit : (chi2_modal, chi2_stated, n_params) of the model without a further effect.
+    fits : sequence of (kind, location, chi2_modal, chi2_stated, n_params), the refitted
+        candidates: chi2_modal over the modal rows (training frequencies and shapes),
+        chi2_stated over the rows whose scales are stated (the weighing and the priors,
+        :meth:`pipeline.diagnose.calibrate.Problem.modal_rows`).
+    n_data : int, training residuals (all rows).
     n_candidates : int, candidates screened.
+    n_modal : int, modal rows among them.
 
     Returns
     -------
-    scores : (len(fits),) chi^2 / c + p ln n of each fit.
-    none_score : float, chi^2 / c + p ln n - 2 ln n_candidates of "none".
-    c : float, the dispersion max(1, chi^2_best / (n - p_best)) (1 without fits).
+    scores : (len(fits),) chi2_modal / c + chi2_stated + p ln n of each fit.
+    none_score : float, chi2_modal / c + chi2_stated + p ln n - 2 ln n_candidates of "none".
+    c : float, the modal dispersion max(1, chi2_modal_best / (n_modal - p_best)) of the best fit
+        (by chi^2 + p ln n at c = 1); 1 without fits.
     """
-    none_chi2, none_p = none_fit
-    chi2 = np.array([f[2] for f in fits], float)
-    p = np.array([f[3] for f in fits], float)
+    none_modal, none_stated, none_p = none_fit
+    modal = np.array([f[2] for f in fits], float)
+    stated = np.array([f[3] for f in fits], float)
+    p = np.array([f[4] for f in fits], float)
     c = 1.0
     if fits:
-        best = int(np.argmin(chi2 + p * np.log(n_data)))
-        c = max(1.0, chi2[best] / max(n_data - p[best], 1.0))
-    scores = chi2 / c + p * np.log(n_data)                                  # Schwarz 1978
-    none_score = none_chi2 / c + none_p * np.log(n_data) - 2.0 * np.log(max(n_candidates, 1))
+        best = int(np.argmin(modal + stated + p * np.log(n_data)))
+        c = max(1.0, modal[best] / max(n_modal - p[best], 1.0))   # Burnham & Anderson 2002 6.2
+    scores = modal / c + stated + p * np.log(n_data)                      # Schwarz 1978
+    none_score = none_modal / c + none_stated + none_p * np.log(n_data) \
+        - 2.0 * np.log(max(n_candidates, 1))
     return scores, float(none_score), float(c)
 
 
 def decide(none_fit, fits, margin: float, near, n_data: int, n_candidates: int = 1, *,
-           held_out=None) -> tuple:
+           n_modal: int, held_out=None) -> tuple:
     """Verdict of one round from its score table.
 
     Parameters
     ----------
-    none_fit : (chi2, n_params) of the model without a further effect.
-    fits : sequence of (kind, location, chi2, n_params)
-        Refitted candidates.
+    none_fit : (chi2_modal, chi2_stated, n_params) of the model without a further effect.
+    fits : sequence of (kind, location, chi2_modal, chi2_stated, n_params)
+        Refitted candidates (:func:`round_scores`).
     margin : float
     near : callable(location_a, location_b) -> bool
         True when b is a's neighbour (one element layer).
-    n_data : int, training residuals.
+    n_data : int, training residuals (all rows).
     n_candidates : int, candidates screened (the prior odds of "none" against each one).
+    n_modal : int, modal rows among the training residuals.
     held_out : ((n_ho_modes,) chi^2 of "none", per fit a (n_ho_modes,) chi^2, (n_ho_modes,)
         entries) of the held-out modes, optional
         (:func:`pipeline.diagnose.predictive.held_out_modes`); without it the predictive check
@@ -140,14 +150,31 @@ def decide(none_fit, fits, margin: float, near, n_data: int, n_candidates: int =
     reason : str, why: ``"gain"`` (the best beats "none" and the runner-up, no veto: effect),
         ``"no_gain"`` (nothing beats "none" by the margin: none or unexplained by the goodness
         of fit), ``"runner_up"`` (ambiguous), ``"held_out"`` (the held-out veto: unexplained).
+    c : float, the round's modal dispersion (:func:`round_scores`; 1 without fits).
 
     Notes
     -----
-    The scores are BIC = chi^2 / c + p ln n (Schwarz 1978) with the dispersion
-    c = max(1, chi^2_best / (n - p_best)) of the best fit (quasi-likelihood, Burnham & Anderson
-    2002 sec. 6.2): a residual the best candidate leaves far above its scales (a second effect,
-    or one outside the library) makes every chi^2 difference count for less, so that fitting
-    that remainder with a wrong candidate does not look decisive.
+    The scores are BIC = chi2_modal / c + chi2_stated + p ln n (Schwarz 1978) with the
+    dispersion c = max(1, chi2_modal_best / (n_modal - p_best)) of the best fit's modal rows
+    (quasi-likelihood, Burnham & Anderson 2002 sec. 6.2): a modal residual the best candidate
+    leaves far above its scales (a second effect, one outside the library, or model-form scatter
+    the nominal-scatter scales do not cover) makes every modal chi^2 difference count for less,
+    so that fitting that remainder with a wrong candidate does not look decisive.
+
+    The dispersion belongs to the rows whose variance it estimates. The modal rows (training
+    frequencies and shapes) have scales built from an assumed model scatter and noise level, known
+    only up to a factor; the weighing rows (weight, CG, inertia at the stated accuracies of
+    :mod:`pipeline.diagnose.weighing`) and the nominal parameters' prior rows
+    (:meth:`pipeline.diagnose.calibrate.Problem.prior_residual`) have scales stated by
+    construction, independent of how well the modes are modelled. The log-likelihood of the
+    independent groups is the sum -chi2_modal / (2 c) - chi2_stated / 2: a dispersion parameter
+    for the group with a scale known up to a factor, unit dispersion for the one whose scale is
+    known (quasi-likelihood with a dispersion per variance group, McCullagh & Nelder 1989 sec.
+    9.2 and 10.5). Dividing the weighing by c would discount the evidence that tells a missing
+    mass from a stiffness error (issue 14 step 2: a mass shows in weight, CG and inertia, a
+    stiffness error does not) by the modes' model-form scatter, which says nothing about the
+    scales. The p fitted parameters are charged to the modal rows in c's degrees of freedom (they
+    are nearly all the data).
 
     "none" and "some effect" are given equal prior probability, shared equally by the
     ``n_candidates`` candidates, so the prior odds of "none" against one candidate are
@@ -156,18 +183,18 @@ def decide(none_fit, fits, margin: float, near, n_data: int, n_candidates: int =
     many candidates fitted to noise does not look like evidence.
 
     Predictive check (:func:`pipeline.diagnose.predictive.held_out_evidence`, divided by the
-    same dispersion c): a best fit that the held-out modes contradict by more than ``margin``
-    gives ``unexplained`` instead of ``effect``: it fits the training modes by distorting the
+    same modal dispersion c: the held-out rows are modal): a best fit that the held-out modes
+    contradict by more than ``margin`` gives ``unexplained`` instead of ``effect``: it fits the training modes by distorting the
     model elsewhere (an effect outside the library, or the right kind at the wrong place,
     absorbed by a candidate), so it does not explain the data. The held-out modes then take part
     in the verdict as a veto only (they never choose the candidate); the gap on them is still the
     prediction of a model whose parameters they never set.
     """
-    none_chi2, none_p = none_fit
-    fitting = gof_limit(n_data - none_p) >= none_chi2
+    none_modal, none_stated, none_p = none_fit
+    fitting = gof_limit(n_data - none_p) >= none_modal + none_stated
     if not fits:
-        return ("none" if fitting else "unexplained"), None, None, float("nan"), "no_gain"
-    scores, none_score, c = round_scores(none_fit, fits, n_data, n_candidates)
+        return ("none" if fitting else "unexplained"), None, None, float("nan"), "no_gain", 1.0
+    scores, none_score, c = round_scores(none_fit, fits, n_data, n_candidates, n_modal=n_modal)
     best = int(np.argmin(scores))
     kind, loc = fits[best][0], fits[best][1]
     rivals = [i for i, f in enumerate(fits)
@@ -175,10 +202,10 @@ def decide(none_fit, fits, margin: float, near, n_data: int, n_candidates: int =
     runner = min(rivals, key=lambda i: scores[i]) if rivals else None
     lead = float(min(none_score, scores[runner] if runner is not None else np.inf) - scores[best])
     if not scores[best] + margin < none_score:
-        return ("none" if fitting else "unexplained"), best, runner, lead, "no_gain"
+        return ("none" if fitting else "unexplained"), best, runner, lead, "no_gain", c
     if runner is not None and not scores[best] + margin < scores[runner]:
-        return "ambiguous", best, runner, lead, "runner_up"
+        return "ambiguous", best, runner, lead, "runner_up", c
     if held_out is not None and \
             held_out_evidence(held_out[0], held_out[1][best], held_out[2], c) < -margin:
-        return "unexplained", best, runner, lead, "held_out"
-    return "effect", best, runner, lead, "gain"
+        return "unexplained", best, runner, lead, "held_out", c
+    return "effect", best, runner, lead, "gain", c

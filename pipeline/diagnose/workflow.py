@@ -31,7 +31,8 @@ from threadpoolctl import threadpool_limits
 
 from pipeline.diagnose.calibrate import Problem, calibrate
 from pipeline.diagnose.effects import KINDS, candidates, neighbours
-from pipeline.diagnose.evidence import SELF_ORTHOGONALITY_LIMIT, build_reference, elastic_index
+from pipeline.diagnose.evidence import (SELF_ORTHOGONALITY_LIMIT, build_reference, chi_square,
+                                         elastic_index)
 from pipeline.diagnose.gap import gap_metrics, separating_measurement
 from pipeline.diagnose.predictive import held_out_evidence, held_out_modes, kept_modes
 from pipeline.diagnose.result import CandidateScore, DiagnoseResult, EffectRecord
@@ -141,10 +142,18 @@ def _overlaps(a, b) -> bool:
                 or set(a.properties) & set(b.properties))
 
 
-def _score_rows(refits) -> list:
-    """The (kind, location, chi2, n_params) rows of refitted candidates that
+def _chi2_split(problem: Problem, fit) -> tuple:
+    """(chi2_modal, chi2_stated) of a refit: its training residual's modal rows and the rest
+    (:meth:`pipeline.diagnose.calibrate.Problem.modal_rows`); they sum to ``fit.chi2``."""
+    r, modal = problem.residual(fit.theta, fit.evaluations), problem.modal_rows()
+    return chi_square(r[modal]), chi_square(r[~modal])
+
+
+def _score_rows(problem: Problem, refits) -> list:
+    """The (kind, location, chi2_modal, chi2_stated, n_params) rows of refitted candidates that
     :func:`pipeline.diagnose.verdict.decide` and :func:`round_scores` take."""
-    return [(f.candidate.kind, f.candidate.location, f.chi2, f.n_params) for f in refits]
+    return [(f.candidate.kind, f.candidate.location, *_chi2_split(problem, f), f.n_params)
+            for f in refits]
 
 
 def _say(progress, text: str) -> None:
@@ -229,18 +238,23 @@ def _preflight(configurations, settings: DiagnoseSettings, notes: list):
     return refs
 
 
-def _table(rows, refits, none, n_data: int, n_theta: int, n_candidates: int) -> tuple:
+def _table(problem: Problem, r0, rows, refits, none, n_data: int, n_candidates: int) -> tuple:
     """The first round's ranked candidates by the scores :func:`decide` compared
-    (:func:`round_scores`: refitted ones from their refit, the rest from their linearised chi^2
-    with the same dispersion c, "none" with its prior odds), minus the best."""
-    scores, none_score, c = round_scores((none.chi2, none.n_params), _score_rows(refits), n_data,
-                                         n_candidates)
+    (:func:`round_scores`: refitted ones from their refit, the rest from their linearised
+    residual r0 + S x with the same modal dispersion c, "none" with its prior odds), minus the
+    best."""
+    modal = problem.modal_rows()
+    scores, none_score, c = round_scores((*_chi2_split(problem, none), none.n_params),
+                                         _score_rows(problem, refits), n_data, n_candidates,
+                                         n_modal=int(modal.sum()))
     scored = [(b, fit.candidate, True) for b, fit in zip(scores, refits)]
     done = {id(fit.candidate) for fit in refits}
     for row in rows:
         if id(row.candidate) not in done:
-            p = len(row.candidate.parameters) + n_theta
-            scored.append((row.chi2 / c + p * np.log(n_data), row.candidate, False))
+            p = len(row.candidate.parameters) + problem.n_theta
+            r = r0 + row.signature @ row.values                              # linearised residual
+            scored.append((chi_square(r[modal]) / c + chi_square(r[~modal]) + p * np.log(n_data),
+                           row.candidate, False))
     scored.append((none_score, None, True))
     scored.sort(key=lambda s: s[0])
     best = scored[0][0]
@@ -313,11 +327,13 @@ def diagnose(configurations, settings: DiagnoseSettings = DiagnoseSettings(), *,
 
             modes_none, entries = held_out_modes(problem, none.evaluations)
             modes = [held_out_modes(problem, f.evaluations)[0] for f in fits]
-            verdict, best, runner, lead, reason = decide(
-                (none.chi2, none.n_params), _score_rows(fits), settings.margin, near, n_data,
-                len(cands), held_out=(modes_none, modes, entries))
+            scored = ((*_chi2_split(problem, none), none.n_params), _score_rows(problem, fits),
+                      int(problem.modal_rows().sum()))
+            verdict, best, runner, lead, reason, c = decide(
+                scored[0], scored[1], settings.margin, near, n_data, len(cands),
+                n_modal=scored[2], held_out=(modes_none, modes, entries))
             rounds.append(_round_record(k, verdict, fits, best, runner, none,
-                                        (modes_none, modes, entries), n_data))
+                                        (modes_none, modes, entries), n_data, scored + (c,)))
             if reason == "held_out":
                 cand, vetoed = fits[best].candidate, rounds[-1]["best"]
                 kept = np.asarray(vetoed["held_out_modes_kept"])
@@ -329,7 +345,7 @@ def diagnose(configurations, settings: DiagnoseSettings = DiagnoseSettings(), *,
                              "record): it compensates for something else; not named.")
             if k == 0:
                 first = verdict
-                table = _table(rows, fits, none, n_data, len(theta), len(cands))
+                table = _table(problem, r0, rows, fits, none, n_data, len(cands))
             if verdict == "ambiguous" and not effects:
                 separating = separating_measurement(problem, fits[best], fits[runner])
             if verdict != "effect":
@@ -365,24 +381,35 @@ def _none_fit(problem: Problem, cal, n_data: int):
                     len(cal.theta), cal.evaluations)
 
 
-def _round_record(k: int, verdict: str, fits, best, runner, none, held_out, n_data: int) -> dict:
+def _round_record(k: int, verdict: str, fits, best, runner, none, held_out, n_data: int,
+                  scored) -> dict:
+    """The JSON record of round k (:class:`pipeline.diagnose.result.DiagnoseResult` ``rounds``).
+
+    ``held_out`` is (modes_none, per fit modes, entries) of
+    :func:`pipeline.diagnose.predictive.held_out_modes`; ``scored`` is (the "none" row, the fits'
+    rows, n_modal, c) that :func:`pipeline.diagnose.verdict.decide` took and returned (rows
+    (..., chi2_modal, chi2_stated, n_params), c the modal dispersion).
+    """
     modes_none, modes, entries = held_out
-    c = round_scores((none.chi2, none.n_params), _score_rows(fits), n_data)[2]
+    none_row, rows, n_modal, c = scored
 
     def entry(i):
         if i is None:
             return None
         f = fits[i]
         return {"kind": f.candidate.kind, "label": f.candidate.label, "bic": f.bic,
-                "chi2": f.chi2, "n_params": f.n_params, "held_out_chi2": float(modes[i].sum()),
+                "chi2": f.chi2, "chi2_modal": rows[i][2], "n_params": f.n_params,
+                "held_out_chi2": float(modes[i].sum()),
                 "held_out_modes_chi2": modes[i].tolist(),
                 "held_out_modes_kept": kept_modes(modes_none, modes[i], entries).tolist(),
                 "held_out_evidence": held_out_evidence(modes_none, modes[i], entries, c),
                 "parameters": dict(zip(f.candidate.parameters, map(float, f.values)))}
-    return {"round": k + 1, "verdict": verdict, "n_data": n_data, "dispersion": c,
+    return {"round": k + 1, "verdict": verdict, "n_data": n_data, "n_modal": n_modal,
+            "dispersion": c,
             "n_held_out": int(np.sum(entries)), "held_out_modes_entries": entries.tolist(),
             "none_bic": none.bic,
-            "none_chi2": none.chi2, "none_n_params": none.n_params,
+            "none_chi2": none.chi2, "none_chi2_modal": none_row[0],
+            "none_n_params": none.n_params,
             "none_held_out_chi2": float(modes_none.sum()),
             "none_held_out_modes_chi2": modes_none.tolist(),
             "best": entry(best), "runner_up": entry(runner),

@@ -12,6 +12,8 @@ from pipeline.diagnose.verdict import decide, on_bound, round_scores, within_sca
 
 N = 400                      # training residuals of the tables
 LN = log(N)
+# Rows are (kind, location, chi2_modal, chi2_stated, n_params); the tables with chi2_stated 0 and
+# n_modal = N have every row modal (the rules the modal / stated split does not concern).
 
 
 def _never_near(a, b):
@@ -24,57 +26,62 @@ def _same_grid(a, b):
 
 def test_none_when_nothing_beats_none_and_it_fits():
     # chi^2 400 on 398 dof passes (99.9 % limit ~ 494); the best candidate gains 5 < 10 + ln n
-    verdict, best, runner, _, reason = decide((400.0, 2), [("lumped_mass", 1, 395.0, 3),
-                                                   ("member_taper", 2, 398.0, 4)],
-                                      10.0, _never_near, N)
+    verdict, best, runner, _, reason, _ = decide((400.0, 0.0, 2),
+                                                 [("lumped_mass", 1, 395.0, 0.0, 3),
+                                                  ("member_taper", 2, 398.0, 0.0, 4)],
+                                                 10.0, _never_near, N, n_modal=N)
     assert (verdict, best, runner, reason) == ("none", 0, 1, "no_gain")
 
 
 def test_unexplained_when_nothing_beats_a_failing_none():
-    verdict, *_ = decide((900.0, 2), [("lumped_mass", 1, 895.0, 3)], 10.0, _never_near, N)
+    verdict, *_ = decide((900.0, 0.0, 2), [("lumped_mass", 1, 895.0, 0.0, 3)], 10.0,
+                         _never_near, N, n_modal=N)
     assert verdict == "unexplained"
-    assert decide((900.0, 2), [], 10.0, _never_near, N)[0] == "unexplained"
-    assert decide((300.0, 2), [], 10.0, _never_near, N)[0] == "none"
+    assert decide((900.0, 0.0, 2), [], 10.0, _never_near, N, n_modal=N)[0] == "unexplained"
+    assert decide((300.0, 0.0, 2), [], 10.0, _never_near, N, n_modal=N)[0] == "none"
 
 
 def test_effect_when_the_best_beats_none_and_the_runner_up():
     # best chi^2 390 (c = 1): BIC 390 + 3 ln n; none 600 + 2 ln n; runner 420 + 3 ln n (30 > 10)
-    verdict, best, runner, lead, reason = decide((600.0, 2), [("member_taper", 7, 420.0, 3),
-                                                      ("lumped_mass", 1, 390.0, 3)],
-                                         10.0, _never_near, N)
+    verdict, best, runner, lead, reason, _ = decide((600.0, 0.0, 2),
+                                                    [("member_taper", 7, 420.0, 0.0, 3),
+                                                     ("lumped_mass", 1, 390.0, 0.0, 3)],
+                                                    10.0, _never_near, N, n_modal=N)
     assert (verdict, best, runner, reason) == ("effect", 1, 0, "gain")
     assert lead == pytest.approx(30.0, rel=1e-12)
 
 
 def test_ambiguous_when_the_runner_up_is_close_and_not_a_neighbour():
-    fits = [("lumped_mass", 1, 390.0, 3), ("lumped_mass", 2, 395.0, 3)]
-    assert decide((600.0, 2), fits, 10.0, _never_near, N)[::4] == ("ambiguous", "runner_up")
+    fits = [("lumped_mass", 1, 390.0, 0.0, 3), ("lumped_mass", 2, 395.0, 0.0, 3)]
+    assert decide((600.0, 0.0, 2), fits, 10.0, _never_near, N, n_modal=N)[::4] == \
+        ("ambiguous", "runner_up")
     # the same rival at a neighbouring location does not compete with the best
     near_all = lambda a, b: True  # noqa: E731
-    verdict, best, runner, lead, reason = decide((600.0, 2), fits, 10.0, near_all, N)
+    verdict, best, runner, lead, reason, _ = decide((600.0, 0.0, 2), fits, 10.0, near_all, N,
+                                                    n_modal=N)
     assert (verdict, best, runner, reason) == ("effect", 0, None, "gain")
     assert lead == pytest.approx(600.0 + 2 * LN - 390.0 - 3 * LN, rel=1e-12)
     # another kind at the same spot always competes
-    fits = [("lumped_mass", 1, 390.0, 3), ("boundary_stiffness", 1, 392.0, 3)]
-    assert decide((600.0, 2), fits, 10.0, near_all, N)[0] == "ambiguous"
+    fits = [("lumped_mass", 1, 390.0, 0.0, 3), ("boundary_stiffness", 1, 392.0, 0.0, 3)]
+    assert decide((600.0, 0.0, 2), fits, 10.0, near_all, N, n_modal=N)[0] == "ambiguous"
 
 
 def test_many_candidates_raise_the_bar_over_none():
     # a gain of 25 over none (+1 parameter): 25 - ln n = 19 > 10 names it among 1 candidate,
     # but not among 100 (prior odds 100 : 1 cost 2 ln 100 = 9.2; 19 - 9.2 < 10)
-    fits = [("lumped_mass", 1, 375.0, 3)]
-    assert decide((400.0, 2), fits, 10.0, _never_near, N, 1)[0] == "effect"
-    assert decide((400.0, 2), fits, 10.0, _never_near, N, 100)[0] == "none"
+    fits = [("lumped_mass", 1, 375.0, 0.0, 3)]
+    assert decide((400.0, 0.0, 2), fits, 10.0, _never_near, N, 1, n_modal=N)[0] == "effect"
+    assert decide((400.0, 0.0, 2), fits, 10.0, _never_near, N, 100, n_modal=N)[0] == "none"
 
 
 def test_dispersion_shrinks_the_lead_of_a_poor_best_fit():
     # the best leaves chi^2 4000 on 397 dof: c = 4000/397 ~ 10.08, a raw gain of 60 over the
     # runner-up is ~6 after scaling, below the margin: ambiguous, not a name
-    fits = [("lumped_mass", 1, 4000.0, 3), ("member_taper", 2, 4060.0, 3)]
-    assert decide((8000.0, 2), fits, 10.0, _never_near, N)[0] == "ambiguous"
+    fits = [("lumped_mass", 1, 4000.0, 0.0, 3), ("member_taper", 2, 4060.0, 0.0, 3)]
+    assert decide((8000.0, 0.0, 2), fits, 10.0, _never_near, N, n_modal=N)[0] == "ambiguous"
     # the same raw gain on a good fit (c = 1) names it
-    fits = [("lumped_mass", 1, 390.0, 3), ("member_taper", 2, 450.0, 3)]
-    assert decide((8000.0, 2), fits, 10.0, _never_near, N)[0] == "effect"
+    fits = [("lumped_mass", 1, 390.0, 0.0, 3), ("member_taper", 2, 450.0, 0.0, 3)]
+    assert decide((8000.0, 0.0, 2), fits, 10.0, _never_near, N, n_modal=N)[0] == "effect"
 
 
 def test_held_out_modes_veto_a_compensating_fit():
@@ -83,12 +90,12 @@ def test_held_out_modes_veto_a_compensating_fit():
     8, 10, 12. The fit giving 8, 60, 12 worsens a mode "none" reproduces: all kept; the
     training dispersion c = max(1, 390 / 397) = 1, evidence (30 - 80) / 1 = -50 < -10:
     unexplained, by the held-out veto."""
-    fits = [("member_taper", 7, 420.0, 3), ("lumped_mass", 1, 390.0, 3)]
+    fits = [("member_taper", 7, 420.0, 0.0, 3), ("lumped_mass", 1, 390.0, 0.0, 3)]
     entries = np.array([10, 10, 10])
     held = (np.array([8.0, 10.0, 12.0]), [np.array([9.0, 9.0, 9.0]), np.array([8.0, 60.0, 12.0])],
             entries)
-    verdict, best, runner, lead, reason = decide((600.0, 2), fits, 10.0, _never_near, N,
-                                                 held_out=held)
+    verdict, best, runner, lead, reason, _ = decide((600.0, 0.0, 2), fits, 10.0, _never_near, N,
+                                                    n_modal=N, held_out=held)
     assert (verdict, best, runner, reason) == ("unexplained", 1, 0, "held_out")
     assert lead == pytest.approx(30.0, rel=1e-12)
 
@@ -99,17 +106,18 @@ def test_a_held_out_mode_neither_model_reproduces_does_not_veto():
     over modes 1 and 3 it is +2: named. When "none" reproduces mode 2 (chi^2 25) and the fit
     does not (3000), the mode is kept: evidence -2975, unexplained. The veto never turns an
     ambiguous verdict into a name."""
-    fits = [("member_taper", 7, 420.0, 3), ("joint_flexibility", 1, 390.0, 3)]
+    fits = [("member_taper", 7, 420.0, 0.0, 3), ("joint_flexibility", 1, 390.0, 0.0, 3)]
     entries = np.array([10, 10, 10])
     fit = np.array([8.0, 5000.0, 10.0])
-    assert decide((600.0, 2), fits, 10.0, _never_near, N,
+    assert decide((600.0, 0.0, 2), fits, 10.0, _never_near, N, n_modal=N,
                   held_out=(np.array([8.0, 3000.0, 12.0]), [fit, fit], entries))[0] == "effect"
     none_fits, fit_not = np.array([8.0, 25.0, 12.0]), np.array([8.0, 3000.0, 12.0])
-    assert decide((600.0, 2), fits, 10.0, _never_near, N,
+    assert decide((600.0, 0.0, 2), fits, 10.0, _never_near, N, n_modal=N,
                   held_out=(none_fits, [fit_not, fit_not], entries))[0] == "unexplained"
-    assert decide((600.0, 2), [("lumped_mass", 1, 390.0, 3), ("lumped_mass", 2, 395.0, 3)],
-                  10.0, _never_near, N, held_out=(none_fits, [fit_not, fit_not], entries))[0] \
-        == "ambiguous"
+    assert decide((600.0, 0.0, 2), [("lumped_mass", 1, 390.0, 0.0, 3),
+                                    ("lumped_mass", 2, 395.0, 0.0, 3)],
+                  10.0, _never_near, N, n_modal=N,
+                  held_out=(none_fits, [fit_not, fit_not], entries))[0] == "ambiguous"
 
 
 def test_an_effect_within_the_nominal_scatter_is_not_named():
@@ -137,28 +145,59 @@ def test_held_out_evidence_is_on_the_training_dispersion():
     far. Held-out "none" 8, 10, 12 (10 entries each, all reproduced): a fit 8, 28, 12 is -18
     raw, -18 / 2 = -9 > -10: named; 8, 35, 12 is -25 / 2 = -12.5: vetoed. With a good best fit
     (chi^2 390, c = 1) the same -18 vetoes."""
-    fits = [("member_taper", 7, 1000.0, 3), ("lumped_mass", 1, 794.0, 3)]
-    assert round_scores((2000.0, 2), fits, N)[2] == pytest.approx(2.0, rel=1e-12)
+    fits = [("member_taper", 7, 1000.0, 0.0, 3), ("lumped_mass", 1, 794.0, 0.0, 3)]
+    assert round_scores((2000.0, 0.0, 2), fits, N, n_modal=N)[2] == pytest.approx(2.0, rel=1e-12)
     entries, none_modes = np.array([10, 10, 10]), np.array([8.0, 10.0, 12.0])
 
     def held(fit):
         return none_modes, [none_modes, np.array(fit)], entries
 
-    assert decide((2000.0, 2), fits, 10.0, _never_near, N, held_out=held([8.0, 28.0, 12.0]))[::4] \
-        == ("effect", "gain")
-    assert decide((2000.0, 2), fits, 10.0, _never_near, N, held_out=held([8.0, 35.0, 12.0]))[::4] \
-        == ("unexplained", "held_out")
-    good = [("member_taper", 7, 1000.0, 3), ("lumped_mass", 1, 390.0, 3)]
-    assert decide((2000.0, 2), good, 10.0, _never_near, N, held_out=held([8.0, 28.0, 12.0]))[::4] \
-        == ("unexplained", "held_out")
+    assert decide((2000.0, 0.0, 2), fits, 10.0, _never_near, N, n_modal=N,
+                  held_out=held([8.0, 28.0, 12.0]))[::4] == ("effect", "gain")
+    assert decide((2000.0, 0.0, 2), fits, 10.0, _never_near, N, n_modal=N,
+                  held_out=held([8.0, 35.0, 12.0]))[::4] == ("unexplained", "held_out")
+    good = [("member_taper", 7, 1000.0, 0.0, 3), ("lumped_mass", 1, 390.0, 0.0, 3)]
+    assert decide((2000.0, 0.0, 2), good, 10.0, _never_near, N, n_modal=N,
+                  held_out=held([8.0, 28.0, 12.0]))[::4] == ("unexplained", "held_out")
+
+
+def test_the_weighing_is_not_divided_by_the_modal_dispersion():
+    """n = 400 rows: 390 modal, 10 stated (weighing and prior). A mass at grid 1 leaves modal
+    chi^2 3870 and explains the weighing (stated 10); a joint at grid 2 fits the modes a little
+    better (3800) but leaves the weighing (100); "none" 5000 + 100; p = 3, 3, 2.
+
+    Split (by hand): the best by chi^2 + p ln n is the mass (3880 + 3 ln n < 3900 + 3 ln n),
+    c = 3870 / (390 - 3) = 10. Scores: mass 387 + 10 + 3 ln n, joint 380 + 100 + 3 ln n,
+    "none" 500 + 100 + 2 ln n: the mass leads the joint by 83 and "none" by 203 - ln n: named.
+    One dispersion over all rows (the same totals, all modal): c = 3880 / 397, mass
+    397 + 3 ln n, joint 3900 / c + 3 ln n = 397 + 20 / c + 3 ln n: a lead of 2.05 < 10,
+    ambiguous. A held-out difference of -95 is -9.5 on the modal c = 10: no veto."""
+    split = [("lumped_mass", 1, 3870.0, 10.0, 3), ("joint_flexibility", 2, 3800.0, 100.0, 3)]
+    scores, none_score, c = round_scores((5000.0, 100.0, 2), split, N, n_modal=390)
+    assert c == pytest.approx(10.0, rel=1e-12)
+    assert scores == pytest.approx([397.0 + 3 * LN, 480.0 + 3 * LN], rel=1e-12)
+    assert none_score == pytest.approx(600.0 + 2 * LN, rel=1e-12)
+    held = (np.array([8.0, 10.0, 12.0]), [np.array([8.0, 105.0, 12.0])] * 2,
+            np.array([10, 400, 10]))
+    verdict, best, runner, lead, reason, c = decide((5000.0, 100.0, 2), split, 10.0, _never_near,
+                                                    N, n_modal=390, held_out=held)
+    assert (verdict, best, runner, reason) == ("effect", 0, 1, "gain")
+    assert lead == pytest.approx(83.0, rel=1e-12) and c == pytest.approx(10.0, rel=1e-12)
+    pooled = [("lumped_mass", 1, 3880.0, 0.0, 3), ("joint_flexibility", 2, 3900.0, 0.0, 3)]
+    verdict, best, runner, lead, reason, c = decide((5100.0, 0.0, 2), pooled, 10.0, _never_near,
+                                                    N, n_modal=N)
+    assert (verdict, best, runner, reason) == ("ambiguous", 0, 1, "runner_up")
+    assert c == pytest.approx(3880.0 / 397.0, rel=1e-12)
+    assert lead == pytest.approx(20.0 * 397.0 / 3880.0, rel=1e-12)
 
 
 def test_reason_without_a_gain():
     """No fits: the goodness of fit alone (chi^2_0.999(398) ~ 494); a failing "none" that no
     candidate beats is unexplained for want of a gain, not by the veto."""
-    assert decide((300.0, 2), [], 10.0, _never_near, N)[::4] == ("none", "no_gain")
+    assert decide((300.0, 0.0, 2), [], 10.0, _never_near, N, n_modal=N)[::4] == ("none", "no_gain")
     held = (np.array([8.0]), [np.array([1e6])], np.array([10]))
-    assert decide((900.0, 2), [("lumped_mass", 1, 895.0, 3)], 10.0, _never_near, N,
+    assert decide((900.0, 0.0, 2), [("lumped_mass", 1, 895.0, 0.0, 3)], 10.0, _never_near, N,
+                  n_modal=N,
                   held_out=held)[::4] == ("unexplained", "no_gain")
 
 

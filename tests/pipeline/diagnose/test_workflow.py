@@ -16,7 +16,7 @@ from pipeline.diagnose.effects import Candidate, Location
 from pipeline.diagnose import DiagnoseSettings, diagnose, preflight
 from pipeline.diagnose.inputs import configurations_from_case, settings_from_case
 from pipeline.diagnose.verdict import decide
-from pipeline.diagnose.workflow import _round_record, _table
+from pipeline.diagnose.workflow import _chi2_split, _round_record, _table
 from structures.common.errors import InputError
 from structures.common.files import read_dataset, write_dataset
 from tests.pipeline.diagnose.truth import make_case
@@ -133,38 +133,90 @@ def test_preflight_checks_the_data_without_screening(tmp_path):
         preflight(confs * 2, DiagnoseSettings())
 
 
+def _rows(modal: float, stated: float, n: int = 100, n_modal: int = 90) -> np.ndarray:
+    """(n,) residual with chi^2 ``modal`` in its first entry (modal rows: the first n_modal)
+    and ``stated`` in entry n_modal (a weighing row)."""
+    r = np.zeros(n)
+    r[0], r[n_modal] = np.sqrt(modal), np.sqrt(stated)
+    return r
+
+
+def _split_problem(n_modal: int = 90, n: int = 100):
+    """A Problem stand-in whose fits' ``evaluations`` are their residual vectors."""
+    modal = np.arange(n) < n_modal
+    return SimpleNamespace(n_theta=2, modal_rows=lambda: modal, residual=lambda theta, r: r)
+
+
 def test_published_ranking_is_the_one_that_decided():
-    """n = 100, 10 candidates screened, 2 nominal parameters. Refits A chi^2 300 and B 350
-    (p 3), linearised C 400 (1 + 2 parameters), none 500 (p 2). Dispersion c = 300 / 97; scores
-    A 97 + 3 ln 100 = 110.816, B 350 / c + 3 ln 100 = 126.982, C 400 / c + 3 ln 100 = 143.149,
-    none 500 / c + 2 ln 100 - 2 ln 10 = 166.272: by hand."""
+    """n = 100 rows, 90 modal, 10 candidates screened, 2 nominal parameters. Refits A (modal
+    chi^2 261, weighing 9) and B (240, 90) (p 3), linearised C r0 + S x (330, 9; 1 + 2
+    parameters), "none" (450, 90; p 2). Modal dispersion of A: c = 261 / 87 = 3; scores
+    A 87 + 9 + 3 ln 100, B 80 + 90 + 3 ln 100, C 110 + 9 + 3 ln 100, none 150 + 90 + 2 ln 100
+    - 2 ln 10: relative to A 0, 23, 74, 144 - ln 100 - 2 ln 10, by hand; decide's lead (over
+    the runner-up B) is B's published score and its c is 3."""
     def cand(kind, grid):
         return Candidate(kind, Location(grids=(grid,)), f"{kind} {grid}", ("x",), (0.0,), (1.0,),
                          (0.1,))
 
     a, b, c = cand("lumped_mass", 1), cand("member_taper", 9), cand("boundary_stiffness", 5)
-    refits = [SimpleNamespace(candidate=a, chi2=300.0, n_params=3),
-              SimpleNamespace(candidate=b, chi2=350.0, n_params=3)]
-    rows = [SimpleNamespace(candidate=x, chi2=chi2) for x, chi2 in ((a, 280.0), (b, 340.0),
-                                                                     (c, 400.0))]
-    none = SimpleNamespace(chi2=500.0, n_params=2)
-    table = _table(rows, refits, none, 100, 2, 10)
-    disp = 300.0 / 97.0
-    hand = {"lumped_mass": 0.0, "member_taper": 350.0 / disp - 97.0,
-            "boundary_stiffness": 400.0 / disp - 97.0,
-            "none": 500.0 / disp - 97.0 - log(100.0) - 2.0 * log(10.0)}
-    assert [t.kind for t in table] == list(hand)
+    problem = _split_problem()
+    refits = [SimpleNamespace(candidate=a, theta=None, evaluations=_rows(261.0, 9.0), chi2=270.0,
+                              n_params=3),
+              SimpleNamespace(candidate=b, theta=None, evaluations=_rows(240.0, 90.0),
+                              chi2=330.0, n_params=3)]
+    r0 = _rows(450.0, 90.0)
+    step = _rows(330.0, 9.0) - r0
+    rows = [SimpleNamespace(candidate=x, signature=step[:, None] * k, values=np.array([1.0]))
+            for x, k in ((a, 0.5), (b, 0.5), (c, 1.0))]
+    none = SimpleNamespace(theta=None, evaluations=r0, chi2=540.0, n_params=2)
+    table = _table(problem, r0, rows, refits, none, 100, 10)
+    hand = {"lumped_mass": 0.0, "member_taper": 74.0, "boundary_stiffness": 23.0,
+            "none": 144.0 - log(100.0) - 2.0 * log(10.0)}
+    assert [t.kind for t in table] == ["lumped_mass", "boundary_stiffness", "member_taper",
+                                       "none"]
     for t in table:
         assert t.score == pytest.approx(hand[t.kind], rel=1e-12, abs=1e-12)
-    assert [t.refitted for t in table] == [True, True, False, True]
-    _, best, runner, lead, _ = decide((500.0, 2), [(x.candidate.kind, x.candidate.location, x.chi2,
-                                                 x.n_params) for x in refits], 10.0, _never_near,
-                                   100, 10)
-    assert (best, runner) == (0, 1) and lead == pytest.approx(table[1].score, rel=1e-12)
+    assert [t.refitted for t in table] == [True, False, True, True]
+    _, best, runner, lead, _, disp = decide(
+        (450.0, 90.0, 2), [(x.candidate.kind, x.candidate.location, m, st, x.n_params)
+                           for x, (m, st) in zip(refits, ((261.0, 9.0), (240.0, 90.0)))],
+        10.0, _never_near, 100, 10, n_modal=90)
+    assert (best, runner) == (0, 1) and lead == pytest.approx(table[2].score, rel=1e-12)
+    assert disp == pytest.approx(3.0, rel=1e-12)
+
+
+def test_chi2_split_separates_the_modal_rows():
+    """Two configurations: one with shapes (3 modes, modes 1 and 3 training, 2 kept shape
+    coordinates each, 2 weighed quantities), one frequency-only (2 modes, mode 2 training, no
+    weighing); the mass scale's prior sigma 0.02 at theta 0.04 is 2. Rows in the residual's
+    order: the first configuration's 2 x (1 + 2) modal rows and 2 weighing rows, the second's 1
+    modal row, the prior: chi^2 modal 1 + 9 + 4 + 0 + 1 + 1 + 16 = 32, stated 9 + 16 + 4 = 29,
+    by hand."""
+    from pipeline.diagnose.calibrate import Problem
+    from pipeline.diagnose.evidence import Evaluation
+
+    keep = np.ones((3, 3), bool)
+    keep[np.arange(3), np.arange(3)] = False
+    refs = (SimpleNamespace(train=np.array([True, False, True]), has_shapes=True,
+                            shape_keep=keep, mass_scale={"weight": 1.0, "x_cg": 1.0}),
+            SimpleNamespace(train=np.array([False, True]), has_shapes=False, shape_keep=None,
+                            mass_scale={}))
+    evs = [Evaluation(None, np.arange(3), np.array([1.0, 50.0, -3.0]),
+                      np.array([[2.0, 0.0], [50.0, 50.0], [1.0, -1.0]]), np.array([3.0, -4.0]),
+                      None),
+           Evaluation(None, np.arange(2), np.array([70.0, 4.0]), np.zeros((2, 0)), np.zeros(0),
+                      None)]
+    problem = Problem(("E1", "mass"), refs, (), (), (), np.array([np.inf, 0.02]))
+    modal = problem.modal_rows()
+    assert modal.tolist() == [True] * 6 + [False] * 2 + [True, False]
+    fit = SimpleNamespace(theta=np.array([0.05, 0.04]), evaluations=evs)
+    assert _chi2_split(problem, fit) == (pytest.approx(32.0, rel=1e-12),
+                                         pytest.approx(29.0, rel=1e-12))
 
 
 def test_round_record_judges_held_out_modes_on_the_training_dispersion():
-    """n = 400: fits A chi^2 794 and B 1000 (p 3), "none" 2000 (p 2): c = 794 / 397 = 2.
+    """n = 400 rows, 390 modal: fits A (modal chi^2 774, weighing 20) and B (1000, 0) (p 3),
+    "none" (1980, 20; p 2): decide's modal dispersion c = 774 / 387 = 2, recorded as it is.
     Held-out modes (10 entries each) "none" 8, 3000, 12; A 8, 25, 12 reproduces mode 2: all
     kept, (3020 - 45) / 2 = 1487.5; B 8, 5000, 10: mode 2 left out, (20 - 18) / 2 = 1."""
     def fit(label, chi2):
@@ -176,9 +228,14 @@ def test_round_record_judges_held_out_modes_on_the_training_dispersion():
     none = SimpleNamespace(chi2=2000.0, n_params=2, bic=0.0)
     held = (np.array([8.0, 3000.0, 12.0]), [np.array([8.0, 25.0, 12.0]),
                                             np.array([8.0, 5000.0, 10.0])], np.array([10, 10, 10]))
+    none_row, rows = (1980.0, 20.0, 2), [("lumped_mass", 1, 774.0, 20.0, 3),
+                                        ("lumped_mass", 2, 1000.0, 0.0, 3)]
+    *_, c = decide(none_row, rows, 10.0, _never_near, 400, n_modal=390, held_out=held)
     record = _round_record(0, "effect", [fit("A", 794.0), fit("B", 1000.0)], 0, 1, none, held,
-                           400)
+                           400, (none_row, rows, 390, c))
     assert record["dispersion"] == pytest.approx(2.0, rel=1e-12)
+    assert (record["n_modal"], record["none_chi2_modal"]) == (390, 1980.0)
+    assert record["best"]["chi2_modal"] == 774.0 and record["best"]["chi2"] == 794.0
     assert record["best"]["held_out_modes_kept"] == [True, True, True]
     assert record["best"]["held_out_evidence"] == pytest.approx(1487.5, rel=1e-12)
     assert record["runner_up"]["held_out_modes_kept"] == [True, False, True]
