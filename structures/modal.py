@@ -296,9 +296,13 @@ def rigid_body_modes(model: FEModel, system: AssembledSystem) -> tuple[np.ndarra
     v = ra @ free
     if v.shape[1] == 0:
         return np.zeros((ra.shape[0], 0)), []
-    v = _m_orthonormal(system.M, v)
+    b = v
+    v = _m_orthonormal(system.M, b)
     _, z = np.linalg.eigh(v.T @ (system.K @ v))
-    q = free @ z[:, _backward_error(system.K, v @ z) <= RIGID_TOL]
+    # v = b G (Gram-Schmidt): the strain-free combinations v z go back to the motions through
+    # b^+, not as free @ z (which holds only when all of them are strain-free)
+    q = free @ np.linalg.lstsq(b, v @ z[:, _backward_error(system.K, v @ z) <= RIGID_TOL],
+                               rcond=None)[0]
     if model.suport:
         return _suport_modes(model, system, rb, q)
     q, motion = _echelon_names(q)

@@ -191,3 +191,37 @@ def test_rigid_count_check_refuses_to_replace_an_elastic_mode():
     _check_rigid_count(model, np.array([1e-12, -3e-13, 40.0, 90.0]), 2)        # both zero: fine
     with pytest.raises(SolverError, match="2 rigid-body motions, but only 1"):
         _check_rigid_count(model, np.array([1e-12, 38.0, 40.0, 90.0]), 2)
+
+
+def test_grounded_spring_leaves_five_strain_free_rigid_modes(tmp_path):
+    """The free-free CBEAM beam with a grounded CELAS2 in y at its end grid (stiffness 1e-3 of
+    the beam's 12 E I / L^3, so its backward error 1e-3-ish is far above RIGID_TOL): the spring
+    holds sway and every rotation that moves the end grid sideways, so 5 rigid motions remain
+    (the yaw about the end grid, not sway) and each carries no strain energy (backward error <=
+    RIGID_TOL). The elastic modes are those of a plain dense eigen-solution of the same (K, M)
+    (scipy.linalg.eigh, no rigid-mode replacement): frequencies to 1e-9, MAC 1 - 1e-8 (the
+    elastic modes are M-orthogonalised against the rigid ones, which must be exact for that;
+    I2 = 2 I1 keeps the two bending planes apart, so every mode is simple)."""
+    import scipy.linalg as sla
+    from structures.modal import _backward_error
+    from tests.structures.beam_decks import E, INERTIA
+
+    k = 1e-3 * 12 * E * INERTIA / LENGTH ** 3
+    model = read_model(beam_deck(tmp_path / "beam.bdf", support="free", element="CBEAM",
+                                 nel=10, i2=2.0 * INERTIA, extra=f"CELAS2,900,{k!r},11,2"))
+    system = assemble(model, warn=False)
+    phi_r, names = rigid_body_modes(model, system)
+    assert names == ["surge", "plunge", "roll", "pitch", "yaw"]
+    assert _backward_error(system.K, phi_r).max() <= RIGID_TOL
+    ds = compute_modes(model, 12, system=system)
+    shift = -1.0
+    mu, vec = sla.eigh(system.M.toarray(), (system.K - shift * system.M).toarray())
+    order = np.argsort(-mu)[:12]
+    lam, vec = shift + 1.0 / mu[order], vec[:, order]
+    shapes = (system.rotation @ (system.T @ vec)).T[5:]
+    freq = ds["frequency"].values
+    np.testing.assert_allclose(freq[5:], np.sqrt(lam[5:]) / (2 * np.pi), rtol=1e-9)
+    ours = ds["shape"].values[5:]
+    mac = np.einsum("ij,ij->i", ours, shapes) ** 2 / (np.einsum("ij,ij->i", ours, ours)
+                                                       * np.einsum("ij,ij->i", shapes, shapes))
+    assert mac.min() > 1.0 - 1e-8
