@@ -45,9 +45,9 @@ class CandidateScore(NamedTuple):
 
     ``score`` is its score minus the best's (0 for the best), the scores the verdict compared
     (:func:`pipeline.diagnose.verdict.round_scores`: chi2_modal / c + chi2_stated + p ln n with
-    the round's modal dispersion c, "none"'s less 2 ln of the candidates screened); ``refitted`` says whether the
-    chi^2 comes from the nonlinear refit (else from the linearised fit); ``kind`` "none" is the
-    model with its nominal parameters only.
+    the round's modal dispersion c, "none"'s less 2 ln of the candidates screened);
+    ``refitted`` says whether the chi^2 comes from the nonlinear refit (else from the linearised
+    fit); ``kind`` "none" is the model with its nominal parameters only.
     """
 
     kind: str
@@ -111,9 +111,10 @@ class DiagnoseResult:
         entries) and ``held_out_modes_entries`` (per held-out mode), "none"'s ``none_chi2``,
         ``none_chi2_modal``, ``none_bic``, ``none_n_params``, ``none_held_out_chi2`` and
         ``none_held_out_modes_chi2`` (per mode), and the refitted candidates (``fits``, the
-        ``best`` and the ``runner_up``: kind, label, chi2, chi2_modal, bic, n_params, held_out_chi2, held_out_modes_chi2, held_out_modes_kept (the modes either
-        model reproduces), held_out_evidence, parameters); the held-out chi^2 is over the
-        held-out modes' residual entries (:func:`pipeline.diagnose.predictive.held_out_modes`,
+        ``best`` and the ``runner_up``: kind, label, chi2, chi2_modal, bic, n_params,
+        held_out_chi2, held_out_modes_chi2, held_out_modes_kept (the modes either model
+        reproduces), held_out_evidence, parameters); the held-out chi^2 is over the held-out
+        modes' residual entries (:func:`pipeline.diagnose.predictive.held_out_modes`,
         :func:`pipeline.diagnose.predictive.held_out_evidence`).
     """
 

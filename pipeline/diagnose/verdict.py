@@ -170,11 +170,11 @@ def decide(none_fit, fits, margin: float, near, n_data: int, n_candidates: int =
     independent groups is the sum -chi2_modal / (2 c) - chi2_stated / 2: a dispersion parameter
     for the group with a scale known up to a factor, unit dispersion for the one whose scale is
     known (quasi-likelihood with a dispersion per variance group, McCullagh & Nelder 1989 sec.
-    9.2 and 10.5). Dividing the weighing by c would discount the evidence that tells a missing
+    9.2 and ch. 10). Dividing the weighing by c would discount the evidence that tells a missing
     mass from a stiffness error (issue 14 step 2: a mass shows in weight, CG and inertia, a
     stiffness error does not) by the modes' model-form scatter, which says nothing about the
-    scales. The p fitted parameters are charged to the modal rows in c's degrees of freedom (they
-    are nearly all the data).
+    weighing's scales. The p fitted parameters are charged to the modal rows in c's degrees of
+    freedom (they are nearly all the data).
 
     "none" and "some effect" are given equal prior probability, shared equally by the
     ``n_candidates`` candidates, so the prior odds of "none" against one candidate are
@@ -184,11 +184,12 @@ def decide(none_fit, fits, margin: float, near, n_data: int, n_candidates: int =
 
     Predictive check (:func:`pipeline.diagnose.predictive.held_out_evidence`, divided by the
     same modal dispersion c: the held-out rows are modal): a best fit that the held-out modes
-    contradict by more than ``margin`` gives ``unexplained`` instead of ``effect``: it fits the training modes by distorting the
-    model elsewhere (an effect outside the library, or the right kind at the wrong place,
-    absorbed by a candidate), so it does not explain the data. The held-out modes then take part
-    in the verdict as a veto only (they never choose the candidate); the gap on them is still the
-    prediction of a model whose parameters they never set.
+    contradict by more than ``margin`` gives ``unexplained`` instead of ``effect``: it fits the
+    training modes by distorting the model elsewhere (an effect outside the library, or the
+    right kind at the wrong place, absorbed by a candidate), so it does not explain the data.
+    The held-out modes then take part in the verdict as a veto only (they never choose the
+    candidate); the gap on them is still the prediction of a model whose parameters they never
+    set.
     """
     none_modal, none_stated, none_p = none_fit
     fitting = gof_limit(n_data - none_p) >= none_modal + none_stated
