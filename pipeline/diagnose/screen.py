@@ -29,8 +29,19 @@ h_k = the candidate's ``reference`` size, r the training residual of every confi
   attachment points on an RBE2) changes no mode at any size: it is not sampled (size the
   smallest rung, chi^2 the current one, signature zero).
 
-**Linear fit**: min |r0 + S x|^2 within the candidate's bounds (``scipy.optimize.lsq_linear``);
-the candidates are ranked by the drop of chi^2.
+- *quadratic* (:data:`QUADRATIC_KINDS`, a member's bow: its stiffness changes to second order,
+  its couplings to first, so no secant is right at more than one size): the second-order model
+  r(x) = r0 + S monomials(x) of :mod:`pipeline.diagnose.quadratic` from exact reanalyses at
+  h_k, 2 h_k and h_k + h_l (the first-order eigenvalue perturbation would miss the
+  (phi_k^T dK_1 phi_j)^2 / (lambda_j - lambda_k) term of the couplings, the same order in the
+  bow as the stiffness change; samples shared by a member's two quadrant candidates), fitted
+  within the sampled span; the :data:`LINE_SEARCH_TOP` best of them then get an exact line search
+  to their bounds (:func:`pipeline.diagnose.quadratic.line_search`), whose best size and exact
+  chi^2 are their screening result.
+
+**Linear fit**: min |r0 + S x|^2 within the candidate's bounds (``scipy.optimize.lsq_linear``;
+the quadratic model's fit for :data:`QUADRATIC_KINDS`); the candidates are ranked by the drop of
+chi^2.
 
 **Refit**: bounded nonlinear least squares with reanalysis (``scipy.optimize.least_squares``) of
 the effect's parameters together with the nominal parameters (:mod:`pipeline.diagnose.calibrate`),
@@ -48,6 +59,8 @@ from pipeline.diagnose.effect_deck import change_matrices
 from pipeline.diagnose.evidence import bic, chi_square, evaluate, evaluate_modes
 from pipeline.diagnose.joints import hangs_nothing
 from pipeline.diagnose.ladder import reduce_joint
+from pipeline.diagnose.quadratic import (coefficients, line_search, monomials, quadratic_fit,
+                                         sample_points)
 from structures.assembly import assemble_g
 from structures.common.errors import InputError, SolverError
 from structures.massprops import mass_properties
@@ -55,6 +68,12 @@ from structures.sensitivity import eigenvalue_derivatives
 
 #: Kinds screened on the ladder of sizes by reanalysis (they change the constraint equations).
 LADDER_KINDS = ("joint_flexibility",)
+#: Kinds screened with the quadratic model of :mod:`pipeline.diagnose.quadratic` (a member's
+#: bow: stiffness ~ bow^2, couplings ~ bow; the effects.py docstring).
+QUADRATIC_KINDS = ("member_curvature",)
+#: Quadratic-kind candidates (best model fits first) given the exact line search: a member's two
+#: quadrant candidates for the two best members.
+LINE_SEARCH_TOP = 4
 #: One-sided joint candidates (detail ``dependent``) are screened for the rigid elements of this
 #: many best whole-joint candidates only (a one-sided joint is a variant of its whole joint).
 ONE_SIDED_TOP = 5
@@ -90,7 +109,9 @@ class Screened:
     values : (npar,) best bounded size of the linearised fit.
     chi2 : float, linearised chi^2 at ``values``.
     drop : float, chi^2 of the current model minus ``chi2``.
-    signature : (n_data, npar) linear signature S (the secant to ``values`` for a ladder).
+    signature : (n_data, npar) linear signature S; the secant to ``values`` (S values = the
+        residual's change there) for a ladder and for :data:`QUADRATIC_KINDS` (of the quadratic
+        model, or exact after a line search).
     """
 
     candidate: object
@@ -163,9 +184,9 @@ def signatures(problem: Problem, theta, effects, evaluations, candidates, *, pro
     Returns
     -------
     r0 : (n_data,) current training residual.
-    list of (Candidate, S (n_data, npar), exact); ``exact`` is (values (npar,), chi2) of a
-    ladder-screened candidate's best size, else None. Candidates that cannot be applied to every
-    configuration are left out (named in ``skipped``).
+    list of (Candidate, S (n_data, npar or n_columns), exact); ``exact`` is (values (npar,),
+    chi2) of a ladder-screened or line-searched candidate's best size, else None. Candidates
+    that cannot be applied to every configuration are left out (named in ``skipped``).
     skipped : list of str
     """
     from pipeline.diagnose.effects import apply_effect
@@ -209,6 +230,14 @@ def signatures(problem: Problem, theta, effects, evaluations, candidates, *, pro
         return cand.kind in LADDER_KINDS and cand.get("dependent") is not None
 
     out, skipped = [], []
+    samples = {}
+
+    def shared(cand, step):
+        """Exact residual of a quadratic-kind size, once per kind, location and size."""
+        key = (cand.kind, cand.location, tuple(np.asarray(step, float).tolist()))
+        if key not in samples:
+            samples[key] = residual(cand, step, True)
+        return samples[key]
 
     def run(cands):
         for n, cand in enumerate(cands):
@@ -223,6 +252,10 @@ def signatures(problem: Problem, theta, effects, evaluations, candidates, *, pro
                     continue
                 if cand.kind in LADDER_KINDS:
                     out.append(_ladder(cand, r0, residual, reduced(cand)))
+                    continue
+                if cand.kind in QUADRATIC_KINDS:
+                    sampled = [shared(cand, step) for step in sample_points(cand.reference)]
+                    out.append((cand, coefficients(r0, sampled, cand.reference), None))
                     continue
                 cols = []
                 for k, h in enumerate(cand.reference):
@@ -239,7 +272,40 @@ def signatures(problem: Problem, theta, effects, evaluations, candidates, *, pro
                    if cand.kind in LADDER_KINDS)
     best = {eid for _, eid in whole[:ONE_SIDED_TOP]}
     run([c for c in candidates if one_sided(c) and c.location.elements[0] in best])
+    _line_searches(out, r0, residual)
     return r0, out, skipped
+
+
+def _line_searches(out, r0, residual) -> None:
+    """The exact line search (module docstring) of the :data:`LINE_SEARCH_TOP` quadratic-kind
+    entries of ``out`` whose model fits best; each is replaced in place by
+    (Candidate, S, (x*, chi2*))."""
+    fits = []
+    for i, (cand, s, exact) in enumerate(out):
+        if cand.kind in QUADRATIC_KINDS and exact is None:
+            x, chi2 = quadratic_fit(r0, s, cand.reference, cand.lower, cand.upper)
+            if np.any(x):
+                fits.append((chi2, i, x))
+    for _, i, x in sorted(fits, key=lambda f: f[0])[:LINE_SEARCH_TOP]:
+        cand = out[i][0]
+
+        def residual_at(size, cand=cand):
+            try:
+                return residual(cand, size, True)
+            except (InputError, SolverError):
+                return None
+        found = line_search(residual_at, x, cand.lower, cand.upper)
+        if found is not None:
+            size, r, chi2 = found
+            out[i] = (cand, _secant(r0, r, size), (size, chi2))
+
+
+def _secant(r0, r, x) -> np.ndarray:
+    """(n_data, npar) S with S x = r - r0 and S y = 0 for y orthogonal to x (0 when x = 0)."""
+    x = np.asarray(x, float)
+    if not np.any(x):
+        return np.zeros((np.size(r0), x.size))
+    return np.outer(np.asarray(r) - np.asarray(r0), x) / (x @ x)
 
 
 def _ladder(cand, r0, residual, approximate=None) -> tuple:
@@ -295,12 +361,19 @@ def linear_fit(r0, signature, lower, upper) -> tuple[np.ndarray, float]:
 
 
 def screen(r0, signed) -> list:
-    """Linear fit of every (Candidate, S, exact) (``exact`` (x, chi2) of a ladder is taken as
-    it is); list of Screened sorted by decreasing drop."""
+    """Linear fit (the quadratic model's fit for :data:`QUADRATIC_KINDS`) of every
+    (Candidate, S, exact) (``exact`` (x, chi2) of a ladder or a line search is taken as it is);
+    list of Screened sorted by decreasing drop."""
     chi0 = chi_square(r0)
     rows = []
     for cand, s, exact in signed:
-        x, chi2 = exact if exact is not None else linear_fit(r0, s, cand.lower, cand.upper)
+        if exact is not None:
+            x, chi2 = exact
+        elif cand.kind in QUADRATIC_KINDS:
+            x, chi2 = quadratic_fit(r0, s, cand.reference, cand.lower, cand.upper)
+            s = _secant(r0, np.asarray(r0) + s @ monomials(x), x)
+        else:
+            x, chi2 = linear_fit(r0, s, cand.lower, cand.upper)
         rows.append(Screened(cand, x, chi2, chi0 - chi2, s))
     rows.sort(key=lambda row: -row.drop)
     return rows
