@@ -1,0 +1,281 @@
+"""Reanalysis of a grounded spring over its ladder of sizes on one Ritz basis.
+
+A ``boundary_stiffness`` candidate of size k adds a grounded CELAS2 of stiffness s = k k_ref at
+one g-set DOF d (:mod:`pipeline.diagnose.effects`). On the a-set (u_g = T u_a) that is a rank-one
+change of the stiffness alone,
+
+    K(k) = K + s e e^T,   e = T^T 1_d  (na,),   M unchanged,
+
+so one basis serves every candidate size. Craig-Bampton with the spring's DOFs as the boundary
+does not apply to a free-free model (the interior keeps its rigid-body motions, K_ii is
+singular); the basis here is that of the load-dependent Ritz / residual-flexibility methods
+(Weissenburger 1968, J. Aircraft 5(6), "Effect of local modifications on the vibration
+characteristics of linear systems"; Craig & Kurdila 2006, Fundamentals of Structural Dynamics,
+section 17.4): the current model's m lowest modes Phi (rigid-body modes included, mass-
+normalised, K Phi = M Phi Lambda) and the residual attachment vector of the spring's load,
+
+    r = (K - sigma M)^-1 e - Phi (Lambda - sigma)^-1 Phi^T e,
+
+the static response to a unit load at d minus the part the kept modes carry (the exact spectral
+expansion of (K - sigma M)^-1), M-orthogonalised against Phi and M-normalised. With
+Psi = [Phi, r], Psi^T M Psi = I and Psi^T K Psi = diag(Lambda, r^T K r) (r is M- and so
+K-orthogonal to the eigenvectors Phi), the modes of size k are those of
+
+    K_r(k) = diag(Lambda, r^T K r) + s w w^T,   w = Psi^T e   ((m + 1), (m + 1), M_r = I).
+
+The exact mode of the changed model is x ~ (K - lambda M)^-1 e (from (K - lambda M) x =
+-s e (e^T x)), whose truncated part sum_{j > m} phi_j phi_j^T e / (lambda_j - lambda) is the
+residual r up to terms of relative size (lambda - sigma) / lambda_{m+1}: the basis holds the
+spring's local flexibility, the elastic mode the spring makes out of a rigid-body motion
+(frequency ~ sqrt(s) w_r) and its coupling with the kept modes. Measured against exact
+reanalysis (:func:`structures.modal.compute_modes`) on the frame over sizes 1e-3 .. 1
+(tests/pipeline/diagnose/test_grounded.py): see :data:`MODE_FACTOR`.
+
+One factorisation of K - sigma M and one eigen-solution per configuration are shared by every
+candidate; a candidate costs one solve, and a rung one dense eigen-solution of size m + 1.
+
+The changed model's rigid-body motions are those of the current model that do not move d
+(:func:`structures.modal.rigid_body_modes` on the current assembly with the spring added: the
+same motions, names and tolerance as the exact reanalysis); they are the first modes at 0 Hz.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+import scipy.sparse as sp
+import xarray as xr
+
+from pipeline.diagnose.effects import DIRECTIONS
+from structures.assembly import AssembledSystem, assemble
+from structures.massprops import MassProperties, mass_properties
+from structures.modal import (DEFAULT_SHIFT, exact_rigid_modes, rigid_body_modes, solve_eigen)
+from structures.model import FEModel
+from structures.sparse_factor import factorize
+
+#: Modes kept in the Ritz basis, per analysis mode asked for (the residual attachment vector
+#: comes on top). Measured on the frame (46 analysis modes, sizes 1e-3 .. 1, the 26 lowest
+#: modes): see tests/pipeline/diagnose/test_grounded.py.
+MODE_FACTOR = 1
+#: Sizes first sampled, as fractions of the upper bound: eighth decades over the top three
+#: decades (below 1e-3 of the bound the spring's mode lies far below the first elastic one and
+#: the modes change by first-order amounts).
+SPRING_LADDER = tuple(10.0 ** (-np.arange(13)[::-1] / 4.0))
+#: An interval of the ladder is halved while some elastic mode at its upper end keeps less than
+#: this squared projection on the modes of its lower end of the same eigenvalue cluster: between
+#: two sizes the modes then turn by less than ~18 degrees (cos^2 = 0.9), so a valley of chi^2
+#: where a pair of modes veers and mixes (a narrow one, a few percent of the size wide) is not
+#: stepped over.
+ROTATION_LIMIT = 0.9
+#: Narrowest interval (factor between sizes): 1/128 decade.
+FINEST_STEP = 10.0 ** (1.0 / 128.0)
+#: Relative eigenvalue difference within which modes form one cluster (a degenerate pair's basis
+#: is arbitrary: its turning is not a change of the modes).
+CLUSTER = 1e-8
+
+
+@dataclass(frozen=True)
+class SpringBasis:
+    """One configuration's current model, shared by every grounded-spring candidate.
+
+    Attributes
+    ----------
+    model : FEModel, the current model.
+    system : AssembledSystem of ``model``.
+    lam : (m,) eigenvalues [(rad/s)^2], the rigid-body ones exactly 0.
+    phi : (na, m) M-orthonormal modes (rigid-body modes first).
+    factor : factorisation of K - sigma M (``solve``).
+    shift : float, sigma [(rad/s)^2].
+    sensor : (n_dof, na) sparse, basic-frame displacement of the measured DOFs per a-set DOF.
+    props : MassProperties (a spring changes no mass).
+    nmodes : int, analysis modes per rung.
+    """
+
+    model: FEModel
+    system: AssembledSystem
+    lam: np.ndarray
+    phi: np.ndarray
+    factor: object
+    shift: float
+    sensor: sp.csr_matrix
+    props: MassProperties
+    nmodes: int
+
+
+@dataclass(frozen=True)
+class ReducedSpring:
+    """A grounded-spring candidate on its Ritz basis (module docstring).
+
+    Attributes
+    ----------
+    diagonal : (m + 1,) diag(Lambda, r^T K r).
+    w : (m + 1,) Psi^T e.
+    k_ref : float, spring stiffness per unit size.
+    sensor : (n_dof, m + 1) sensor displacements of the basis vectors.
+    rigid : list of str, rigid-body motions of the changed model (size > 0).
+    props : MassProperties
+    nmodes : int
+    template : xarray.Dataset, the modes Dataset :meth:`modes` fills in.
+    solved : dict, size -> :meth:`solve` (the ladder asks for a size twice: to place the
+        rungs and to evaluate them).
+    """
+
+    diagonal: np.ndarray
+    w: np.ndarray
+    k_ref: float
+    sensor: np.ndarray
+    rigid: list
+    props: MassProperties
+    nmodes: int
+    template: xr.Dataset
+    solved: dict = field(default_factory=dict, repr=False, compare=False)
+
+    def solve(self, size: float) -> tuple[np.ndarray, np.ndarray]:
+        """(lam (n,), y (m + 1, n)): the ``nmodes`` lowest eigenpairs of (K_r(size), I), the
+        rigid-body eigenvalues set to 0 (n = min(nmodes, m + 1))."""
+        if size not in self.solved:
+            k_r = np.diag(self.diagonal) + (size * self.k_ref) * np.outer(self.w, self.w)
+            lam, y = np.linalg.eigh(k_r)                                   # M_r = I
+            n = min(self.nmodes, lam.size)
+            lam, y = lam[:n], y[:, :n]
+            lam[:min(len(self.rigid), n)] = 0.0
+            self.solved[size] = (lam, y)
+        return self.solved[size]
+
+    def modes(self, size: float) -> tuple[xr.Dataset, np.ndarray]:
+        """Modes at candidate size ``size`` (> 0).
+
+        Returns
+        -------
+        modes : xarray.Dataset, ``frequency(mode)`` [Hz] with the ``rigid_motion(mode)``
+            coordinate ("" for elastic modes), the rigid-body modes first at 0 Hz; ``nmodes``
+            modes (at most m + 1).
+        sensor_shapes : (nmodes, n_dof) mass-normalised shapes at the measured DOFs.
+        """
+        lam, y = self.solve(size)
+        freq = np.sqrt(np.clip(lam, 0.0, None)) / (2.0 * np.pi)
+        return self.template.copy(data={"frequency": freq}), (self.sensor @ y).T
+
+
+def spring_basis(model: FEModel, sensor_index, nmodes: int, *,
+                 shift: float = DEFAULT_SHIFT) -> SpringBasis:
+    """The current model's modes and factorisation shared by its grounded-spring candidates.
+
+    Parameters
+    ----------
+    model : FEModel, the configuration's current model.
+    sensor_index : (n_dof,) measured DOFs along the modes' ``dof`` (6 per grid, basic frame).
+    nmodes : int, analysis modes per rung; the basis keeps :data:`MODE_FACTOR` x as many.
+    shift : float, sigma [(rad/s)^2], negative (K - sigma M positive definite, free-free too).
+
+    Returns
+    -------
+    SpringBasis
+
+    Raises
+    ------
+    SolverError
+        The model cannot be analysed (a mechanism), as :func:`structures.modal.compute_modes`.
+    """
+    system = assemble(model, warn=False)
+    lam, phi = solve_eigen(system.K, system.M, MODE_FACTOR * nmodes, shift=shift,
+                           groups=system.a_dofs // 6, filename=model.filename)
+    phi_r, _ = rigid_body_modes(model, system)
+    lam, phi = exact_rigid_modes(system.M, lam, phi, phi_r)
+    factor = factorize(system.K - shift * system.M, groups=system.a_dofs // 6,
+                       filename=model.filename)
+    sensor = (system.rotation @ system.T).tocsr()[np.asarray(sensor_index, int)]
+    return SpringBasis(model=model, system=system, lam=lam, phi=phi, factor=factor, shift=shift,
+                       sensor=sensor, props=mass_properties(model, m_basic=system.m_basic),
+                       nmodes=nmodes)
+
+
+def reduce_spring(basis: SpringBasis, candidate, smallest: float) -> ReducedSpring:
+    """The ``boundary_stiffness`` candidate on the basis's Ritz basis.
+
+    Parameters
+    ----------
+    basis : SpringBasis of the model the candidate is applied to.
+    candidate : Candidate, ``boundary_stiffness``.
+    smallest : float, the smallest size the ladder will ask for: the rigid-body motions are
+        named with the spring at that size (a motion the spring holds with a force below
+        :data:`structures.modal.RIGID_TOL` of the structure's stays rigid, as in the exact
+        reanalysis).
+
+    Returns
+    -------
+    ReducedSpring
+    """
+    model, system = basis.model, basis.system
+    row = int(model.grids.index([candidate.location.grids[0]])[0])
+    dof = 6 * row + DIRECTIONS.index(candidate.get("direction"))
+    e = np.asarray(system.T[dof].toarray()).ravel()                        # T^T 1_d
+    k_ref = float(candidate.get("k_ref"))
+    phi, lam = basis.phi, basis.lam
+    # residual attachment vector (Weissenburger 1968): the static response minus the kept modes'
+    r = basis.factor.solve(e) - phi @ ((phi.T @ e) / (lam - basis.shift))
+    for _ in range(2):                                                     # round-off
+        r = r - phi @ (phi.T @ (system.M @ r))
+    norm = float(np.sqrt(r @ (system.M @ r)))
+    psi = np.column_stack([phi, r / norm]) if norm > 0 else phi
+    diagonal = np.append(lam, (psi[:, -1] @ (system.K @ psi[:, -1]))) if norm > 0 else lam
+    load = sp.csc_matrix(e[:, None])
+    held = (system.K + (smallest * k_ref) * (load @ load.T)).tocsc()
+    _, rigid = rigid_body_modes(model, replace(system, K=held))
+    n = min(basis.nmodes, diagonal.size)
+    names = (list(rigid) + [""] * n)[:n]
+    template = xr.Dataset({"frequency": ("mode", np.zeros(n), {"units": "Hz"})},
+                          coords={"rigid_motion": ("mode", np.array(names, dtype=str))})
+    return ReducedSpring(diagonal=diagonal, w=psi.T @ e, k_ref=k_ref,
+                         sensor=np.asarray(basis.sensor @ psi), rigid=list(rigid),
+                         props=basis.props, nmodes=basis.nmodes, template=template)
+
+
+def _turned(a, b) -> bool:
+    """True when some elastic mode j of solution ``b`` keeps less than :data:`ROTATION_LIMIT`
+    of its norm on mode j of solution ``a`` (on its eigenvalue cluster when degenerate); each
+    solution is (lam (n,), y (m + 1, n)), lam ascending. At a veering the modes exchange their
+    shapes (the order of the eigenvalues stays): mode j then turns towards mode j +- 1."""
+    (lam_a, y_a), (lam_b, y_b) = a, b
+    overlap = (y_a.T @ y_b) ** 2                                           # (n, n)
+    gap = np.diff(lam_a) > CLUSTER * np.maximum(np.abs(lam_a[1:]), np.finfo(float).tiny)
+    label = np.concatenate([[0], np.cumsum(gap)])
+    kept = (overlap * (label[:, None] == label[None, :])).sum(axis=0)
+    return bool(np.any(kept[lam_b > 0] < ROTATION_LIMIT))
+
+
+def ladder_sizes(reduced, upper: float) -> np.ndarray:
+    """Sizes at which a grounded-spring candidate is analysed.
+
+    :data:`SPRING_LADDER` times ``upper``, every interval halved (geometric mean) while the
+    modes of some configuration turn across it (:data:`ROTATION_LIMIT`), down to
+    :data:`FINEST_STEP`. Costs eigen-solutions of size m + 1 only.
+
+    Parameters
+    ----------
+    reduced : sequence of ReducedSpring, one per configuration.
+    upper : float, the parameter's upper bound.
+
+    Returns
+    -------
+    (n_sizes,) ascending sizes.
+    """
+    def solved(size):
+        return [r.solve(size) for r in reduced]
+
+    sizes = list(upper * np.asarray(SPRING_LADDER))
+    out = [sizes[0]]
+    previous = solved(sizes[0])
+    for size in sizes[1:]:
+        stack = [(size, solved(size))]
+        while stack:
+            b, at_b = stack[-1]
+            a = out[-1]
+            if b / a > FINEST_STEP and any(_turned(p, q) for p, q in zip(previous, at_b)):
+                mid = float(np.sqrt(a * b))
+                stack.append((mid, solved(mid)))
+                continue
+            out.append(b)
+            previous = at_b
+            stack.pop()
+    return np.array(out)
