@@ -9,10 +9,11 @@ change of the stiffness alone,
 so one basis serves every candidate size. Craig-Bampton with the spring's DOFs as the boundary
 does not apply to a free-free model (the interior keeps its rigid-body motions, K_ii is
 singular); the basis here is that of the load-dependent Ritz / residual-flexibility methods
-(Weissenburger 1968, J. Aircraft 5(6), "Effect of local modifications on the vibration
-characteristics of linear systems"; Craig & Kurdila 2006, Fundamentals of Structural Dynamics,
-section 17.4): the current model's m lowest modes Phi (rigid-body modes included, mass-
-normalised, K Phi = M Phi Lambda) and the residual attachment vector of the spring's load,
+(Weissenburger 1968, "Effect of local modifications on the vibration characteristics of linear
+systems", J. Appl. Mech. 35(2); the residual-flexibility attachment modes of Craig & Kurdila
+2006, Fundamentals of Structural Dynamics, 2nd ed.): the current model's m lowest modes Phi
+(rigid-body modes included, mass-normalised, K Phi = M Phi Lambda) and the residual attachment
+vector of the spring's load,
 
     r = (K - sigma M)^-1 e - Phi (Lambda - sigma)^-1 Phi^T e,
 
@@ -59,12 +60,13 @@ from structures.sparse_factor import factorize
 #: the sensors with 1 (one rung 0.23 ms), 7e-10 and 2.6e-12 with 2 (0.8 ms); the residual's
 #: frequency scale is ~1e-2, so 1 suffices (tests/pipeline/diagnose/test_grounded.py: 1e-5).
 MODE_FACTOR = 1
-#: Sizes first sampled, as fractions of the upper bound: eighth decades over the top three
+#: Sizes first sampled, as fractions of the upper bound: quarter decades over the top three
 #: decades (below 1e-3 of the bound the spring's mode lies far below the first elastic one and
 #: the modes change by first-order amounts).
 SPRING_LADDER = tuple(10.0 ** (-np.arange(13)[::-1] / 4.0))
 #: An interval of the ladder is halved while some elastic mode at its upper end keeps less than
-#: this squared projection on the modes of its lower end of the same eigenvalue cluster: between
+#: this squared projection on the mode of the same order at its lower end (on its eigenvalue
+#: cluster when degenerate; at a veering two modes exchange their shapes): between
 #: two sizes the modes then turn by less than ~18 degrees (cos^2 = 0.9), so a valley of chi^2
 #: where a pair of modes veers and mixes (a narrow one, a few percent of the size wide) is not
 #: stepped over.
