@@ -241,8 +241,9 @@ def _preflight(configurations, settings: DiagnoseSettings, notes: list):
 def _table(problem: Problem, r0, rows, refits, none, n_data: int, n_candidates: int) -> tuple:
     """The first round's ranked candidates by the scores :func:`decide` compared
     (:func:`round_scores`: refitted ones from their refit, the rest from their linearised
-    residual r0 + S x with the same modal dispersion c, "none" with its prior odds), minus the
-    best."""
+    residual r0 + S x (:class:`pipeline.diagnose.screen.Screened`: S x is the residual's change
+    at x for every kind) with the same modal dispersion c, "none" with its prior odds), minus
+    the best."""
     modal = problem.modal_rows()
     scores, none_score, c = round_scores((*_chi2_split(problem, none), none.n_params),
                                          _score_rows(problem, refits), n_data, n_candidates,
