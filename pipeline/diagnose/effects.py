@@ -91,6 +91,7 @@ from pipeline.diagnose.effect_deck import (change_matrices, model_changes, small
 from pipeline.diagnose.edits import append_elements, next_eid, next_pid
 from pipeline.diagnose.joints import flexible_joint, joint_sites
 from pipeline.diagnose.members import connectivity, find_members, grow, remesh
+from pipeline.diagnose.mirror import mirror_pairs, site_values
 from structures.common.errors import InputError, card_message
 from structures.massprops import mass_properties
 from structures.model import FEModel, Property
@@ -236,7 +237,8 @@ def candidates(model: FEModel, kinds=KINDS, *, frequency: float | None = None
 
     Returns
     -------
-    tuple of Candidate, grouped by kind in the order of ``kinds``.
+    tuple of Candidate, grouped by kind in the order of ``kinds``, then the mirror-image pairs
+    (:func:`pipeline.diagnose.mirror.mirror_pairs`).
     """
     kinds = _check_kinds(kinds)
     out = []
@@ -279,7 +281,7 @@ def candidates(model: FEModel, kinds=KINDS, *, frequency: float | None = None
                     out.append(replace(cand, lower=(0.0, min(0.0, side * cand.upper[1])),
                                        upper=(cand.upper[0], max(0.0, side * cand.upper[1])),
                                        reference=(cand.reference[0], side * cand.reference[1])))
-    return tuple(out)
+    return tuple(out) + mirror_pairs(model, out)
 
 
 def neighbours(model: FEModel, location: Location) -> Location:
@@ -404,7 +406,9 @@ def apply_effect(model: FEModel, candidate: Candidate, values) -> FEModel:
                          f"{candidate.kind}. Fix: build candidates with candidates(model).")
     if not np.any(x):
         return model
-    return _APPLY[candidate.kind](model, candidate, x)
+    for site, x_site in site_values(candidate, x):             # a mirror pair: both sites
+        model = _APPLY[candidate.kind](model, site, x_site)
+    return model
 
 
 def effect_matrices(model: FEModel, candidate: Candidate, values, *, mass: str = "deck"):

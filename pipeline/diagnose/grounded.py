@@ -32,6 +32,10 @@ spring's local flexibility, the elastic mode the spring makes out of a rigid-bod
 reanalysis (:func:`structures.modal.compute_modes`) on the frame over sizes 1e-3 .. 1: see
 :data:`MODE_FACTOR`.
 
+A mirror pair (:mod:`pipeline.diagnose.mirror`) has a spring at each of its two sites, both of
+size k: K(k) = K + s E E^T with E = [e_1, e_2], and the basis carries both residual attachment
+vectors, M-orthonormalised (R = [r_1, r_2]; K_r(k) = diag(Lambda, R^T K R) + s W W^T, W = Psi^T E).
+
 One factorisation of K - sigma M and one eigen-solution per configuration are shared by every
 candidate; a candidate costs one solve, and a rung one dense eigen-solution of size m + 1.
 
@@ -48,12 +52,16 @@ import scipy.sparse as sp
 import xarray as xr
 
 from pipeline.diagnose.effects import DIRECTIONS
+from pipeline.diagnose.mirror import sites
 from structures.assembly import AssembledSystem, assemble
 from structures.massprops import MassProperties, mass_properties
 from structures.modal import (DEFAULT_SHIFT, exact_rigid_modes, rigid_body_modes, solve_eigen)
 from structures.model import FEModel
 from structures.sparse_factor import factorize
 
+#: Residual attachment vectors whose M-Gram eigenvalue is below this share of the largest are
+#: dependent on the others (a mirror pair's two springs acting on one a-set DOF) and left out.
+INDEPENDENT = 1e-12
 #: Modes kept in the Ritz basis, per analysis mode asked for (the residual attachment vector
 #: comes on top). Measured on the frame (46 analysis modes, 12 springs, sizes 1e-3 .. 1, the 26
 #: lowest modes against exact reanalysis): largest frequency error 1.9e-6 and 1 - MAC 1.5e-6 at
@@ -112,8 +120,8 @@ class ReducedSpring:
 
     Attributes
     ----------
-    diagonal : (m + 1,) diag(Lambda, r^T K r).
-    w : (m + 1,) Psi^T e.
+    k0 : (m + q, m + q) Psi^T K Psi = diag(Lambda, R^T K R) (q = 1, or 2 for a mirror pair).
+    w : (m + q, q) Psi^T E, E the springs' DOF columns.
     k_ref : float, spring stiffness per unit size.
     sensor : (n_dof, m + 1) sensor displacements of the basis vectors.
     rigid : list of str, rigid-body motions of the changed model (size > 0).
@@ -124,7 +132,7 @@ class ReducedSpring:
         rungs and to evaluate them).
     """
 
-    diagonal: np.ndarray
+    k0: np.ndarray
     w: np.ndarray
     k_ref: float
     sensor: np.ndarray
@@ -138,7 +146,7 @@ class ReducedSpring:
         """(lam (n,), y (m + 1, n)): the ``nmodes`` lowest eigenpairs of (K_r(size), I), the
         rigid-body eigenvalues set to 0 (n = min(nmodes, m + 1))."""
         if size not in self.solved:
-            k_r = np.diag(self.diagonal) + (size * self.k_ref) * np.outer(self.w, self.w)
+            k_r = self.k0 + (size * self.k_ref) * (self.w @ self.w.T)
             lam, y = np.linalg.eigh(k_r)                                   # M_r = I
             n = min(self.nmodes, lam.size)
             lam, y = lam[:n], y[:, :n]
@@ -211,26 +219,32 @@ def reduce_spring(basis: SpringBasis, candidate, smallest: float) -> ReducedSpri
     ReducedSpring
     """
     model, system = basis.model, basis.system
-    row = int(model.grids.index([candidate.location.grids[0]])[0])
-    dof = 6 * row + DIRECTIONS.index(candidate.get("direction"))
-    e = np.asarray(system.T[dof].toarray()).ravel()                        # T^T 1_d
+    dofs = [6 * int(model.grids.index([site.location.grids[0]])[0])
+            + DIRECTIONS.index(site.get("direction")) for site in sites(candidate)]
+    e = np.asarray(system.T[dofs].toarray()).T                             # T^T 1_d, (na, q)
     k_ref = float(candidate.get("k_ref"))
     phi, lam = basis.phi, basis.lam
-    # residual attachment vector (Weissenburger 1968): the static response minus the kept modes'
-    r = basis.factor.solve(e) - phi @ ((phi.T @ e) / (lam - basis.shift))
+    # residual attachment vectors (Weissenburger 1968): the static response minus the kept modes'
+    r = np.asarray(basis.factor.solve(e)).reshape(e.shape) \
+        - phi @ ((phi.T @ e) / (lam - basis.shift)[:, None])
     for _ in range(2):                                                     # round-off
         r = r - phi @ (phi.T @ (system.M @ r))
-    norm = float(np.sqrt(r @ (system.M @ r)))
-    psi = np.column_stack([phi, r / norm]) if norm > 0 else phi
-    diagonal = np.append(lam, (psi[:, -1] @ (system.K @ psi[:, -1]))) if norm > 0 else lam
-    load = sp.csc_matrix(e[:, None])
+    gram = r.T @ (system.M @ r)                                            # (q, q)
+    g_val, g_vec = np.linalg.eigh(gram)
+    keep = g_val > INDEPENDENT * max(float(g_val.max(initial=0.0)), 0.0)
+    q = r @ (g_vec[:, keep] / np.sqrt(g_val[keep]))                        # M-orthonormal
+    psi = np.column_stack([phi, q])
+    k0 = np.zeros((psi.shape[1], psi.shape[1]))
+    k0[np.diag_indices(lam.size)] = lam
+    k0[lam.size:, lam.size:] = q.T @ (system.K @ q)
+    load = sp.csc_matrix(e)
     held = (system.K + (smallest * k_ref) * (load @ load.T)).tocsc()
     _, rigid = rigid_body_modes(model, replace(system, K=held))
-    n = min(basis.nmodes, diagonal.size)
+    n = min(basis.nmodes, psi.shape[1])
     names = (list(rigid) + [""] * n)[:n]
     template = xr.Dataset({"frequency": ("mode", np.zeros(n), {"units": "Hz"})},
                           coords={"rigid_motion": ("mode", np.array(names, dtype=str))})
-    return ReducedSpring(diagonal=diagonal, w=psi.T @ e, k_ref=k_ref,
+    return ReducedSpring(k0=k0, w=psi.T @ e, k_ref=k_ref,
                          sensor=np.asarray(basis.sensor @ psi), rigid=list(rigid),
                          props=basis.props, nmodes=basis.nmodes, template=template)
 

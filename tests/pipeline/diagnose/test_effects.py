@@ -631,12 +631,21 @@ def test_effect_cards_against_mystran(x56, x56_candidates, tmp_path):
 
 # --------------------------------------------------------------------------- library & errors
 def test_candidates_of_x56_and_neighbours(x56, x56_candidates):
-    counts = {k: sum(c.kind == k for c in x56_candidates) for k in KINDS}
+    one_sided = [c for c in x56_candidates if c.get("sites") is None]
+    counts = {k: sum(c.kind == k for c in one_sided) for k in KINDS}
     # 28 RBE2 in structure_x56.inc, 26 of them with two dependent grids (one-sided variants)
     assert counts["joint_flexibility"] == 28 + 2 * 26
     assert counts["lumped_mass"] == len(x56.grids)     # every grid carries structure, none fixed
     assert counts["boundary_stiffness"] == 3 * len(x56.grids)
     assert counts["member_taper"] == counts["member_curvature"] / 2 == len(find_members(x56))
+    # mirror pairs (pipeline.diagnose.mirror): 92 of the 103 grids lie off the plane y = 0, the
+    # 28 RBE2 are 14 left / right pairs, 14 members have a mirror image (two bow quadrants each)
+    pairs = {k: sum(c.kind == k and c.get("sites") is not None for c in x56_candidates)
+             for k in KINDS}
+    off_plane = int(np.sum(np.abs(x56.grids.xyz[:, 1]) > 1e-9))
+    assert off_plane == 92
+    assert pairs == {"lumped_mass": off_plane // 2, "boundary_stiffness": 3 * off_plane // 2,
+                     "joint_flexibility": 14, "member_taper": 14, "member_curvature": 28}
     grown = neighbours(x56, Location(grids=(3005,)))
     assert grown.grids == (3004, 3005, 3006, 3105, 3205)
     assert grown.elements == (3004, 3005, 7005)

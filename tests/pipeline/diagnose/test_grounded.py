@@ -56,6 +56,34 @@ def test_reduced_spring_modes_match_exact_reanalysis(frame_model):
             assert mac.min() > 1.0 - 1e-5, (cand.label, size)
 
 
+@pytest.mark.parametrize("label, n_rigid", [("grid 2004 z and its mirror image grid 3004 z", 4),
+                                            ("grid 2006 y and its mirror image grid 3006 y", 5)])
+def test_reduced_mirror_pair_of_springs_matches_exact_reanalysis(frame_model, label, n_rigid):
+    """A mirror pair: a spring of the same size at a grid and at its image (rank-two change, both
+    residual attachment vectors in the basis) against compute_modes of the model with both
+    CELAS2s; same tolerances as one spring. Two z springs hold plunge and roll (4 rigid motions
+    left); two y springs at mirror points move alike in every rigid motion, so they hold one
+    combination only (5 left); the motions named as the exact reanalysis names them."""
+    model, ref = frame_model
+    basis = spring_basis(model, ref.sensor_index, ref.nmodes)
+    cand = next(c for c in candidates(model, ("boundary_stiffness",)) if c.label == label)
+    reduced = reduce_spring(basis, cand, 1e-3)
+    for size in (1e-3, 0.1, 1.0):
+        exact = compute_modes(apply_effect(model, cand, [size]), ref.nmodes)
+        modes, shapes = reduced.modes(size)
+        names = exact["rigid_motion"].values
+        assert list(modes["rigid_motion"].values) == list(names), size
+        nr = int(np.sum(names != ""))
+        assert nr == n_rigid
+        f_e, f_r = exact["frequency"].values[nr:26], modes["frequency"].values[nr:26]
+        assert f_r == pytest.approx(f_e, rel=1e-5), size
+        s_e = exact["shape"].values[nr:26][:, ref.sensor_index]
+        s_r = shapes[nr:26]
+        mac = np.einsum("ij,ij->i", s_e, s_r) ** 2 / (
+            np.einsum("ij,ij->i", s_e, s_e) * np.einsum("ij,ij->i", s_r, s_r))
+        assert mac.min() > 1.0 - 1e-5, size
+
+
 def test_spring_ladder_finds_the_valley_the_secant_misses(frame_model):
     """A test made by the frame with a spring of size 0.3 at grid 4004 z (its mode sweeps
     through the measured ones: chi^2 over the size is far from linear). The secant at the

@@ -324,3 +324,32 @@ def test_screening_recovers_a_bowed_members_bow(bowed_tail):
     assert best.values == pytest.approx(x_true, abs=0.01)
     assert best.chi2 < 0.03 * float(r0 @ r0)
     assert r0 + best.signature @ best.values == pytest.approx(residual(best.values), abs=1e-9)
+
+
+def test_refit_starts_at_the_best_exactly_analysed_fraction_of_the_linear_fit(frame_reference,
+                                                                               monkeypatch):
+    """The model against its own modes: any added mass makes chi^2 grow, so of the linear fit's
+    fractions REFIT_START the smallest is the best start; with the iterations stubbed out
+    (least_squares returning its start) the refit returns that start and its exact chi^2."""
+    model, _, ref = frame_reference
+    cand = next(c for c in candidates(model, ("lumped_mass",)) if c.get("sites") is None)
+    problem = Problem.build([ref], [model], 0.03)
+    theta0 = np.zeros(len(problem.names))
+    r0 = problem.residual(theta0, problem.evaluate(theta0))
+    start = np.array([0.04])
+    row = Screened(cand, start, 0.0, 0.0, np.zeros((r0.size, 1)))
+
+    class Stopped:
+        def __init__(self, x):
+            self.x = x
+
+    monkeypatch.setattr(screen, "least_squares", lambda fun, z0, **kw: Stopped(z0))
+    fit = screen.refit(problem, theta0, (), row, n_data=r0.size,
+                       jacobian_theta=np.zeros((r0.size, len(theta0))))
+    best = min(screen.REFIT_START)
+    assert fit.values == pytest.approx(best * start, rel=1e-12)
+    exact = np.sum(problem.residual(theta0, problem.evaluate(theta0, ((cand, best * start),))) ** 2)
+    assert fit.chi2 == pytest.approx(exact, rel=1e-12)
+    chi2 = [np.sum(problem.residual(theta0, problem.evaluate(theta0, ((cand, t * start),))) ** 2)
+            for t in screen.REFIT_START]
+    assert np.argmin(chi2) == np.argmin(screen.REFIT_START)
