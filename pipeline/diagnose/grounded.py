@@ -37,7 +37,7 @@ size k: K(k) = K + s E E^T with E = [e_1, e_2], and the basis carries both resid
 vectors, M-orthonormalised (R = [r_1, r_2]; K_r(k) = diag(Lambda, R^T K R) + s W W^T, W = Psi^T E).
 
 One factorisation of K - sigma M and one eigen-solution per configuration are shared by every
-candidate; a candidate costs one solve, and a rung one dense eigen-solution of size m + 1.
+candidate; a candidate costs one solve, and a rung one dense eigen-solution of size m + q (q = 1, or 2 for a pair).
 
 The changed model's rigid-body motions are those of the current model that do not move d
 (:func:`structures.modal.rigid_body_modes` on the current assembly with the spring added: the
@@ -123,7 +123,7 @@ class ReducedSpring:
     k0 : (m + q, m + q) Psi^T K Psi = diag(Lambda, R^T K R) (q = 1, or 2 for a mirror pair).
     w : (m + q, q) Psi^T E, E the springs' DOF columns.
     k_ref : float, spring stiffness per unit size.
-    sensor : (n_dof, m + 1) sensor displacements of the basis vectors.
+    sensor : (n_dof, m + q) sensor displacements of the basis vectors.
     rigid : list of str, rigid-body motions of the changed model (size > 0).
     props : MassProperties
     nmodes : int
@@ -143,8 +143,8 @@ class ReducedSpring:
     solved: dict = field(default_factory=dict, repr=False, compare=False)
 
     def solve(self, size: float) -> tuple[np.ndarray, np.ndarray]:
-        """(lam (n,), y (m + 1, n)): the ``nmodes`` lowest eigenpairs of (K_r(size), I), the
-        rigid-body eigenvalues set to 0 (n = min(nmodes, m + 1))."""
+        """(lam (n,), y (m + q, n)): the ``nmodes`` lowest eigenpairs of (K_r(size), I), the
+        rigid-body eigenvalues set to 0 (n = min(nmodes, m + q))."""
         if size not in self.solved:
             k_r = self.k0 + (size * self.k_ref) * (self.w @ self.w.T)
             lam, y = np.linalg.eigh(k_r)                                   # M_r = I
@@ -161,7 +161,7 @@ class ReducedSpring:
         -------
         modes : xarray.Dataset, ``frequency(mode)`` [Hz] with the ``rigid_motion(mode)``
             coordinate ("" for elastic modes), the rigid-body modes first at 0 Hz; ``nmodes``
-            modes (at most m + 1).
+            modes (at most m + q).
         sensor_shapes : (nmodes, n_dof) mass-normalised shapes at the measured DOFs.
         """
         lam, y = self.solve(size)
@@ -252,7 +252,7 @@ def reduce_spring(basis: SpringBasis, candidate, smallest: float) -> ReducedSpri
 def _turned(a, b) -> bool:
     """True when some elastic mode j of solution ``b`` keeps less than :data:`ROTATION_LIMIT`
     of its norm on mode j of solution ``a`` (on its eigenvalue cluster when degenerate); each
-    solution is (lam (n,), y (m + 1, n)), lam ascending. At a veering the modes exchange their
+    solution is (lam (n,), y (m + q, n)), lam ascending. At a veering the modes exchange their
     shapes (the order of the eigenvalues stays): mode j then turns towards mode j +- 1."""
     (lam_a, y_a), (lam_b, y_b) = a, b
     overlap = (y_a.T @ y_b) ** 2                                           # (n, n)
@@ -267,7 +267,7 @@ def ladder_sizes(reduced, upper: float) -> np.ndarray:
 
     :data:`SPRING_LADDER` times ``upper``, every interval halved (geometric mean) while the
     modes of some configuration turn across it (:data:`ROTATION_LIMIT`), down to
-    :data:`FINEST_STEP`. Costs eigen-solutions of size m + 1 only.
+    :data:`FINEST_STEP`. Costs eigen-solutions of size m + q only.
 
     Parameters
     ----------

@@ -10,9 +10,10 @@ mirror image at once; it competes with the one-sided candidates on the same term
 parameter count), so the data decide between one side and both.
 
 Mirror image: the reflection y -> -y of the basic frame (:data:`REFLECTION`), the convention of
-aircraft models whose plane of symmetry is the basic XZ plane. A grid's image is the grid at the
-reflected position (within :data:`TOLERANCE` of the model's size); a grid on the plane is its own
-image and has no pair. The image of each kind's site:
+aircraft models whose plane of symmetry is the basic XZ plane. A grid's image is the one grid at
+the reflected position (within :data:`TOLERANCE` of the model's size; grids that coincide with
+another, as at a hinge, have none, and images are mutual); a grid on the plane is its own image
+and has no pair. The image of each kind's site:
 
 - ``lumped_mass``: the image grid; both get the same mass (parameter ``mass`` per site).
 - ``boundary_stiffness``: the image grid, the same direction letter (a spring's stiffness has no
@@ -23,9 +24,9 @@ image and has no pair. The image of each kind's site:
   member's chain runs the other way (the taper grows along the chain).
 - ``member_curvature``: the image member; each bow takes the sign that makes its arc the
   reflection of the site's: the sign of (R y_e) . y_e' for ``bow_1`` and (R z_e) . z_e' for
-  ``bow_2``, y_e, z_e the axes of the site's first element and y_e', z_e' those of its image
-  element, R the reflection (a member whose image's axes are not the reflected axes within
-  :data:`AXIS_TOLERANCE` has no pair).
+  ``bow_2``, y_e, z_e the axes of a site element and y_e', z_e' those of its image element, R
+  the reflection (a member whose image's axes are not the reflected axes within
+  :data:`AXIS_TOLERANCE`, or whose elements want different signs, has no pair).
 """
 from __future__ import annotations
 
@@ -64,10 +65,16 @@ def mirror_grids(model: FEModel) -> dict:
     if not len(xyz):
         return {}
     size = max(float(np.ptp(xyz, axis=0).max()), 1.0)
-    dist, row = cKDTree(xyz).query(xyz @ REFLECTION)
+    tree = cKDTree(xyz)
+    near = tree.query_ball_point(xyz @ REFLECTION, TOLERANCE * size)
     ids = np.asarray(model.grids.ids)
-    ok = dist <= TOLERANCE * size
-    return dict(zip(ids[ok].tolist(), ids[row[ok]].tolist()))
+    image = {}
+    for i, rows in enumerate(near):
+        if abs(xyz[i, 1]) <= TOLERANCE * size:
+            image[int(ids[i])] = int(ids[i])               # on the plane: its own image
+        elif len(rows) == 1:                               # one grid there: coincident ones
+            image[int(ids[i])] = int(ids[rows[0]])          # (hinges) have no certain image
+    return {g: h for g, h in image.items() if image.get(h) == g}
 
 
 def sites(candidate) -> tuple:
@@ -142,7 +149,7 @@ def _signs(model: FEModel, image: dict, cand, twin):
     return ones, ones
 
 
-def _first_axes(model: FEModel, member, eid: int) -> np.ndarray:
+def _element_axes(model: FEModel, member, eid: int) -> np.ndarray:
     """(3, 3) axes (rows x, y, z in basic) of the member's element ``eid``."""
     es = model.elements[member.card]
     row = int(np.flatnonzero(np.asarray(es.eids) == eid)[0])
@@ -159,15 +166,17 @@ def _bow_signs(model: FEModel, image: dict, member, twin):
     es = model.elements[member.card]
     ends = {int(e): set(np.asarray(es.nodes)[np.asarray(es.eids) == e][0].tolist())
             for e in (*member.eids, *twin.eids)}
-    first = member.eids[0]
-    match = [e for e in twin.eids if ends[e] == {image[g] for g in ends[first]}]
-    if not match:
-        return None
-    a, b = _first_axes(model, member, first), _first_axes(model, twin, match[0])
-    cos = np.array([(REFLECTION @ a[k]) @ b[k] for k in (1, 2)])
-    if np.any(np.abs(cos) < AXIS_TOLERANCE):
-        return None
-    return (1.0, 1.0), tuple(float(s) for s in np.sign(cos))
+    signs = set()
+    for eid in member.eids:                      # every element bows along its own axes
+        match = [e for e in twin.eids if ends[e] == {image.get(g) for g in ends[eid]}]
+        if not match:
+            return None
+        a, b = _element_axes(model, member, eid), _element_axes(model, twin, match[0])
+        cos = np.array([(REFLECTION @ a[k]) @ b[k] for k in (1, 2)])
+        if np.any(np.abs(cos) < AXIS_TOLERANCE):
+            return None
+        signs.add(tuple(float(v) for v in np.sign(cos)))
+    return ((1.0, 1.0), signs.pop()) if len(signs) == 1 else None
 
 
 def _pair(cand, twin, signs):

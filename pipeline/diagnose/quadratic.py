@@ -33,10 +33,15 @@ import itertools
 import numpy as np
 from scipy.optimize import least_squares
 
+from structures.common.errors import InputError, SolverError
+
 #: Grid points per parameter of the quadratic fit's first pass.
 GRID = 25
 #: Fractions of the ray from 0 to the candidate's bounds sampled by the exact line search.
 RAY = tuple(np.arange(1, 7) / 6.0)
+#: Candidates (best model fits first) given the exact line search (:func:`line_searches`): a
+#: member's two quadrant candidates for the two best members, or a pair's.
+LINE_SEARCH_TOP = 4
 
 
 def _pairs(npar: int) -> list:
@@ -188,3 +193,37 @@ def line_search(residual_at, x, lower, upper) -> tuple | None:
     t_best = best()
     r, chi2 = tried[t_best]
     return np.clip(t_best * x, lower, upper), r, chi2
+
+
+def line_searches(out, r0, residual, kinds) -> None:
+    """The exact line search (:func:`line_search`) of the :data:`LINE_SEARCH_TOP` entries of
+    ``out`` (the screening's (Candidate, S, exact) list,
+    :func:`pipeline.diagnose.screen.signatures`) of the given kinds whose model fits best; each
+    is replaced in place by (Candidate, S, (x*, chi2*)). ``residual(cand, x, exact)`` is the
+    exact training residual (InputError or SolverError where the model cannot be analysed)."""
+    fits = []
+    for i, (cand, s, exact) in enumerate(out):
+        if cand.kind in kinds and exact is None:
+            x, chi2 = quadratic_fit(r0, s, cand.reference, cand.lower, cand.upper)
+            if np.any(x):
+                fits.append((chi2, i, x))
+    for _, i, x in sorted(fits, key=lambda f: f[0])[:LINE_SEARCH_TOP]:
+        cand = out[i][0]
+
+        def residual_at(size, cand=cand):
+            try:
+                return residual(cand, size, True)
+            except (InputError, SolverError):
+                return None
+        found = line_search(residual_at, x, cand.lower, cand.upper)
+        if found is not None:
+            size, r, chi2 = found
+            out[i] = (cand, secant(r0, r, size), (size, chi2))
+
+
+def secant(r0, r, x) -> np.ndarray:
+    """(n_data, npar) S with S x = r - r0 and S y = 0 for y orthogonal to x (0 when x = 0)."""
+    x = np.asarray(x, float)
+    if not np.any(x):
+        return np.zeros((np.size(r0), x.size))
+    return np.outer(np.asarray(r) - np.asarray(r0), x) / (x @ x)

@@ -12,6 +12,7 @@ from typing import Mapping, NamedTuple
 import numpy as np
 import xarray as xr
 
+from pipeline.diagnose.mirror import site_values
 from structures.common.errors import InputError
 
 VERDICTS = ("effect", "none", "ambiguous", "unexplained")
@@ -64,11 +65,20 @@ def _location_dict(location) -> dict:
 
 
 def effect_json(record: EffectRecord) -> dict:
-    """{"kind", "location", "parameters", "label", "score"} of a named effect."""
+    """{"kind", "location", "parameters", "label", "score", "sites"} of a named effect.
+
+    ``sites`` lists the places it acts on, each with its ``location`` and ``parameters``: one for
+    a one-sided effect, two for a mirror pair (:mod:`pipeline.diagnose.mirror`; ``location`` is
+    then the union of both and ``parameters`` the first site's: a pair of masses adds
+    ``parameters["mass"]`` at each, twice in all).
+    """
     cand = record.candidate
     return {"kind": cand.kind, "location": _location_dict(cand.location),
             "parameters": {name: float(v) for name, v in zip(cand.parameters, record.values)},
-            "label": cand.label, "score": float(record.score)}
+            "label": cand.label, "score": float(record.score),
+            "sites": [{"location": _location_dict(site.location),
+                       "parameters": {name: float(v) for name, v in zip(site.parameters, x)}}
+                      for site, x in site_values(cand, record.values)]}
 
 
 def _clean(value):

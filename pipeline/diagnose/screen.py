@@ -33,12 +33,14 @@ h_k = the candidate's ``reference`` size, r the training residual of every confi
   over k has valleys a few percent of k wide; the frame's seed 8 of the blind study: exact chi^2
   1.6e3 at k = 0.124, 1.3e4 at 0.13, 1.9e4 at 0.117, the secant at 0.1 misses it): the modes on
   one Ritz basis per configuration and round (:mod:`pipeline.diagnose.grounded`, the current
-  modes and the spring's residual attachment vector; K(k) is a rank-one change, frequencies
+  modes and the spring's residual attachment vector; K(k) is a rank-one change, rank two for a
+  mirror pair, frequencies
   within 2e-6 of exact reanalysis) at the sizes of :func:`pipeline.diagnose.grounded.ladder_sizes`
   (quarter decades over the top three, intervals halved while some mode turns by more than ~18
   degrees across them, down to 1/128 decade); the best rung's size and chi^2 on the basis are the
   candidate's screening result, the secant to it its signature (cost on the frame, 264
-  candidates and ~5,900 rungs: ~5 s a round on a shared core, against 0.25 s for the secants).
+  one-sided candidates and ~5,900 rungs: ~5 s a round on a shared core, against 0.25 s for the
+  secants; the 114 mirror pairs add about as much again).
 
 - *quadratic* (:data:`QUADRATIC_KINDS`, a member's bow: its stiffness changes to second order,
   its couplings to first, so no secant is right at more than one size): the second-order model
@@ -46,7 +48,8 @@ h_k = the candidate's ``reference`` size, r the training residual of every confi
   h_k, 2 h_k and h_k + h_l (the first-order eigenvalue perturbation would miss the
   (phi_k^T dK_1 phi_j)^2 / (lambda_j - lambda_k) term of the couplings, the same order in the
   bow as the stiffness change; samples shared by a member's two quadrant candidates), fitted
-  within the sampled span; the :data:`LINE_SEARCH_TOP` best of them then get an exact line search
+  within the sampled span; the :data:`pipeline.diagnose.quadratic.LINE_SEARCH_TOP` best of them
+  then get an exact line search
   to their bounds (:func:`pipeline.diagnose.quadratic.line_search`), whose best size and exact
   chi^2 are their screening result.
 
@@ -56,7 +59,8 @@ chi^2.
 
 **Refit**: bounded nonlinear least squares with reanalysis (``scipy.optimize.least_squares``) of
 the effect's parameters together with the nominal parameters (:mod:`pipeline.diagnose.calibrate`),
-started at the best of the linear fit and its fractions :data:`REFIT_START`; ranked by BIC = chi^2 + p ln n (Schwarz 1978).
+started at the best of the linear fit and its fractions :data:`REFIT_START`; ranked by
+BIC = chi^2 + p ln n (Schwarz 1978).
 """
 from __future__ import annotations
 
@@ -72,8 +76,8 @@ from pipeline.diagnose.grounded import SPRING_LADDER, ladder_sizes, reduce_sprin
 from pipeline.diagnose.joints import hangs_nothing
 from pipeline.diagnose.ladder import reduce_joint
 from pipeline.diagnose.mirror import sites
-from pipeline.diagnose.quadratic import (coefficients, line_search, monomials, quadratic_fit,
-                                         sample_points)
+from pipeline.diagnose.quadratic import (coefficients, line_searches, monomials, quadratic_fit,
+                                         sample_points, secant)
 from structures.assembly import assemble_g
 from structures.common.errors import InputError, SolverError
 from structures.massprops import mass_properties
@@ -84,9 +88,6 @@ LADDER_KINDS = ("joint_flexibility",)
 #: Kinds screened with the quadratic model of :mod:`pipeline.diagnose.quadratic` (a member's
 #: bow: stiffness ~ bow^2, couplings ~ bow; the effects.py docstring).
 QUADRATIC_KINDS = ("member_curvature",)
-#: Quadratic-kind candidates (best model fits first) given the exact line search: a member's two
-#: quadrant candidates for the two best members.
-LINE_SEARCH_TOP = 4
 #: One-sided joint candidates (detail ``dependent``) are screened for the rigid elements of this
 #: many best whole-joint candidates only (a one-sided joint is a variant of its whole joint).
 ONE_SIDED_TOP = 5
@@ -252,9 +253,9 @@ def signatures(problem: Problem, theta, effects, evaluations, candidates, *, pro
         """A grounded spring's rungs (:func:`pipeline.diagnose.grounded.ladder_sizes`) on the
         Ritz bases of :mod:`pipeline.diagnose.grounded`, one per configuration and round."""
         if not springs:
-            springs.extend(spring_basis(m, ref.sensor_index if ref.has_shapes else
-                                        np.zeros(0, int), ref.nmodes)
-                           for ref, m in zip(problem.refs, models))
+            bases = [spring_basis(m, ref.sensor_index if ref.has_shapes else np.zeros(0, int),
+                                  ref.nmodes) for ref, m in zip(problem.refs, models)]
+            springs.extend(bases)                   # all configurations or none (a failure)
         reds = [reduce_spring(b, cand, cand.upper[0] * SPRING_LADDER[0]) for b in springs]
         return _ladder(cand, r0, residual, lambda size: on_bases(reds, size),
                        sizes=ladder_sizes(reds, cand.upper[0]))
@@ -305,43 +306,11 @@ def signatures(problem: Problem, theta, effects, evaluations, candidates, *, pro
 
     run([c for c in candidates if not one_sided(c)])
     whole = sorted((exact[1], cand.location.elements[0]) for cand, _, exact in out
-                   if cand.kind in LADDER_KINDS)
+                   if cand.kind in LADDER_KINDS and cand.get("sites") is None)
     best = {eid for _, eid in whole[:ONE_SIDED_TOP]}
     run([c for c in candidates if one_sided(c) and c.location.elements[0] in best])
-    _line_searches(out, r0, residual)
+    line_searches(out, r0, residual, QUADRATIC_KINDS)
     return r0, out, skipped
-
-
-def _line_searches(out, r0, residual) -> None:
-    """The exact line search (module docstring) of the :data:`LINE_SEARCH_TOP` quadratic-kind
-    entries of ``out`` whose model fits best; each is replaced in place by
-    (Candidate, S, (x*, chi2*))."""
-    fits = []
-    for i, (cand, s, exact) in enumerate(out):
-        if cand.kind in QUADRATIC_KINDS and exact is None:
-            x, chi2 = quadratic_fit(r0, s, cand.reference, cand.lower, cand.upper)
-            if np.any(x):
-                fits.append((chi2, i, x))
-    for _, i, x in sorted(fits, key=lambda f: f[0])[:LINE_SEARCH_TOP]:
-        cand = out[i][0]
-
-        def residual_at(size, cand=cand):
-            try:
-                return residual(cand, size, True)
-            except (InputError, SolverError):
-                return None
-        found = line_search(residual_at, x, cand.lower, cand.upper)
-        if found is not None:
-            size, r, chi2 = found
-            out[i] = (cand, _secant(r0, r, size), (size, chi2))
-
-
-def _secant(r0, r, x) -> np.ndarray:
-    """(n_data, npar) S with S x = r - r0 and S y = 0 for y orthogonal to x (0 when x = 0)."""
-    x = np.asarray(x, float)
-    if not np.any(x):
-        return np.zeros((np.size(r0), x.size))
-    return np.outer(np.asarray(r) - np.asarray(r0), x) / (x @ x)
 
 
 def _ladder(cand, r0, residual, approximate=None, sizes=None) -> tuple:
@@ -379,7 +348,7 @@ def _ladder(cand, r0, residual, approximate=None, sizes=None) -> tuple:
             return _ladder(cand, r0, residual)
         best = (size, r, chi_square(r))
     size, r, chi2 = best
-    return cand, ((r - r0) / size)[:, None], (np.array([size]), chi2)
+    return cand, secant(r0, r, [size]), (np.array([size]), chi2)
 
 
 def linear_fit(r0, signature, lower, upper) -> tuple[np.ndarray, float]:
@@ -409,7 +378,7 @@ def screen(r0, signed) -> list:
             x, chi2 = exact
         elif cand.kind in QUADRATIC_KINDS:
             x, chi2 = quadratic_fit(r0, s, cand.reference, cand.lower, cand.upper)
-            s = _secant(r0, np.asarray(r0) + s @ monomials(x), x)
+            s = secant(r0, np.asarray(r0) + s @ monomials(x), x)
         else:
             x, chi2 = linear_fit(r0, s, cand.lower, cand.upper)
         rows.append(Screened(cand, x, chi2, chi0 - chi2, s))

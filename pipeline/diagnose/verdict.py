@@ -26,6 +26,7 @@ from __future__ import annotations
 import numpy as np
 
 from pipeline.diagnose.evidence import gof_limit
+from pipeline.diagnose.mirror import sites
 from pipeline.diagnose.predictive import held_out_evidence
 from structures.model import FEModel
 
@@ -60,7 +61,8 @@ def within_scatter(model: FEModel, candidate, values, scatter: float) -> bool:
     exactly. Such a fit is not a missing effect when it stays within ``SCATTER_SIGMAS`` x s of
     what it changes:
 
-    - ``lumped_mass``: the added mass against the CONM2 mass already at its grid;
+    - ``lumped_mass``: the added mass against the CONM2 mass already at its grid (at each grid
+      of a mirror pair: the scatter must make both);
     - ``member_taper``: the largest change of a section field, (1 + |scale|)^4 (1 + |taper| / 2)^4
       - 1 (I ~ s^4 at the member's ends), against s.
     Other kinds change nothing the scatter changes (False).
@@ -76,7 +78,8 @@ def within_scatter(model: FEModel, candidate, values, scatter: float) -> bool:
     x = dict(zip(candidate.parameters, np.abs(np.asarray(values, float))))
     if candidate.kind == "lumped_mass":
         cm = model.masses
-        local = float(cm.mass[cm.grid == candidate.location.grids[0]].sum())
+        local = min(float(cm.mass[cm.grid == site.location.grids[0]].sum())
+                    for site in sites(candidate))
         return bool(x["mass"] * candidate.get("total_mass") <= limit * local)
     if candidate.kind == "member_taper":
         change = (1.0 + x["scale"]) ** 4 * (1.0 + x.get("taper", 0.0) / 2.0) ** 4 - 1.0
@@ -175,6 +178,10 @@ def decide(none_fit, fits, margin: float, near, n_data: int, n_candidates: int =
     stiffness error does not) by the modes' model-form scatter, which says nothing about the
     weighing's scales. The p fitted parameters are charged to the modal rows in c's degrees of
     freedom (they are nearly all the data).
+
+    A mirror pair (:mod:`pipeline.diagnose.mirror`) and either of its sites alone are the same
+    kind at overlapping locations, so neither is the other's runner-up: whether one side or both
+    is named is decided by the score alone (same parameter count), not by the margin.
 
     "none" and "some effect" are given equal prior probability, shared equally by the
     ``n_candidates`` candidates, so the prior odds of "none" against one candidate are

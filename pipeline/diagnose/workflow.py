@@ -13,7 +13,8 @@
 3. Nominal calibration and model-form flags (:mod:`pipeline.diagnose.calibrate`).
 4. Screening of every candidate by its linear signature, 5. refit of the best
    (:mod:`pipeline.diagnose.screen`) and the verdict (:func:`decide`).
-6. Look again: the named effect is added and steps 4-5 repeat, up to ``settings.max_effects``.
+6. Look again: the named effect is added and steps 4-5 repeat, up to ``settings.max_effects`` (a
+   site already named is not offered again, alone or in a mirror pair).
 
 The verdict of each round is :func:`pipeline.diagnose.verdict.decide`.
 The overall verdict is ``effect`` when at least one effect was named, else the first round's.
@@ -34,6 +35,7 @@ from pipeline.diagnose.effects import KINDS, candidates, neighbours
 from pipeline.diagnose.evidence import (SELF_ORTHOGONALITY_LIMIT, build_reference, chi_square,
                                          elastic_index)
 from pipeline.diagnose.gap import gap_metrics, separating_measurement
+from pipeline.diagnose.mirror import sites
 from pipeline.diagnose.predictive import held_out_evidence, held_out_modes, kept_modes
 from pipeline.diagnose.result import CandidateScore, DiagnoseResult, EffectRecord
 from pipeline.diagnose.screen import pick_for_refit, refit, screen, signatures
@@ -299,9 +301,9 @@ def diagnose(configurations, settings: DiagnoseSettings = DiagnoseSettings(), *,
         for k in range(settings.max_effects):
             _say(progress, f"round {k + 1}: screening")
             model0 = problem.model(0, theta, effects)
-            named = {(c.kind, c.location) for c, _ in effects}
-            cands = [c for c in candidates(model0, settings.kinds)
-                     if (c.kind, c.location) not in named]
+            named = {(s.kind, s.location) for c, _ in effects for s in sites(c)}
+            cands = [c for c in candidates(model0, settings.kinds)      # a site named once
+                     if not any((s.kind, s.location) in named for s in sites(c))]
             r0, signed, skipped = signatures(problem, theta, effects, none_evs, cands,
                                              progress=progress)
             if skipped:
