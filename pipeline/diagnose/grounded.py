@@ -37,7 +37,8 @@ size k: K(k) = K + s E E^T with E = [e_1, e_2], and the basis carries both resid
 vectors, M-orthonormalised (R = [r_1, r_2]; K_r(k) = diag(Lambda, R^T K R) + s W W^T, W = Psi^T E).
 
 One factorisation of K - sigma M and one eigen-solution per configuration are shared by every
-candidate; a candidate costs one solve, and a rung one dense eigen-solution of size m + q (q = 1, or 2 for a pair).
+candidate; a candidate costs one solve, and a rung one dense eigen-solution of size m + q (q = 1,
+or 2 for a pair).
 
 The changed model's rigid-body motions are those of the current model that do not move d
 (:func:`structures.modal.rigid_body_modes` on the current assembly with the spring added: the
