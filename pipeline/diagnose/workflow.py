@@ -158,6 +158,48 @@ def _score_rows(problem: Problem, refits) -> list:
             for f in refits]
 
 
+def _prefer_one_side(problem: Problem, theta, effects, rows, fits, none, n_data: int,
+                     margin: float, jacobian) -> tuple:
+    """The round's fits without a best mirror pair that does not clearly beat its sides.
+
+    A pair (:mod:`pipeline.diagnose.mirror`) claims the effect on both sides, one of its sites
+    alone on one side only, with the same parameters: of two explanations within the margin the
+    smaller change of the model is kept (parsimony; the margin of :func:`decide`, Kass & Raftery
+    1995). When the best fit by :func:`pipeline.diagnose.verdict.round_scores` is a pair, its
+    better-screened site is refitted (if it is not among the fits) and the pair is left out when
+    that site's score is within ``margin`` of the pair's.
+
+    Returns
+    -------
+    fits : list of Refitted, with the site's fit added and the pair left out where it loses.
+    pair : Candidate or None, the pair left out.
+    """
+    if not fits:
+        return fits, None
+    n_modal = int(problem.modal_rows().sum())
+
+    def scores(refits):
+        return round_scores((*_chi2_split(problem, none), none.n_params),
+                            _score_rows(problem, refits), n_data, n_modal=n_modal)[0]
+
+    best = int(np.argmin(scores(fits)))
+    pair = fits[best].candidate
+    if pair.get("sites") is None:
+        return fits, None
+    own = sites(pair)
+    if not any(f.candidate in own for f in fits):
+        site_rows = [r for r in rows if r.candidate in own]
+        if site_rows:
+            site = refit(problem, theta, effects, max(site_rows, key=lambda r: r.drop),
+                         n_data=n_data, jacobian_theta=jacobian)
+            fits = fits + ([site] if site is not None else [])
+    score = scores(fits)
+    sides = [score[i] for i, f in enumerate(fits) if f.candidate in own]
+    if sides and min(sides) < score[best] + margin:
+        return [f for i, f in enumerate(fits) if i != best], pair
+    return fits, None
+
+
 def _say(progress, text: str) -> None:
     if progress is not None:
         progress(text)
@@ -323,6 +365,11 @@ def diagnose(configurations, settings: DiagnoseSettings = DiagnoseSettings(), *,
                 notes.append(f"round {k + 1}: {labels} left out: fitted within "
                              f"{SCATTER_SIGMAS:g} x the nominal scatter of what they change.")
                 fits = [f for f, s in zip(fits, small) if not s]
+            fits, pair = _prefer_one_side(problem, theta, effects, rows, fits, none, n_data,
+                                          settings.margin, cal.jacobian)
+            if pair is not None:
+                notes.append(f"round {k + 1}: {pair.kind} {pair.label} left out: it does not "
+                             f"beat one of its sides alone by the margin {settings.margin:g}.")
             model_k = model0
 
             def near(a, b):

@@ -268,3 +268,45 @@ def test_separating_measurement_across_an_added_grid():
 
     text = separating_measurement(problem, fit(a, "A"), fit(b, "B"))
     assert "grid 2 component 2" in text
+
+
+@pytest.mark.parametrize("pair_chi2, side_chi2, kept", [(373.8, 382.1, False),
+                                                        (340.0, 382.1, True)])
+def test_a_pair_is_named_only_when_it_beats_its_side_alone_by_the_margin(monkeypatch, pair_chi2,
+                                                                          side_chi2, kept):
+    """The frame's 'none' seed 8 (measured): a mirror pair of grounded springs at chi^2 373.8
+    against 382.1 for one of its sides, same parameter count, 375 modal rows (c = 1): the lead
+    8.3 < 10, so the pair is left out and the side (refitted here, it was not among the fits)
+    stays; a pair at 340.0 leads by 42 and stays, the side's fit added beside it."""
+    from pipeline.diagnose import workflow
+    from pipeline.diagnose.mirror import _pair
+    from pipeline.diagnose.screen import Screened
+
+    def spring(grid):
+        return Candidate("boundary_stiffness", Location(grids=(grid,)), f"grid {grid} y",
+                         ("k_y",), (0.0,), (1.0,), (0.1,), (("direction", "y"), ("k_ref", 1.0)))
+
+    side, image = spring(6102), spring(6002)
+    pair = _pair(side, image, ((1.0,), (1.0,)))
+    other = spring(2009)
+
+    def fit(cand, chi2):
+        return SimpleNamespace(candidate=cand, chi2=chi2, n_params=3)
+
+    problem = SimpleNamespace(modal_rows=lambda: np.ones(375, bool))
+    monkeypatch.setattr(workflow, "_chi2_split", lambda problem, f: (f.chi2, 0.0))
+    refitted = []
+
+    def refit(problem, theta, effects, row, **kw):
+        refitted.append(row.candidate)
+        return fit(row.candidate, side_chi2)
+
+    monkeypatch.setattr(workflow, "refit", refit)
+    rows = [Screened(c, np.array([0.02]), 0.0, drop, None)
+            for c, drop in ((pair, 30.0), (side, 20.0), (image, 5.0), (other, 3.0))]
+    fits = [fit(pair, pair_chi2), fit(other, 395.0)]
+    none = fit(None, 406.0)
+    out, dropped = workflow._prefer_one_side(problem, None, (), rows, fits, none, 375, 10.0, None)
+    assert refitted == [side]                     # the better-screened side, refitted once
+    assert [f.candidate for f in out] == ([pair, other, side] if kept else [other, side])
+    assert dropped is (None if kept else pair)
