@@ -223,7 +223,25 @@ def reduce_spring(basis: SpringBasis, candidate, smallest: float) -> ReducedSpri
     dofs = [6 * int(model.grids.index([site.location.grids[0]])[0])
             + DIRECTIONS.index(site.get("direction")) for site in sites(candidate)]
     e = np.asarray(system.T[dofs].toarray()).T                             # T^T 1_d, (na, q)
-    k_ref = float(candidate.get("k_ref"))
+    return reduce_load(basis, e, float(candidate.get("k_ref")), smallest)
+
+
+def reduce_load(basis: SpringBasis, e, k_ref: float, smallest: float) -> ReducedSpring:
+    """Springs K(k) = K + k k_ref E E^T of load vectors ``e`` on the basis's Ritz basis.
+
+    Parameters
+    ----------
+    basis : SpringBasis
+    e : (na, q) a-set load vectors (a grounded spring's T^T 1_d; a spring between two grids,
+        :mod:`pipeline.diagnose.loadpath`, the difference of their displacements along it).
+    k_ref : float, stiffness per unit size.
+    smallest : float, as :func:`reduce_spring`.
+
+    Returns
+    -------
+    ReducedSpring
+    """
+    model, system = basis.model, basis.system
     phi, lam = basis.phi, basis.lam
     # residual attachment vectors (Weissenburger 1968): the static response minus the kept modes'
     r = np.asarray(basis.factor.solve(e)).reshape(e.shape) \
@@ -245,7 +263,7 @@ def reduce_spring(basis: SpringBasis, candidate, smallest: float) -> ReducedSpri
     names = (list(rigid) + [""] * n)[:n]
     template = xr.Dataset({"frequency": ("mode", np.zeros(n), {"units": "Hz"})},
                           coords={"rigid_motion": ("mode", np.array(names, dtype=str))})
-    return ReducedSpring(k0=k0, w=psi.T @ e, k_ref=k_ref,
+    return ReducedSpring(k0=k0, w=psi.T @ e, k_ref=float(k_ref),
                          sensor=np.asarray(basis.sensor @ psi), rigid=list(rigid),
                          props=basis.props, nmodes=basis.nmodes, template=template)
 
@@ -263,10 +281,10 @@ def _turned(a, b) -> bool:
     return bool(np.any(kept[lam_b > 0] < ROTATION_LIMIT))
 
 
-def ladder_sizes(reduced, upper: float) -> np.ndarray:
+def ladder_sizes(reduced, upper: float, ladder=SPRING_LADDER) -> np.ndarray:
     """Sizes at which a grounded-spring candidate is analysed.
 
-    :data:`SPRING_LADDER` times ``upper``, every interval halved (geometric mean) while the
+    ``ladder`` (:data:`SPRING_LADDER`) times ``upper``, every interval halved (geometric mean) while the
     modes of some configuration turn across it (:data:`ROTATION_LIMIT`), down to
     :data:`FINEST_STEP`. Costs eigen-solutions of size m + q only.
 
@@ -274,6 +292,7 @@ def ladder_sizes(reduced, upper: float) -> np.ndarray:
     ----------
     reduced : sequence of ReducedSpring, one per configuration.
     upper : float, the parameter's upper bound.
+    ladder : ascending fractions of ``upper``.
 
     Returns
     -------
@@ -282,7 +301,7 @@ def ladder_sizes(reduced, upper: float) -> np.ndarray:
     def solved(size):
         return [r.solve(size) for r in reduced]
 
-    sizes = list(upper * np.asarray(SPRING_LADDER))
+    sizes = list(upper * np.asarray(ladder))
     out = [sizes[0]]
     previous = solved(sizes[0])
     for size in sizes[1:]:

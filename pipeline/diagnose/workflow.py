@@ -35,6 +35,7 @@ from pipeline.diagnose.effects import KINDS, candidates, neighbours
 from pipeline.diagnose.evidence import (SELF_ORTHOGONALITY_LIMIT, build_reference, chi_square,
                                          elastic_index)
 from pipeline.diagnose.gap import gap_metrics, separating_measurement
+from pipeline.diagnose.loadpath import best_load_path, outscores
 from pipeline.diagnose.mirror import sites
 from pipeline.diagnose.predictive import held_out_evidence, held_out_modes, kept_modes
 from pipeline.diagnose.result import CandidateScore, DiagnoseResult, EffectRecord
@@ -382,8 +383,22 @@ def diagnose(configurations, settings: DiagnoseSettings = DiagnoseSettings(), *,
             verdict, best, runner, lead, reason, c = decide(
                 scored[0], scored[1], settings.margin, near, n_data, len(cands),
                 n_modal=scored[2], held_out=(modes_none, modes, entries))
+            path = None
+            if verdict == "effect":
+                verdict, path = _load_path_check(problem, theta, effects, none_evs, r0, scored,
+                                                 best, c, n_data, len(cands),
+                                                 settings.margin)
             rounds.append(_round_record(k, verdict, fits, best, runner, none,
-                                        (modes_none, modes, entries), n_data, scored + (c,)))
+                                        (modes_none, modes, entries), n_data, scored + (c,),
+                                        path))
+            if path is not None and verdict == "unexplained":
+                cand = fits[best].candidate
+                notes.append(f"round {k + 1}: {cand.kind} {cand.label} is not named: a load "
+                             "path the library does not hold, a spring between grids "
+                             f"{path[0].grids[0]} and {path[0].grids[1]} "
+                             f"(k = {path[0].stiffness:.4g}), fits the training data better "
+                             f"(score {path[1]:.1f} against {path[2]:.1f}): the effect is "
+                             "outside the library.")
             if reason == "held_out":
                 cand, vetoed = fits[best].candidate, rounds[-1]["best"]
                 kept = np.asarray(vetoed["held_out_modes_kept"])
@@ -431,14 +446,29 @@ def _none_fit(problem: Problem, cal, n_data: int):
                     len(cal.theta), cal.evaluations)
 
 
+def _load_path_check(problem: Problem, theta, effects, evaluations, r0, scored, best: int,
+                     c: float, n_data: int, n_candidates: int, margin: float) -> tuple:
+    """(verdict, (LoadPath, its score, the named effect's score) or None): "unexplained" when the
+    best load path (:mod:`pipeline.diagnose.loadpath`) beats the named effect by the margin."""
+    found = best_load_path(problem, theta, effects, evaluations, r0)
+    if found is None:
+        return "effect", None
+    scores, _, _ = round_scores(scored[0], scored[1], n_data, n_candidates, n_modal=scored[2])
+    beats, score = outscores(found, float(scores[best]), problem.modal_rows(), c,
+                             problem.n_theta, n_data, n_candidates, margin)
+    return ("unexplained" if beats else "effect"), (found, score, float(scores[best]))
+
+
 def _round_record(k: int, verdict: str, fits, best, runner, none, held_out, n_data: int,
-                  scored) -> dict:
+                  scored, path=None) -> dict:
     """The JSON record of round k (:class:`pipeline.diagnose.result.DiagnoseResult` ``rounds``).
 
     ``held_out`` is (modes_none, per fit modes, entries) of
     :func:`pipeline.diagnose.predictive.held_out_modes`; ``scored`` is (the "none" row, the fits'
     rows, n_modal, c) that :func:`pipeline.diagnose.verdict.decide` took and returned (rows
-    (..., chi2_modal, chi2_stated, n_params), c the modal dispersion).
+    (..., chi2_modal, chi2_stated, n_params), c the modal dispersion); ``path`` is
+    (LoadPath, its score, the named effect's score) of :func:`_load_path_check`, or None when
+    the round named nothing.
     """
     modes_none, modes, entries = held_out
     none_row, rows, n_modal, c = scored
@@ -463,4 +493,8 @@ def _round_record(k: int, verdict: str, fits, best, runner, none, held_out, n_da
             "none_held_out_chi2": float(modes_none.sum()),
             "none_held_out_modes_chi2": modes_none.tolist(),
             "best": entry(best), "runner_up": entry(runner),
-            "fits": [entry(i) for i in range(len(fits))]}
+            "fits": [entry(i) for i in range(len(fits))],
+            "load_path": None if path is None else {
+                "grids": list(path[0].grids), "stiffness": path[0].stiffness,
+                "chi2": chi_square(path[0].residual), "n_pairs": path[0].n_pairs,
+                "score": path[1], "named_score": path[2]}}
