@@ -226,7 +226,8 @@ def reduce_spring(basis: SpringBasis, candidate, smallest: float) -> ReducedSpri
     return reduce_load(basis, e, float(candidate.get("k_ref")), smallest)
 
 
-def reduce_load(basis: SpringBasis, e, k_ref: float, smallest: float) -> ReducedSpring:
+def reduce_load(basis: SpringBasis, e, k_ref: float, smallest: float, *,
+                rigid: list | None = None) -> ReducedSpring:
     """Springs K(k) = K + k k_ref E E^T of load vectors ``e`` on the basis's Ritz basis.
 
     Parameters
@@ -236,6 +237,9 @@ def reduce_load(basis: SpringBasis, e, k_ref: float, smallest: float) -> Reduced
         :mod:`pipeline.diagnose.loadpath`, the difference of their displacements along it).
     k_ref : float, stiffness per unit size.
     smallest : float, as :func:`reduce_spring`.
+    rigid : list of str, optional, the rigid-body motions of the changed model when they are
+        known (a spring between two grids along the line joining them holds none: the current
+        model's); else named as :func:`reduce_spring` says.
 
     Returns
     -------
@@ -256,9 +260,10 @@ def reduce_load(basis: SpringBasis, e, k_ref: float, smallest: float) -> Reduced
     k0 = np.zeros((psi.shape[1], psi.shape[1]))
     k0[np.diag_indices(lam.size)] = lam
     k0[lam.size:, lam.size:] = q.T @ (system.K @ q)
-    load = sp.csc_matrix(e)
-    held = (system.K + (smallest * k_ref) * (load @ load.T)).tocsc()
-    _, rigid = rigid_body_modes(model, replace(system, K=held))
+    if rigid is None:
+        load = sp.csc_matrix(e)
+        held = (system.K + (smallest * k_ref) * (load @ load.T)).tocsc()
+        _, rigid = rigid_body_modes(model, replace(system, K=held))
     n = min(basis.nmodes, psi.shape[1])
     names = (list(rigid) + [""] * n)[:n]
     template = xr.Dataset({"frequency": ("mode", np.zeros(n), {"units": "Hz"})},

@@ -18,12 +18,13 @@ v^T u = n . (u_a - u_b), dM = 0: to first order it raises eigenvalue j by h d_j^
 the modes' relative displacement along n (rigid-body motions have d = 0: a rotation moves a and
 b apart at right angles to n), which sets the pair's stiffness scale (:data:`STEP`). Every pair
 is analysed on the Ritz basis of :mod:`pipeline.diagnose.grounded` (the current modes and the
-spring's residual attachment vector, v its load vector) at the sizes of
-:func:`pipeline.diagnose.grounded.ladder_sizes` over :data:`LADDER`, paired again at every size;
-the lowest chi^2 over pairs and sizes is the load path. A first-order (linear) screening would
-not do: a brace stiff enough to matter saturates (on the frame's outside seed 3 the brace of the
-truth ranked 34th of 1331 pairs by its linear fit and has the lowest exact chi^2, 915 against
-5684 for the best of the 8 linear leaders). Cost on the frame: ~7 ms a pair, ~10 s a round.
+spring's residual attachment vector, v its load vector) at the sizes of :data:`LADDER`, paired
+again at every size, and the :data:`REFINED` best pairs again on the ladder's refinement
+(:func:`pipeline.diagnose.grounded.ladder_sizes`, where a pair of modes veers); the lowest
+chi^2 over pairs and sizes is the load path. A first-order (linear) screening would not do: a
+brace stiff enough to matter saturates (on the frame's outside seed 3 the brace of the truth
+ranked 34th of 1331 pairs by its linear fit and has the lowest exact chi^2, 915 against 5684 for
+the best of the 8 linear leaders). Cost on the frame: ~3 ms a pair.
 
 **Score** (:func:`outscores`): chi2_modal / c + chi2_stated + (n_theta + 1) ln n + 2 ln n_pairs,
 c the round's modal dispersion (:func:`pipeline.diagnose.verdict.round_scores`), against the
@@ -42,6 +43,7 @@ from scipy.sparse.csgraph import dijkstra
 from pipeline.diagnose.evidence import chi_square, evaluate_modes
 from pipeline.diagnose.grounded import ladder_sizes, reduce_load, spring_basis
 from pipeline.diagnose.members import connectivity
+from structures.modal import rigid_body_modes
 from structures.model import FEModel
 
 #: Fewest elements between the two grids of a load path (two grids one or two elements apart are
@@ -57,6 +59,9 @@ STEP = 1e-2
 #: eigenvalue change at first order up to a nearly rigid link, where the modes saturate).
 SPAN = 10.0 ** 3.5
 LADDER = tuple(10.0 ** (-np.arange(17)[::-1] / 4.0))
+#: Pairs whose best size on :data:`LADDER` is lowest that are analysed again on its refinement
+#: (:func:`pipeline.diagnose.grounded.ladder_sizes`: intervals halved where the modes turn).
+REFINED = 24
 #: Rows of the hop-distance matrix computed at once.
 CHUNK = 512
 
@@ -163,22 +168,37 @@ def best_load_path(problem, theta, effects, evaluations, r0) -> LoadPath | None:
     bases = [spring_basis(m, ref.sensor_index if ref.has_shapes else np.zeros(0, int), ref.nmodes)
              for ref, m in zip(problem.refs, models)]
     basic = [(b.system.rotation @ b.system.T).tocsr() for b in bases]     # (n_g, na)
-    best, best_chi2 = None, chi_square(r0)
-    for p in np.flatnonzero(ratio > 0.0):
-        upper = STEP / ratio[p] * SPAN
-        reduced = []
-        for basis, rt, pr, n in zip(bases, basic, prs, ns):
+    rigid = [rigid_body_modes(b.model, b.system)[1] for b in bases]      # a brace holds none
+
+    def reduced(p):
+        out = []
+        for basis, rt, pr, n, names in zip(bases, basic, prs, ns, rigid):
             a, b = 6 * pr[p, 0], 6 * pr[p, 1]
             v = np.asarray((rt[a:a + 3] - rt[b:b + 3]).T @ n[p]).ravel()  # v^T u = n.(u_a - u_b)
-            reduced.append(reduce_load(basis, v[:, None], 1.0, upper * LADDER[0]))
-        for size in ladder_sizes(reduced, upper, LADDER):
-            parts = []
-            for ref, red in zip(problem.refs, reduced):
-                modes, shapes = red.modes(size)
-                parts.append(evaluate_modes(ref, modes["frequency"].values,
-                                            shapes if ref.has_shapes else None, red.props,
-                                            modes=modes).vector(ref.train))
-            r = np.concatenate(parts + [prior])
+            out.append(reduce_load(basis, v[:, None], 1.0, STEP / ratio[p] * SPAN * LADDER[0],
+                                   rigid=names))
+        return out
+
+    def residual(reds, size):
+        parts = []
+        for ref, red in zip(problem.refs, reds):
+            modes, shapes = red.modes(size)
+            parts.append(evaluate_modes(ref, modes["frequency"].values,
+                                        shapes if ref.has_shapes else None, red.props,
+                                        modes=modes).vector(ref.train))
+        return np.concatenate(parts + [prior])
+
+    coarse = []
+    for p in np.flatnonzero(ratio > 0.0):
+        reds = reduced(p)
+        sizes = STEP / ratio[p] * SPAN * np.asarray(LADDER)
+        coarse.append((min(chi_square(residual(reds, size)) for size in sizes), int(p)))
+    coarse.sort()
+    best, best_chi2 = None, chi_square(r0)
+    for _, p in coarse[:REFINED]:
+        reds = reduced(p)
+        for size in ladder_sizes(reds, STEP / ratio[p] * SPAN, LADDER):
+            r = residual(reds, size)
             if chi_square(r) < best_chi2:
                 best_chi2 = chi_square(r)
                 best = LoadPath(tuple(int(g) for g in ids[p]), float(size), r, len(ids))

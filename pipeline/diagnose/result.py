@@ -125,7 +125,10 @@ class DiagnoseResult:
         held_out_chi2, held_out_modes_chi2, held_out_modes_kept (the modes either model
         reproduces), held_out_evidence, parameters); the held-out chi^2 is over the held-out
         modes' residual entries (:func:`pipeline.diagnose.predictive.held_out_modes`,
-        :func:`pipeline.diagnose.predictive.held_out_evidence`).
+        :func:`pipeline.diagnose.predictive.held_out_evidence`); ``load_path`` (when the
+        round's verdict named an effect, or would have: the best spring between two grids,
+        :mod:`pipeline.diagnose.loadpath`: its ``grids``, ``stiffness``, ``chi2``, ``n_pairs``,
+        ``score`` and the named effect's ``named_score``), else null.
     """
 
     verdict: str

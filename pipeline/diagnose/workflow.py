@@ -16,7 +16,9 @@
 6. Look again: the named effect is added and steps 4-5 repeat, up to ``settings.max_effects`` (a
    site already named is not offered again, alone or in a mirror pair).
 
-The verdict of each round is :func:`pipeline.diagnose.verdict.decide`.
+The verdict of each round is :func:`pipeline.diagnose.verdict.decide`; an effect it names must
+also beat the best load path between two grids, an effect the library does not hold
+(:mod:`pipeline.diagnose.loadpath`), else the round is ``unexplained``.
 The overall verdict is ``effect`` when at least one effect was named, else the first round's.
 """
 from __future__ import annotations
