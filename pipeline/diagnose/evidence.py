@@ -368,27 +368,96 @@ def elastic_index(modes: xr.Dataset) -> np.ndarray:
     return np.arange(modes.sizes["mode"])
 
 
-def pair(ref: Reference, modes: xr.Dataset, *, sensor_shapes=None) -> np.ndarray:
-    """Pair the test modes with elastic analysis modes: MAC assignment, or nearest frequency.
+def pairing_cost(ref: Reference, frequency, sensor_shapes) -> np.ndarray:
+    """chi^2 of the residual entries of every test mode paired with every analysis mode.
 
-    A mode the sensors do not see (:data:`INVISIBLE`, e.g. an in-plane mode at out-of-plane
-    sensors) gets MAC 0: its rounding-level shape at the sensors would otherwise give any MAC.
+    Entry (j, k) is what mode j adds to chi^2 when paired with analysis mode k: the frequency
+    entry ((f_k - f_jG) / f_jG / sigma_fj)^2 plus the shape entries of
+    :func:`shape_residual`, sum_i keep_ji (u_ji - alpha_jk v_ki)^2 / scale_ji^2 with
+    u_j = A0^+ t_j, v_k = A0^+ a_k and alpha_jk = a_k . t_j / a_k . a_k (0 for a mode the sensors
+    do not see at all).
+
+    Parameters
+    ----------
+    ref : Reference with its projector (after :func:`build_reference`).
+    frequency : (n_fe,) analysis frequencies [Hz].
+    sensor_shapes : (n_fe, n_dof) analysis shapes at the measured DOFs.
+
+    Returns
+    -------
+    (n_test, n_fe) float
+    """
+    f = np.asarray(frequency, float)
+    a = np.asarray(sensor_shapes, float)
+    f_cost = ((f[None, :] - ref.test_frequency[:, None]) / ref.test_frequency[:, None]
+              / ref.frequency_sigma[:, None]) ** 2
+    w = ref.shape_keep / ref.shape_scale ** 2                              # (n_test, m)
+    u = ref.shapes @ ref.projector.T                                       # (n_test, m)
+    v = a @ ref.projector.T                                                # (n_fe, m)
+    norm = np.sum(a * a, axis=1)
+    alpha = np.divide(ref.shapes @ a.T, norm[None, :], out=np.zeros((u.shape[0], a.shape[0])),
+                      where=norm[None, :] > 0.0)                           # (n_test, n_fe)
+    s_cost = (np.sum(w * u * u, axis=1)[:, None] - 2.0 * alpha * ((w * u) @ v.T)
+              + alpha ** 2 * (w @ (v * v).T))
+    return f_cost + s_cost
+
+
+def pair(ref: Reference, modes: xr.Dataset, *, sensor_shapes=None) -> np.ndarray:
+    """Pair the test modes with elastic analysis modes.
+
+    - Once the residual is defined (``ref.projector`` set by :func:`build_reference`): the
+      assignment that makes the training and held-out residual smallest, sum_j cost(j, k_j) of
+      :func:`pairing_cost` (Hungarian method). The pairing is a discrete unknown of the model;
+      this is its maximum-likelihood value, the same criterion every fit minimises, so chi^2 is
+      the minimum over assignments of continuous functions of the model and stays continuous
+      where the best assignment changes (a MAC assignment ignores the frequencies: a test mode
+      whose shape the model lacks would go to whichever analysis mode its shape resembles most,
+      at any frequency, and chi^2 would jump by thousands when that choice flips).
+    - The nominal pairing in :func:`build_reference`, which defines the residual, and any
+      pairing without shapes: :func:`mac_pairing`.
 
     Returns
     -------
     ndarray of int, shape (n_test,)
         Index along ``modes.mode``.
     """
+    if ref.projector is None or not ref.has_shapes:
+        return mac_pairing(ref, modes, sensor_shapes=sensor_shapes)
+    elastic = _elastic(ref, modes)
+    if sensor_shapes is None:
+        sensor_shapes = modes["shape"].values[:, ref.sensor_index]
+    rows, cols = linear_sum_assignment(pairing_cost(ref, modes["frequency"].values[elastic],
+                                                    np.asarray(sensor_shapes)[elastic]))
+    out = np.empty(ref.test_frequency.size, int)
+    out[rows] = cols
+    return elastic[out]
+
+
+def _elastic(ref: Reference, modes: xr.Dataset) -> np.ndarray:
     elastic = elastic_index(modes)
-    f_fe = modes["frequency"].values[elastic]
     if elastic.size < ref.test_frequency.size:
         raise InputError(f"configuration {ref.name}: {ref.test_frequency.size} test modes but only "
                          f"{elastic.size} elastic analysis modes. Fix: raise settings.nmodes.")
+    return elastic
+
+
+def mac_pairing(ref: Reference, modes: xr.Dataset, *, sensor_shapes=None) -> np.ndarray:
+    """Pair the test modes with elastic analysis modes as a correlation report does: MAC
+    assignment (paper eq. 23, :func:`structures.pairing.pair_modes`; a mode the sensors do not
+    see, :data:`INVISIBLE`, gets MAC 0), or nearest frequency without shapes.
+
+    Returns
+    -------
+    ndarray of int, shape (n_test,)
+        Index along ``modes.mode``.
+    """
+    elastic = _elastic(ref, modes)
+    f_fe = modes["frequency"].values[elastic]
     if not ref.has_shapes:
         return elastic[pair_frequency_only(ref.test_frequency, f_fe)]
     if sensor_shapes is None:
         sensor_shapes = modes["shape"].values[:, ref.sensor_index]
-    seen = sensor_shapes[elastic]
+    seen = np.asarray(sensor_shapes)[elastic]
     rms = np.sqrt(np.mean(seen ** 2, axis=1))
     metric = mac(ref.shapes.T, seen.T) * (rms >= INVISIBLE * rms.max())[None, :]   # eq. 23
     return elastic[pair_modes(metric, ref.test_frequency, f_fe).fe_index]
@@ -476,7 +545,7 @@ def build_reference(name: str, model: FEModel, gvt: xr.Dataset, measured_mass: M
                     frequency_sigma=np.full(f_test.size, float(frequency_noise)),
                     shape_sigma=noise, train=~holdout_mask(f_test.size, holdout, rotation),
                     measured_mass=measured, mass_scale=mass_scales(measured, mass_properties(model)), nmodes=nmodes)
-    paired = pair(ref, modes)
+    paired = mac_pairing(ref, modes)
     facts["paired_fe_mode"] = modes["mode"].values[paired].tolist()
     rigid = np.setdiff1d(np.arange(modes.sizes["mode"]), elastic_index(modes))
     keep = np.concatenate([rigid, paired])

@@ -1,6 +1,10 @@
 """The gap between model and test (before / after), and the measurement that separates two fits.
 
-Gap metrics (issue 14 step 6, the contract's JSON keys), over all configurations:
+Gap metrics (issue 14 step 6, the contract's JSON keys), over all configurations, of the modes
+paired as a correlation report pairs them (:func:`pipeline.diagnose.evidence.mac_pairing`: MAC
+assignment, eq. 23; the fits pair by likelihood, :func:`pipeline.diagnose.evidence.pair`, which
+within a pair of close modes follows the frequencies where the shapes cannot tell them apart, and
+would make a cross-orthogonality off-diagonal of such a pair ~1 by construction):
 
 - ``frequency_rms_held_out`` / ``frequency_rms``: RMS of 100 (f_FE - f_GVT) / f_GVT (paper eq. 18)
   over the held-out paired modes / all paired modes [%];
@@ -22,18 +26,17 @@ from __future__ import annotations
 
 import numpy as np
 
-from pipeline.diagnose.evidence import elastic_index
+from pipeline.diagnose.evidence import elastic_index, mac_pairing
 from pipeline.diagnose.weighing import mass_references
 from structures.correlation import cross_orthogonality, mac, serep_coordinates
 
 
 
-def _cross_offdiag(ref, ev) -> tuple[float, float]:
+def _cross_offdiag(ref, modes, paired) -> tuple[float, float]:
     """Largest |S_ij|, i != j, over all test modes and over the held-out ones (rows i)."""
-    modes = ev.modes
     phi_m = modes["shape"].values[:, ref.sensor_index]
     rigid = np.setdiff1d(np.arange(modes.sizes["mode"]), elastic_index(modes))
-    keep = np.concatenate([rigid, ev.paired])
+    keep = np.concatenate([rigid, paired])
     q = serep_coordinates(phi_m[keep].T, ref.shapes.T)                     # eq. 14
     s = np.abs(cross_orthogonality(q, np.eye(keep.size)))[:, rigid.size:]   # eq. 20, paired block
     off = s - np.diag(np.diag(s))
@@ -46,14 +49,16 @@ def gap_metrics(problem, evaluations) -> dict:
     cross, cross_held, macs, macs_held = [], [], [], []
     mass_by = {}
     for ref, ev in zip(problem.refs, evaluations):
-        err = 100.0 * ev.frequency * ref.frequency_sigma                  # eq. 18 in %
+        paired = mac_pairing(ref, ev.modes)
+        f_fe = ev.modes["frequency"].values[paired]
+        err = 100.0 * (f_fe - ref.test_frequency) / ref.test_frequency       # eq. 18 in %
         errors.append(err)
         held.append(err[~ref.train])
         if ref.has_shapes:
-            both, held_only = _cross_offdiag(ref, ev)
+            both, held_only = _cross_offdiag(ref, ev.modes, paired)
             cross.append(both)
             cross_held.append(held_only)
-            phi = ev.modes["shape"].values[ev.paired][:, ref.sensor_index]
+            phi = ev.modes["shape"].values[paired][:, ref.sensor_index]
             macs.append(np.diag(mac(ref.shapes.T, phi.T)))                 # eq. 23
             macs_held.append(macs[-1][~ref.train])
         if ref.measured_mass:

@@ -70,6 +70,10 @@ class ReducedJoint:
     props: object
     nmodes: int
 
+    def properties(self, compliance: float):
+        """Mass properties (the same at every compliance)."""
+        return self.props
+
     def modes(self, compliance: float) -> tuple[xr.Dataset, np.ndarray]:
         """Modes of the rung at ``compliance`` (> 0).
 

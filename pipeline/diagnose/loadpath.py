@@ -43,7 +43,6 @@ from scipy.sparse.csgraph import dijkstra
 from pipeline.diagnose.evidence import chi_square, evaluate_modes
 from pipeline.diagnose.grounded import ladder_sizes, reduce_load, spring_basis
 from pipeline.diagnose.members import connectivity
-from structures.modal import rigid_body_modes
 from structures.model import FEModel
 
 #: Fewest elements between the two grids of a load path (two grids one or two elements apart are
@@ -168,15 +167,14 @@ def best_load_path(problem, theta, effects, evaluations, r0) -> LoadPath | None:
     bases = [spring_basis(m, ref.sensor_index if ref.has_shapes else np.zeros(0, int), ref.nmodes)
              for ref, m in zip(problem.refs, models)]
     basic = [(b.system.rotation @ b.system.T).tocsr() for b in bases]     # (n_g, na)
-    rigid = [rigid_body_modes(b.model, b.system)[1] for b in bases]      # a brace holds none
 
     def reduced(p):
         out = []
-        for basis, rt, pr, n, names in zip(bases, basic, prs, ns, rigid):
+        for basis, rt, pr, n in zip(bases, basic, prs, ns):
             a, b = 6 * pr[p, 0], 6 * pr[p, 1]
             v = np.asarray((rt[a:a + 3] - rt[b:b + 3]).T @ n[p]).ravel()  # v^T u = n.(u_a - u_b)
             out.append(reduce_load(basis, v[:, None], 1.0, STEP / ratio[p] * SPAN * LADDER[0],
-                                   rigid=names))
+                                   rigid=basis.rigid))                    # a brace holds none
         return out
 
     def residual(reds, size):
@@ -184,7 +182,7 @@ def best_load_path(problem, theta, effects, evaluations, r0) -> LoadPath | None:
         for ref, red in zip(problem.refs, reds):
             modes, shapes = red.modes(size)
             parts.append(evaluate_modes(ref, modes["frequency"].values,
-                                        shapes if ref.has_shapes else None, red.props,
+                                        shapes if ref.has_shapes else None, red.properties(size),
                                         modes=modes).vector(ref.train))
         return np.concatenate(parts + [prior])
 

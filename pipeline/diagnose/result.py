@@ -128,7 +128,9 @@ class DiagnoseResult:
         :func:`pipeline.diagnose.predictive.held_out_evidence`); ``load_path`` (when the
         round's verdict named an effect, or would have: the best spring between two grids,
         :mod:`pipeline.diagnose.loadpath`: its ``grids``, ``stiffness``, ``chi2``, ``n_pairs``,
-        ``score`` and the named effect's ``named_score``), else null.
+        ``score`` and the named effect's ``named_score``), else null; ``gap`` (when the round
+        named an effect: the gap of the model with it and every earlier one, keys as
+        ``gap_after``; the last such round's is ``gap_after``), else null.
     """
 
     verdict: str

@@ -1,19 +1,14 @@
 """Screening of candidate effects and the bounded refit of the best.
 
-**Linear signature** of candidate c with parameters x (npar,): s_k = (r(x = h_k e_k) - r0) / h_k,
-h_k = the candidate's ``reference`` size, r the training residual of every configuration
-(:mod:`pipeline.diagnose.evidence`). Two routes:
+Every candidate is screened by an exact or near-exact analysis of its changed model at several
+sizes, because no kind acts linearly at the sizes a real effect has (a first-order secant through
+one step predicted the wrong size, or none, for masses, tapers, bows and springs alike; numbers in
+each route below). The result of a candidate is (S, exact): ``exact`` the best size x* and its
+chi^2 when the route finds them (ladders, line searches), and S a matrix with r0 + S m(x) the
+model's training residual at x (the secant (r(x*) - r0) / x* with m(x) = x for a ladder, the
+second-order model of :mod:`pipeline.diagnose.quadratic` otherwise); r is the training residual of
+every configuration (:mod:`pipeline.diagnose.evidence`). The routes:
 
-- *perturbation* (every kind that keeps the model's grids and rigid elements): the change of the
-  g-set matrices dK, dM (:func:`pipeline.diagnose.effect_deck.change_matrices`), then first-order
-  eigenvalues (Fox & Kapoor 1968, :func:`structures.sensitivity.eigenvalue_derivatives`)
-  d lambda_j = phi_j^T (dK - lambda_j dM) phi_j and mode shapes by modal expansion over the m
-  computed modes, dphi_j = sum_{k != j} phi_k c_kj - (phi_j^T dM phi_j / 2) phi_j with
-  c_kj = -phi_k^T (dK - lambda_j dM) phi_j / (lambda_k - lambda_j) (Fox & Kapoor 1968, eq. 19
-  truncated), with the pairing of the current model kept; mass properties exactly from the changed
-  mass matrix;
-- *reanalysis* (any candidate whose model gains grids): modes of the changed model
-  (:func:`structures.modal.compute_modes`), paired again;
 - *ladder* (``joint_flexibility``, one parameter that changes the constraints and acts far from
   linearly: a joint's local mode falls as 1 / sqrt(compliance) and sweeps through the measured
   modes): reanalysis at every size of :data:`LADDER` (quarter decades of the parameter's range)
@@ -28,8 +23,9 @@ h_k = the candidate's ``reference`` size, r the training residual of every confi
   carry nothing (:func:`pipeline.diagnose.joints.hangs_nothing`, e.g. massless sensor or
   attachment points on an RBE2) changes no mode at any size: it is not sampled (size the
   smallest rung, chi^2 the current one, signature zero).
-- *spring ladder* (``boundary_stiffness``: a grounded spring turns a rigid-body motion into an
-  elastic mode whose frequency rises as sqrt(k), and the modes it passes veer and mix, so chi^2
+- *Ritz ladder* (:data:`RITZ_KINDS`; ``boundary_stiffness``: a grounded spring turns a
+  rigid-body motion into an elastic mode whose frequency rises as sqrt(k), and the modes it
+  passes veer and mix, so chi^2
   over k has valleys a few percent of k wide; the frame's seed 8 of the blind study: exact chi^2
   1.6e3 at k = 0.124, 1.3e4 at 0.13, 1.9e4 at 0.117, the secant at 0.1 misses it): the modes on
   one Ritz basis per configuration and round (:mod:`pipeline.diagnose.grounded`, the current
@@ -40,26 +36,31 @@ h_k = the candidate's ``reference`` size, r the training residual of every confi
   degrees across them, down to 1/128 decade); the best rung's size and chi^2 on the basis are the
   candidate's screening result, the secant to it its signature (cost on the frame, 264
   one-sided candidates and ~5,900 rungs: ~5 s a round on a shared core, against 0.25 s for the
-  secants; the 114 mirror pairs add about as much again).
+  secants; the 114 mirror pairs add about as much again). ``lumped_mass`` likewise (M(x) is a
+  rank-three change, rank six for a pair; the mass's own mode falls through the measured ones as
+  it grows): its rungs on the same bases (:func:`pipeline.diagnose.grounded.reduce_mass`,
+  frequencies within 4e-6 of exact reanalysis up to 10 % of the model's mass).
 
 - *quadratic* (:data:`QUADRATIC_KINDS`, a member's bow: its stiffness changes to second order,
-  its couplings to first, so no secant is right at more than one size): the second-order model
+  its couplings to first, so no secant is right at more than one size; a member's taper: its
+  section's I ~ s^4, and the modes' response is far from linear at a real taper's sizes, of
+  either sign): the second-order model
   r(x) = r0 + S monomials(x) of :mod:`pipeline.diagnose.quadratic` from exact reanalyses at
-  h_k, 2 h_k and h_k + h_l (the first-order eigenvalue perturbation would miss the
-  (phi_k^T dK_1 phi_j)^2 / (lambda_j - lambda_k) term of the couplings, the same order in the
-  bow as the stiffness change; samples shared by a member's two quadrant candidates), fitted
-  within the sampled span; the :data:`pipeline.diagnose.quadratic.LINE_SEARCH_TOP` best of them
-  then get an exact line search
+  h_k, 2 h_k and h_k + h_l for a bow, +-2 h_k and 2 h_k + 2 h_l for a taper (the first-order
+  eigenvalue perturbation would miss the (phi_k^T dK_1 phi_j)^2 / (lambda_j - lambda_k) term of
+  the couplings, the same order in the bow as the stiffness change; samples shared by a member's two quadrant candidates), fitted
+  within the sampled span; the :data:`pipeline.diagnose.quadratic.LINE_SEARCH_TOP` best of
+  each kind then get an exact line search
   to their bounds (:func:`pipeline.diagnose.quadratic.line_search`), whose best size and exact
   chi^2 are their screening result.
 
-**Linear fit**: min |r0 + S x|^2 within the candidate's bounds (``scipy.optimize.lsq_linear``;
-the quadratic model's fit for :data:`QUADRATIC_KINDS`); the candidates are ranked by the drop of
-chi^2.
+**Ranking** (:func:`screen`): a candidate's best size and chi^2 are ``exact``, else the
+quadratic model's fit within its bounds and sampled span; the candidates are ranked by the drop
+of chi^2.
 
 **Refit**: bounded nonlinear least squares with reanalysis (``scipy.optimize.least_squares``) of
 the effect's parameters together with the nominal parameters (:mod:`pipeline.diagnose.calibrate`),
-started at the best of the linear fit and its fractions :data:`REFIT_START`; ranked by
+started at the screening's best size and its fractions :data:`REFIT_START`; ranked by
 BIC = chi^2 + p ln n (Schwarz 1978).
 """
 from __future__ import annotations
@@ -67,27 +68,28 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import least_squares, lsq_linear
+from scipy.optimize import least_squares
 
 from pipeline.diagnose.calibrate import THETA_SCALE, Problem
-from pipeline.diagnose.effect_deck import change_matrices
 from pipeline.diagnose.evidence import bic, chi_square, evaluate, evaluate_modes
-from pipeline.diagnose.grounded import SPRING_LADDER, ladder_sizes, reduce_spring, spring_basis
+from pipeline.diagnose.grounded import (SPRING_LADDER, ladder_sizes, reduce_mass, reduce_spring,
+                                        spring_basis)
 from pipeline.diagnose.joints import hangs_nothing
 from pipeline.diagnose.ladder import reduce_joint
 from pipeline.diagnose.mirror import sites
 from pipeline.diagnose.quadratic import (coefficients, line_searches, monomials, quadratic_fit,
                                          sample_points, secant)
-from structures.assembly import assemble_g
 from structures.common.errors import InputError, SolverError
-from structures.massprops import mass_properties
-from structures.sensitivity import eigenvalue_derivatives
 
 #: Kinds screened on the ladder of sizes by reanalysis (they change the constraint equations).
 LADDER_KINDS = ("joint_flexibility",)
-#: Kinds screened with the quadratic model of :mod:`pipeline.diagnose.quadratic` (a member's
-#: bow: stiffness ~ bow^2, couplings ~ bow; the effects.py docstring).
-QUADRATIC_KINDS = ("member_curvature",)
+#: Kinds screened on a ladder of sizes on the Ritz basis of :mod:`pipeline.diagnose.grounded`
+#: (a rank-q change of K or of M at fixed grids).
+RITZ_KINDS = ("boundary_stiffness", "lumped_mass")
+#: Kinds screened with the quadratic model of :mod:`pipeline.diagnose.quadratic`, and its
+#: sampling scheme: a member's bow (stiffness ~ bow^2, couplings ~ bow; the effects.py
+#: docstring; its quadrant fixes the signs) and a member's taper (I ~ s^4, either sign).
+QUADRATIC_KINDS = {"member_curvature": "one_sided", "member_taper": "centred"}
 #: One-sided joint candidates (detail ``dependent``) are screened for the rigid elements of this
 #: many best whole-joint candidates only (a one-sided joint is a variant of its whole joint).
 ONE_SIDED_TOP = 5
@@ -101,34 +103,32 @@ LADDER_REFINE = (10.0 ** -0.125, 10.0 ** 0.125)
 #: (a joint whose hung grids carry no mass changes nothing: every rung gives the same chi^2 to
 #: ~1e-13, and the smallest size is kept rather than whichever rounds lowest).
 LADDER_ROUNDOFF = 1e-9
-#: Eigenvalue gaps below this fraction of the largest computed eigenvalue are treated as
-#: degenerate in the modal expansion (their coupling is left out instead of dividing by ~0).
-DEGENERATE_GAP = 1e-9
-#: Most iterations of one refit (started at the linear fit, a few iterations suffice).
+#: Most iterations of one refit (started at the screening's best size, a few suffice).
 REFIT_NFEV = 12
 #: Forward-difference step of an effect parameter, relative to its scale in the refit (the larger
 #: of its reference size and its starting value).
 FD_STEP = 1e-3
 #: Residual at a trial point whose model cannot be analysed, relative to the starting residual.
 PENALTY = 3.0
-#: Fractions of the linear fit at which the refit's start is analysed exactly: the linear
-#: screening extrapolates its signature, and past a mode crossing (a mass or spring that moves
-#: one mode through another changes the pairing) the exact chi^2 jumps; the refit starts at the
-#: best of these (a backtracking line search, Nocedal & Wright 2006 sec. 3.1).
+#: Fractions of the screening's best size at which the refit's start is analysed exactly: the
+#: screening's model extrapolates its signature, and past a mode crossing (a mass or spring that
+#: moves one mode through another changes the pairing) the exact chi^2 jumps; the refit starts at
+#: the best of these (a backtracking line search, Nocedal & Wright 2006 sec. 3.1).
 REFIT_START = (1.0, 0.5, 0.25)
 
 
 @dataclass(frozen=True)
 class Screened:
-    """One candidate after the linear screening.
+    """One candidate after the screening.
 
     Attributes
     ----------
     candidate : Candidate
-    values : (npar,) best bounded size of the linearised fit.
-    chi2 : float, linearised chi^2 at ``values``.
+    values : (npar,) best bounded size found by the screening.
+    chi2 : float, the screening's chi^2 at ``values`` (exact or on the Ritz or Craig-Bampton
+        basis for a ladder or a line search, of the quadratic model otherwise).
     drop : float, chi^2 of the current model minus ``chi2``.
-    signature : (n_data, npar) linear signature S; the secant to ``values`` (S values = the
+    signature : (n_data, npar) signature S; the secant to ``values`` (S values = the
         residual's change there) for a ladder and for :data:`QUADRATIC_KINDS` (of the quadratic
         model, or exact after a line search).
     """
@@ -163,33 +163,8 @@ class Refitted:
     evaluations: list
 
 
-def _perturbed(ref, model, ev, m0, changed):
-    """Residual entries of the first-order perturbation of ``ev`` by changed - current."""
-    dk, dm = change_matrices(model, changed)
-    m1 = m0 + dm
-    phi = ev.modes["shape"].values.T                                       # (n_g, m)
-    lam = (2.0 * np.pi * ev.modes["frequency"].values) ** 2
-    dlam = eigenvalue_derivatives(lam, phi, [dk], [dm])[0]                  # Fox & Kapoor 1968
-    freq = np.sqrt(np.clip(lam + dlam, 0.0, None)) / (2.0 * np.pi)
-    shapes = None
-    if ref.has_shapes:
-        g = phi.T @ (dk @ phi)
-        hm = phi.T @ (dm @ phi)
-        j = ev.paired
-        gap = lam[:, None] - lam[None, j]                                   # lambda_k - lambda_j
-        coupling = -(g[:, j] - hm[:, j] * lam[None, j])                     # -phi_k^T (dK - l_j dM) phi_j
-        small = np.abs(gap) <= DEGENERATE_GAP * max(lam.max(), 1.0)
-        c = np.divide(coupling, gap, out=np.zeros_like(coupling), where=~small)
-        c[j, np.arange(j.size)] = -0.5 * hm[j, j]                           # mass normalisation
-        phi_s = ev.modes["shape"].values[:, ref.sensor_index]               # (m, n_dof)
-        shapes = phi_s.copy()
-        shapes[j] = phi_s[j] + c.T @ phi_s
-    props = mass_properties(changed, m_basic=m1)
-    return evaluate_modes(ref, freq, shapes, props, paired=ev.paired)
-
-
 def signatures(problem: Problem, theta, effects, evaluations, candidates, *, progress=None):
-    """Linear signature of every candidate (see the module docstring).
+    """The screening analyses of every candidate (see the module docstring).
 
     Parameters
     ----------
@@ -211,20 +186,13 @@ def signatures(problem: Problem, theta, effects, evaluations, candidates, *, pro
     from pipeline.diagnose.effects import apply_effect
 
     models = [problem.model(i, theta, effects) for i in range(len(problem.refs))]
-    mats = [assemble_g(m)[1] for m in models]
     r0 = problem.residual(theta, evaluations)
     prior = problem.prior_residual(theta)                                  # a candidate keeps theta
 
-    def residual(cand, step, exact):
-        parts = []
-        for ref, model, ev, m0 in zip(problem.refs, models, evaluations, mats):
-            changed = apply_effect(model, cand, step)
-            if exact or len(changed.grids) != len(model.grids):
-                e1 = evaluate(ref, changed)
-            else:
-                e1 = _perturbed(ref, model, ev, m0, changed)
-            parts.append(e1.vector(ref.train))
-        return np.concatenate(parts + [prior])
+    def residual(cand, step):
+        """Training residual of the candidate at ``step`` by exact reanalysis."""
+        return np.concatenate([evaluate(ref, apply_effect(model, cand, step)).vector(ref.train)
+                               for ref, model in zip(problem.refs, models)] + [prior])
 
     def reduced(cand):
         """size -> training residual on the candidate's Craig-Bampton bases, or None."""
@@ -243,20 +211,30 @@ def signatures(problem: Problem, theta, effects, evaluations, candidates, *, pro
         for ref, basis in zip(problem.refs, bases):
             modes, shapes = basis.modes(size)
             e1 = evaluate_modes(ref, modes["frequency"].values,
-                                shapes if ref.has_shapes else None, basis.props, modes=modes)
+                                shapes if ref.has_shapes else None, basis.properties(size),
+                                modes=modes)
             parts.append(e1.vector(ref.train))
         return np.concatenate(parts + [prior])
 
     springs = []
 
-    def spring_ladder(cand):
-        """A grounded spring's rungs (:func:`pipeline.diagnose.grounded.ladder_sizes`) on the
-        Ritz bases of :mod:`pipeline.diagnose.grounded`, one per configuration and round."""
+    def ritz_bases():
+        """The Ritz bases of :mod:`pipeline.diagnose.grounded`, one per configuration and
+        round, shared by the grounded springs and the masses."""
         if not springs:
             bases = [spring_basis(m, ref.sensor_index if ref.has_shapes else np.zeros(0, int),
                                   ref.nmodes) for ref, m in zip(problem.refs, models)]
             springs.extend(bases)                   # all configurations or none (a failure)
-        reds = [reduce_spring(b, cand, cand.upper[0] * SPRING_LADDER[0]) for b in springs]
+        return springs
+
+    def ritz_ladder(cand):
+        """A grounded spring's or a mass's rungs (:func:`pipeline.diagnose.grounded.ladder_sizes`)
+        on the Ritz bases."""
+        if cand.kind == "lumped_mass":
+            reds = [reduce_mass(b, cand) for b in ritz_bases()]
+        else:
+            reds = [reduce_spring(b, cand, cand.upper[0] * SPRING_LADDER[0])
+                    for b in ritz_bases()]
         return _ladder(cand, r0, residual, lambda size: on_bases(reds, size),
                        sizes=ladder_sizes(reds, cand.upper[0]))
 
@@ -270,7 +248,7 @@ def signatures(problem: Problem, theta, effects, evaluations, candidates, *, pro
         """Exact residual of a quadratic-kind size, once per kind, location and size."""
         key = (cand.kind, cand.location, tuple(np.asarray(step, float).tolist()))
         if key not in samples:
-            samples[key] = residual(cand, step, True)
+            samples[key] = residual(cand, step)
         return samples[key]
 
     def run(cands):
@@ -284,25 +262,17 @@ def signatures(problem: Problem, theta, effects, evaluations, candidates, *, pro
                     out.append((cand, np.zeros((r0.size, 1)),
                                 (np.array([cand.upper[0] * LADDER[0]]), chi_square(r0))))
                     continue
-                if cand.kind == "boundary_stiffness":
-                    out.append(spring_ladder(cand))
+                if cand.kind in RITZ_KINDS:
+                    out.append(ritz_ladder(cand))
                     continue
                 if cand.kind in LADDER_KINDS:
                     out.append(_ladder(cand, r0, residual, reduced(cand)))
                     continue
-                if cand.kind in QUADRATIC_KINDS:
-                    sampled = [shared(cand, step) for step in sample_points(cand.reference)]
-                    out.append((cand, coefficients(r0, sampled, cand.reference), None))
-                    continue
-                cols = []
-                for k, h in enumerate(cand.reference):
-                    step = np.zeros(len(cand.parameters))
-                    step[k] = h
-                    cols.append((residual(cand, step, False) - r0) / h)
+                scheme = QUADRATIC_KINDS[cand.kind]                # the other kinds
+                sampled = [shared(cand, step) for step in sample_points(cand.reference, scheme)]
+                out.append((cand, coefficients(r0, sampled, cand.reference, scheme), None))
             except (InputError, SolverError) as exc:
                 skipped.append(f"{cand.label}: {exc}")
-                continue
-            out.append((cand, np.column_stack(cols), None))
 
     run([c for c in candidates if not one_sided(c)])
     whole = sorted((exact[1], cand.location.elements[0]) for cand, _, exact in out
@@ -326,7 +296,7 @@ def _ladder(cand, r0, residual, approximate=None, sizes=None) -> tuple:
         nonlocal best, failure
         try:
             r = approximate(size) if approximate is not None else \
-                residual(cand, np.array([size]), True)
+                residual(cand, np.array([size]))
         except (InputError, SolverError) as exc:
             failure = exc
             return
@@ -343,7 +313,7 @@ def _ladder(cand, r0, residual, approximate=None, sizes=None) -> tuple:
     size = best[0]
     if approximate is not None and sizes is None:
         try:
-            r = residual(cand, np.array([size]), True)
+            r = residual(cand, np.array([size]))
         except (InputError, SolverError):
             return _ladder(cand, r0, residual)
         best = (size, r, chi_square(r))
@@ -351,36 +321,19 @@ def _ladder(cand, r0, residual, approximate=None, sizes=None) -> tuple:
     return cand, secant(r0, r, [size]), (np.array([size]), chi2)
 
 
-def linear_fit(r0, signature, lower, upper) -> tuple[np.ndarray, float]:
-    """Bounded linear least squares min |r0 + S x|^2, lower <= x <= upper.
-
-    Returns
-    -------
-    x : (npar,)
-    chi2 : float, |r0 + S x|^2.
-    """
-    s = np.asarray(signature, float)
-    lower, upper = np.asarray(lower, float), np.asarray(upper, float)
-    if not np.any(s):
-        return np.clip(np.zeros(s.shape[1]), lower, upper), chi_square(r0)
-    sol = lsq_linear(s, -np.asarray(r0, float), bounds=(lower, upper), method="bvls")
-    return sol.x, chi_square(np.asarray(r0) + s @ sol.x)
-
-
 def screen(r0, signed) -> list:
-    """Linear fit (the quadratic model's fit for :data:`QUADRATIC_KINDS`) of every
-    (Candidate, S, exact) (``exact`` (x, chi2) of a ladder or a line search is taken as it is);
-    list of Screened sorted by decreasing drop."""
+    """The best size of every (Candidate, S, exact) of :func:`signatures`: ``exact`` (x, chi2)
+    of a ladder or a line search as it is, else the quadratic model's fit; list of Screened
+    sorted by decreasing drop."""
     chi0 = chi_square(r0)
     rows = []
     for cand, s, exact in signed:
         if exact is not None:
             x, chi2 = exact
-        elif cand.kind in QUADRATIC_KINDS:
-            x, chi2 = quadratic_fit(r0, s, cand.reference, cand.lower, cand.upper)
-            s = secant(r0, np.asarray(r0) + s @ monomials(x), x)
         else:
-            x, chi2 = linear_fit(r0, s, cand.lower, cand.upper)
+            x, chi2 = quadratic_fit(r0, s, cand.reference, cand.lower, cand.upper,
+                                    QUADRATIC_KINDS[cand.kind])
+            s = secant(r0, np.asarray(r0) + s @ monomials(x), x)
         rows.append(Screened(cand, x, chi2, chi0 - chi2, s))
     rows.sort(key=lambda row: -row.drop)
     return rows
@@ -411,7 +364,7 @@ def refit(problem: Problem, theta0, effects, row: Screened | None, *, n_data: in
     parameters' columns are ``jacobian_theta`` (n_data, n_theta), d r / d theta of the
     calibration (they change little with a small effect; this saves a reanalysis of every
     configuration per nominal parameter and iteration). ``row`` None refits the nominal
-    parameters alone ("none"). The start is the best of the linear fit scaled by
+    parameters alone ("none"). The start is the screening's best size scaled by
     :data:`REFIT_START`, analysed exactly. A model that cannot be analysed at some trial point (a
     mechanism) costs ``PENALTY`` times the starting residual there; None when every start fails.
     """

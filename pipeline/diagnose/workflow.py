@@ -11,13 +11,16 @@
    configuration a third of the modes stays unseen by the naming: an effect that moves only a
    held-out mode is missed (the gap report says so: its held-out error stays).
 3. Nominal calibration and model-form flags (:mod:`pipeline.diagnose.calibrate`).
-4. Screening of every candidate by its linear signature, 5. refit of the best
+4. Screening of every candidate at several sizes, 5. refit of the best
    (:mod:`pipeline.diagnose.screen`) and the verdict (:func:`decide`).
 6. Look again: the named effect is added and steps 4-5 repeat, up to ``settings.max_effects`` (a
    site already named is not offered again, alone or in a mirror pair).
 
 The verdict of each round is :func:`pipeline.diagnose.verdict.decide`; an effect it names must
-also beat the best load path between two grids, an effect the library does not hold
+also fit inside its bounds (a parameter on a non-zero bound,
+:func:`pipeline.diagnose.verdict.on_bound`, means the data want more of it than the library's
+plausible range holds: the model-form signal of DESIGN.md section 5.2, not a finding) and beat
+the best load path between two grids, an effect the library does not hold
 (:mod:`pipeline.diagnose.loadpath`), else the round is ``unexplained``.
 The overall verdict is ``effect`` when at least one effect was named, else the first round's.
 """
@@ -387,6 +390,17 @@ def diagnose(configurations, settings: DiagnoseSettings = DiagnoseSettings(), *,
                 n_modal=scored[2], held_out=(modes_none, modes, entries))
             path = None
             if verdict == "effect":
+                cand = fits[best].candidate
+                bound = [f"{name} = {v:.3g}" for name, v, lo, hi in
+                         zip(cand.parameters, fits[best].values, cand.lower, cand.upper)
+                         if on_bound(v, lo, hi)]
+                if bound:
+                    verdict = "unexplained"
+                    notes.append(f"round {k + 1}: {cand.kind} {cand.label} fits best but "
+                                 f"{', '.join(bound)} sits on its bound: the data want more "
+                                 "than the library's range of that effect; not named (a "
+                                 "different or larger effect).")
+            if verdict == "effect":
                 verdict, path = _load_path_check(problem, theta, effects, none_evs, r0, scored,
                                                  best, c, n_data, len(cands),
                                                  settings.margin)
@@ -418,12 +432,7 @@ def diagnose(configurations, settings: DiagnoseSettings = DiagnoseSettings(), *,
             if verdict != "effect":
                 break
             chosen = fits[best]
-            cand = chosen.candidate
-            for name, v, lo, hi in zip(cand.parameters, chosen.values, cand.lower, cand.upper):
-                if on_bound(v, lo, hi):
-                    notes.append(f"round {k + 1}: {cand.kind} {cand.label} {name} = {v:.3g} sits on "
-                                 "its bound: the effect may be larger than the library allows, or "
-                                 "a different effect.")
+            rounds[-1]["gap"] = gap_metrics(problem, chosen.evaluations)
             records.append(EffectRecord(chosen.candidate, chosen.values, lead))
             effects.append((chosen.candidate, chosen.values))
             theta, none_evs = chosen.theta, chosen.evaluations
@@ -494,7 +503,7 @@ def _round_record(k: int, verdict: str, fits, best, runner, none, held_out, n_da
             "none_n_params": none.n_params,
             "none_held_out_chi2": float(modes_none.sum()),
             "none_held_out_modes_chi2": modes_none.tolist(),
-            "best": entry(best), "runner_up": entry(runner),
+            "gap": None, "best": entry(best), "runner_up": entry(runner),
             "fits": [entry(i) for i in range(len(fits))],
             "load_path": None if path is None else {
                 "grids": list(path[0].grids), "stiffness": path[0].stiffness,

@@ -4,13 +4,22 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from pipeline.diagnose.evidence import (bic, build_reference, chi_square, gof_limit, holdout_mask,
-                                        pair_frequency_only, runs_test, scatter_scales,
-                                        shape_noise, shape_residual, unit_rms)
+from dataclasses import replace
+
+import xarray as xr
+from scipy.optimize import linear_sum_assignment
+
+from pipeline.diagnose.evidence import (Reference, bic, build_reference, chi_square, evaluate,
+                                        evaluate_modes, gof_limit, holdout_mask, pair,
+                                        pair_frequency_only, pairing_cost, runs_test,
+                                        scatter_scales, shape_noise, shape_residual, unit_rms)
 from structures.bdf import read_model
 from structures.common.errors import InputError
+from structures.correlation import mac
 from structures.gvt import make_gvt_dataset
 from structures.modal import compute_modes
+from tests.pipeline.diagnose.test_screen import _perfect_reference, _with_mass
+from tests.pipeline.diagnose.truth import frame
 
 
 def test_chi_square_and_bic_by_hand():
@@ -120,3 +129,76 @@ def test_self_orthogonality_of_mixed_modes_in_the_analysis_mass(tmp_path):
                                shape_noise_value=0.02, model_scatter=0.03, holdout=3, nmodes=3)
     assert facts["paired_fe_mode"] == [1, 2]
     assert facts["self_orthogonality"] == pytest.approx(np.sin(a), rel=1e-8)   # 0.29552
+
+
+def _one_mode_reference(shape, frequency) -> Reference:
+    """A test mode on three DOFs, the projector the identity, scales 0.1, sigma_f 1 %, its own
+    coordinate (the first) left out."""
+    shape = np.atleast_2d(np.asarray(shape, float))
+    return Reference(name="hand", test_mode=np.array([7]), test_frequency=np.array([frequency]),
+                     shapes=shape, sensor_index=np.arange(3), sensor_grid=np.array([1, 2, 3]),
+                     sensor_component=np.array([3, 3, 3]), projector=np.eye(3),
+                     shape_scale=np.full((1, 3), 0.1), shape_keep=np.array([[False, True, True]]),
+                     frequency_sigma=np.array([0.01]), shape_sigma=np.array([0.05]),
+                     train=np.array([True]), measured_mass={}, mass_scale={}, nmodes=2)
+
+
+def test_pairing_by_likelihood_by_hand():
+    """Test mode t = (1, 0, 0) at 19.5 Hz; analysis mode A = (1, 0, 0) at 10 Hz (MAC 1) and
+    B = (1, 0.3, 0) at 20 Hz (MAC 1 / 1.09 = 0.917). Cost of A: shape 0 (alpha 1, d = 0),
+    frequency ((10 - 19.5) / 19.5 / 0.01)^2 = 2373.4; of B: alpha = 1 / 1.09, d = (0.0826,
+    -0.2752, 0), kept entries (-2.752, 0) -> 7.574, frequency (0.5 / 19.5 / 0.01)^2 = 6.575;
+    14.149 in all. The MAC assignment takes A, the likelihood B."""
+    ref = _one_mode_reference([1.0, 0.0, 0.0], 19.5)
+    shapes = np.array([[1.0, 0.0, 0.0], [1.0, 0.3, 0.0]])
+    cost = pairing_cost(ref, np.array([10.0, 20.0]), shapes)
+    alpha = 1.0 / 1.09
+    assert cost[0, 0] == pytest.approx((9.5 / 19.5 / 0.01) ** 2, rel=1e-12)
+    assert cost[0, 1] == pytest.approx((0.3 * alpha / 0.1) ** 2 + (0.5 / 19.5 / 0.01) ** 2,
+                                       rel=1e-12)
+    assert np.argmax(mac(ref.shapes.T, shapes.T)[0]) == 0
+    modes = xr.Dataset({"frequency": ("mode", [10.0, 20.0])},
+                       coords={"rigid_motion": ("mode", ["", ""])})
+    assert pair(ref, modes, sensor_shapes=shapes).tolist() == [1]
+    # a mode the sensors do not see at all: alpha 0, the whole test shape is residual
+    zero = pairing_cost(ref, np.array([19.5]), np.zeros((1, 3)))
+    assert zero[0, 0] == pytest.approx(0.0, abs=1e-12)     # t's only entry is its own coordinate
+    ref2 = replace(ref, shapes=np.array([[1.0, 0.5, 0.0]]))
+    assert pairing_cost(ref2, np.array([19.5]), np.zeros((1, 3)))[0, 0] == pytest.approx(25.0)
+
+
+@pytest.fixture(scope="module")
+def frame_case(tmp_path_factory):
+    model = read_model(frame.write_frame(tmp_path_factory.mktemp("frame")))
+    changed = _with_mass(model, 3009, 0.03 * model.masses.mass.sum())
+    modes, ref = _perfect_reference(changed, model)
+    return model, changed, ref
+
+
+def test_pairing_cost_is_the_residual_and_the_pairing_its_minimum(frame_case):
+    """On the frame against a test of the frame with 3 % of its mass added at a wing grid: the
+    cost of the chosen pairing is every test mode's chi^2 (frequency and shape entries of
+    evaluate) to round-off, and no other assignment gives less: the MAC assignment and every
+    swap of two test modes' partners cost at least as much."""
+    model, changed, ref = frame_case
+    for m in (model, changed):
+        ev = evaluate(ref, m)
+        modes = ev.modes
+        elastic = np.flatnonzero(modes["rigid_motion"].values == "")
+        seen = modes["shape"].values[:, ref.sensor_index]
+        cost = pairing_cost(ref, modes["frequency"].values[elastic], seen[elastic])
+        col = np.searchsorted(elastic, ev.paired)
+        per_mode = ev.frequency ** 2 + np.sum(ev.shape ** 2, axis=1)
+        assert cost[np.arange(col.size), col] == pytest.approx(per_mode, rel=1e-10)
+        total = per_mode.sum()
+        rows, best = linear_sum_assignment(cost)
+        assert cost[rows, best].sum() == pytest.approx(total, rel=1e-12)
+        by_mac = linear_sum_assignment(mac(ref.shapes.T, seen[elastic].T), maximize=True)[1]
+        mac_ev = evaluate_modes(ref, modes["frequency"].values, seen, ev.props,
+                                paired=elastic[by_mac])
+        assert chi_square(mac_ev.vector(np.ones(col.size, bool))[:-mac_ev.mass.size]) \
+            >= total * (1.0 - 1e-12)
+        for i in range(col.size - 1):
+            swapped = col.copy()
+            swapped[[i, i + 1]] = swapped[[i + 1, i]]
+            assert cost[np.arange(col.size), swapped].sum() >= total * (1.0 - 1e-12)

@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from structures.common.errors import InputError
 from pipeline.diagnose.quadratic import (RAY, coefficients, line_search, monomials, n_columns,
                                          quadratic_fit, sample_points, trust_box)
 
@@ -20,11 +21,12 @@ def _quadratic(x):
     return R0 + A @ x + C @ np.array([x[0] ** 2, x[1] ** 2, x[0] * x[1]])
 
 
+@pytest.mark.parametrize("scheme", ["one_sided", "centred"])
 @pytest.mark.parametrize("reference", [(0.05, 0.05), (0.05, -0.05), (0.2, 0.01)])
-def test_coefficients_of_a_quadratic_are_exact(reference):
-    points = sample_points(reference)
+def test_coefficients_of_a_quadratic_are_exact(reference, scheme):
+    points = sample_points(reference, scheme)
     assert points.shape == (5, 2) and n_columns(2) == 5
-    s = coefficients(R0, [_quadratic(p) for p in points], reference)
+    s = coefficients(R0, [_quadratic(p) for p in points], reference, scheme)
     assert s == pytest.approx(np.column_stack([A, C]), rel=1e-9, abs=1e-9)
     x = np.array([0.07, -0.02])
     assert R0 + s @ monomials(x) == pytest.approx(_quadratic(x), rel=1e-12, abs=1e-12)
@@ -85,3 +87,22 @@ def test_line_search_passes_over_sizes_that_cannot_be_analysed():
     x, _, chi2 = line_search(residual_at, [0.05, 0.0], [0.0, 0.0], [0.15, 0.15])
     assert np.linalg.norm(x) <= 0.1 and chi2 == pytest.approx((np.linalg.norm(x) - 0.2) ** 2)
     assert line_search(lambda x: None, [0.05, 0.0], [0.0, 0.0], [0.15, 0.15]) is None
+
+
+def test_centred_samples_and_trust_box_by_hand():
+    """The centred scheme samples +-2h on each axis and 2h on both, and trusts -2h..2h (within
+    the bounds); one parameter r(x) = 1 - 10 x + 100 x^2 = (1 - 5 x)^2 + 75 x^2 from
+    r(0.1) = 1 and r(-0.1) = 3: a = (1 - 3) / 0.2 = -10, c = (1 + 3 - 2) / 0.02 = 100."""
+    assert sample_points((0.1, 0.3), "centred") == pytest.approx(
+        np.array([[0.2, 0.0], [-0.2, 0.0], [0.0, 0.6], [0.0, -0.6], [0.2, 0.6]]))
+    lo, hi = trust_box((0.1, 0.3), (-0.3, -0.8), (0.3, 0.5), "centred")
+    assert lo.tolist() == pytest.approx([-0.2, -0.6]) and hi.tolist() == pytest.approx([0.2, 0.5])
+    s = coefficients([1.0], [[1.0], [3.0]], [0.05], "centred")
+    assert s == pytest.approx(np.array([[-10.0, 100.0]]), rel=1e-12)
+    x, chi2 = quadratic_fit([1.0], s, [0.05], [-0.3], [0.3], "centred")    # minimum at 0.05
+    assert x == pytest.approx([0.05], abs=1e-6) and chi2 == pytest.approx(0.75 ** 2, rel=1e-6)
+    # r = 2 - 10 x is zero at 0.2, beyond the trust box: the fit stops at 2h = 0.1
+    x, chi2 = quadratic_fit([2.0], np.array([[-10.0, 0.0]]), [0.05], [-0.3], [0.3], "centred")
+    assert x == pytest.approx([0.1], abs=1e-8) and chi2 == pytest.approx(1.0, rel=1e-6)
+    with pytest.raises(InputError, match="scheme"):
+        sample_points((0.1,), "both")

@@ -13,11 +13,11 @@ import pytest
 from pipeline.diagnose import quadratic, screen
 from pipeline.diagnose.calibrate import Problem
 from pipeline.diagnose.effect_deck import change_matrices
-from pipeline.diagnose.effects import apply_effect, candidates
+from pipeline.diagnose.effects import KINDS, apply_effect, candidates
 from pipeline.diagnose.evidence import build_reference, evaluate
 from pipeline.diagnose.joints import hangs_nothing
 from pipeline.diagnose.ladder import reduce_joint
-from pipeline.diagnose.screen import Screened, _perturbed, linear_fit, pick_for_refit
+from pipeline.diagnose.screen import Screened, pick_for_refit
 from structures.assembly import assemble_g
 from structures.bdf import read_model
 from structures.bulk_text import card
@@ -62,34 +62,12 @@ def _with_mass(model, grid: int, mass: float):
         np.vstack([cm.offset, np.zeros((1, 3))]), np.concatenate([cm.inertia, np.zeros((1, 3, 3))])))
 
 
-def test_lumped_mass_signature_matches_reanalysis(frame_reference):
-    model, modes, ref = frame_reference
-    ev0 = evaluate(ref, model, modes)
-    assert np.abs(ev0.frequency).max() < 1e-8                              # the model is the test
-    changed = _with_mass(model, 3005, 0.002 * mass_properties(model).mass)
-    lin = _perturbed(ref, model, ev0, assemble_g(model)[1], changed)
-    full = evaluate(ref, changed)
-    assert np.array_equal(full.paired, ev0.paired)                         # a small change
-    d_lin, d_full = lin.frequency - ev0.frequency, full.frequency - ev0.frequency
-    assert np.abs(d_full).max() > 0.05                                    # visible: > 5 % of sigma
-    # first order in a 0.2 % mass: the frequency changes agree to 5 % of the largest change
-    # (measured 2.4 %: second-order coupling with the close modes)
-    assert np.abs(d_lin - d_full).max() < 0.05 * np.abs(d_full).max()
-    # shapes through the modal expansion over 46 modes: 10 % of the change (truncation)
-    s_lin, s_full = lin.shape - ev0.shape, full.shape - ev0.shape
-    assert np.linalg.norm(s_lin - s_full) < 0.10 * np.linalg.norm(s_full)
-    # mass properties exactly (from the changed mass matrix)
-    assert lin.mass == pytest.approx(full.mass, rel=1e-12, abs=1e-12)
-
-
-def test_linear_fit_bounded_by_hand():
-    # r0 + S x = (1 - x, 2 - 2x): unbounded x = 1, chi^2 0; x <= 0.5: (0.5, 1) -> 1.25
-    x, chi2 = linear_fit([1.0, 2.0], [[-1.0], [-2.0]], [0.0], [2.0])
-    assert x == pytest.approx([1.0], abs=1e-12) and chi2 == pytest.approx(0.0, abs=1e-20)
-    x, chi2 = linear_fit([1.0, 2.0], [[-1.0], [-2.0]], [0.0], [0.5])
-    assert x == pytest.approx([0.5], abs=1e-12) and chi2 == pytest.approx(1.25, rel=1e-12)
-    x, chi2 = linear_fit([1.0, 2.0], np.zeros((2, 1)), [-1.0], [1.0])   # no signature: no change
-    assert x == pytest.approx([0.0]) and chi2 == pytest.approx(5.0)
+def test_every_kind_has_a_screening_route():
+    """Each library kind is screened one way: on a ladder (exact or Craig-Bampton), on the Ritz
+    basis, or with the quadratic model."""
+    routes = [set(screen.LADDER_KINDS), set(screen.RITZ_KINDS), set(screen.QUADRATIC_KINDS)]
+    assert set().union(*routes) == set(KINDS)
+    assert sum(len(r) for r in routes) == len(KINDS)
 
 
 def test_pick_for_refit_takes_every_kind_first():
@@ -326,9 +304,9 @@ def test_screening_recovers_a_bowed_members_bow(bowed_tail):
     assert r0 + best.signature @ best.values == pytest.approx(residual(best.values), abs=1e-9)
 
 
-def test_refit_starts_at_the_best_exactly_analysed_fraction_of_the_linear_fit(frame_reference,
-                                                                               monkeypatch):
-    """The model against its own modes: any added mass makes chi^2 grow, so of the linear fit's
+def test_refit_starts_at_the_best_exactly_analysed_fraction_of_the_screened_size(
+        frame_reference, monkeypatch):
+    """The model against its own modes: any added mass makes chi^2 grow, so of the screened size's
     fractions REFIT_START the smallest is the best start; with the iterations stubbed out
     (least_squares returning its start) the refit returns that start and its exact chi^2."""
     model, _, ref = frame_reference
