@@ -52,6 +52,21 @@ def on_bound(value: float, lower: float, upper: float) -> bool:
     return edge != 0.0 and abs(value - edge) <= BOUND_SHARE * (upper - lower)
 
 
+def at_bound(candidate, values) -> list[str]:
+    """``"name = value"`` of every parameter of a fitted candidate that sits on a non-zero bound
+    (:func:`on_bound`); empty when the fit is inside its range. A named effect must have none
+    (:func:`pipeline.diagnose.workflow.diagnose`).
+
+    Parameters
+    ----------
+    candidate : Candidate
+    values : (npar,) fitted parameters.
+    """
+    return [f"{name} = {v:.3g}" for name, v, lo, hi in
+            zip(candidate.parameters, np.asarray(values, float), candidate.lower, candidate.upper)
+            if on_bound(v, lo, hi)]
+
+
 def within_scatter(model: FEModel, candidate, values, scatter: float) -> bool:
     """True when a fitted effect is a change the nominal scatter could make by itself.
 

@@ -18,7 +18,7 @@
 
 The verdict of each round is :func:`pipeline.diagnose.verdict.decide`; an effect it names must
 also fit inside its bounds (a parameter on a non-zero bound,
-:func:`pipeline.diagnose.verdict.on_bound`, means the data want more of it than the library's
+:func:`pipeline.diagnose.verdict.at_bound`, means the data want more of it than the library's
 plausible range holds: the model-form signal of DESIGN.md section 5.2, not a finding) and beat
 the best load path between two grids, an effect the library does not hold
 (:mod:`pipeline.diagnose.loadpath`), else the round is ``unexplained``.
@@ -45,7 +45,7 @@ from pipeline.diagnose.mirror import sites
 from pipeline.diagnose.predictive import held_out_evidence, held_out_modes, kept_modes
 from pipeline.diagnose.result import CandidateScore, DiagnoseResult, EffectRecord
 from pipeline.diagnose.screen import pick_for_refit, refit, screen, signatures
-from pipeline.diagnose.verdict import (SCATTER_SIGMAS, decide, on_bound, round_scores,
+from pipeline.diagnose.verdict import (SCATTER_SIGMAS, at_bound, decide, round_scores,
                                         within_scatter)
 from structures.common.errors import InputError
 from structures.massprops import check_measured_mass
@@ -391,9 +391,7 @@ def diagnose(configurations, settings: DiagnoseSettings = DiagnoseSettings(), *,
             path = None
             if verdict == "effect":
                 cand = fits[best].candidate
-                bound = [f"{name} = {v:.3g}" for name, v, lo, hi in
-                         zip(cand.parameters, fits[best].values, cand.lower, cand.upper)
-                         if on_bound(v, lo, hi)]
+                bound = at_bound(cand, fits[best].values)
                 if bound:
                     verdict = "unexplained"
                     notes.append(f"round {k + 1}: {cand.kind} {cand.label} fits best but "

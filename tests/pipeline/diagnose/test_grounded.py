@@ -130,27 +130,39 @@ def test_spring_ladder_finds_the_valley_the_secant_misses(frame_model):
     reanalysis's at the same size to 1e-3 + 0.01."""
     model, _ = frame_model
     cand = next(c for c in candidates(model, ("boundary_stiffness",)) if c.label == "grid 4004 z")
-    truth = apply_effect(model, cand, [0.3])
-    _, ref = _perfect_reference(truth, model)
-    problem = Problem.build([ref], [model], 0.03)
-    theta = np.zeros(len(problem.names))
-    evs = problem.evaluate(theta)
-    r0 = problem.residual(theta, evs)
-    prior = problem.prior_residual(theta)
-    h = cand.reference[0]
-    at_h = evaluate(ref, apply_effect(model, cand, [h]))
-    secant = ((np.concatenate([at_h.vector(ref.train), prior]) - r0) / h)[:, None]
-    fit = lsq_linear(secant, -r0, bounds=(cand.lower, cand.upper))
-    chi_lin = chi_square(r0 + secant @ fit.x)
+    problem, ref, theta, evs, r0, chi_lin = _made_by(model, cand, 0.3)
     assert chi_lin > 0.3 * chi_square(r0)                                 # the secant misses
     _, out, skipped = screen.signatures(problem, theta, (), evs, [cand])
     assert not skipped
     (x, chi2) = out[0][2]
     assert abs(np.log10(x[0] / 0.3)) <= 1.0 / 8.0
     assert chi2 < 5.0 < 0.01 * chi_lin
-    exact = evaluate(ref, apply_effect(model, cand, x))
-    assert chi2 == pytest.approx(chi_square(np.concatenate([exact.vector(ref.train), prior])),
-                                 rel=1e-3, abs=0.01)
+    assert chi2 == pytest.approx(_exact_chi2(problem, ref, model, cand, x), rel=1e-3, abs=0.01)
+
+
+def _made_by(model, cand, size):
+    """The frame against a perfect test of the frame with ``cand`` at ``size``: (problem, ref,
+    theta 0, evaluations, r0, the chi^2 of the secant through the exact reanalysis at the
+    candidate's reference size, fitted within its bounds)."""
+    _, ref = _perfect_reference(apply_effect(model, cand, [size]), model)
+    problem = Problem.build([ref], [model], 0.03)
+    theta = np.zeros(len(problem.names))
+    evs = problem.evaluate(theta)
+    r0 = problem.residual(theta, evs)
+    h = cand.reference[0]
+    secant = ((_exact(problem, ref, model, cand, [h]) - r0) / h)[:, None]
+    fit = lsq_linear(secant, -r0, bounds=(cand.lower, cand.upper))
+    return problem, ref, theta, evs, r0, chi_square(r0 + secant @ fit.x)
+
+
+def _exact(problem, ref, model, cand, x):
+    theta = np.zeros(len(problem.names))
+    return np.concatenate([evaluate(ref, apply_effect(model, cand, x)).vector(ref.train),
+                           problem.prior_residual(theta)])
+
+
+def _exact_chi2(problem, ref, model, cand, x):
+    return chi_square(_exact(problem, ref, model, cand, x))
 
 
 def test_mass_ladder_finds_the_size_and_the_grid(frame_model):
@@ -163,17 +175,7 @@ def test_mass_ladder_finds_the_size_and_the_grid(frame_model):
     model, _ = frame_model
     masses = candidates(model, ("lumped_mass",))
     cand = next(c for c in masses if c.label == "grid 4004")
-    _, ref = _perfect_reference(apply_effect(model, cand, [0.06]), model)
-    problem = Problem.build([ref], [model], 0.03)
-    theta = np.zeros(len(problem.names))
-    evs = problem.evaluate(theta)
-    r0 = problem.residual(theta, evs)
-    prior = problem.prior_residual(theta)
-    h = cand.reference[0]
-    at_h = evaluate(ref, apply_effect(model, cand, [h]))
-    secant = ((np.concatenate([at_h.vector(ref.train), prior]) - r0) / h)[:, None]
-    chi_lin = chi_square(r0 + secant @ lsq_linear(secant, -r0, bounds=(cand.lower,
-                                                                      cand.upper)).x)
+    problem, ref, theta, evs, r0, chi_lin = _made_by(model, cand, 0.06)
     _, out, skipped = screen.signatures(problem, theta, (), evs, masses)
     rows = screen.screen(r0, out)
     assert not skipped and len(rows) == len(masses) == 126
@@ -181,8 +183,7 @@ def test_mass_ladder_finds_the_size_and_the_grid(frame_model):
     assert best.candidate.label == "grid 4004"
     assert abs(np.log10(best.values[0] / 0.06)) <= 0.25
     assert best.chi2 < 0.01 * chi_square(r0) and best.chi2 < 0.1 * chi_lin
-    exact = evaluate(ref, apply_effect(model, cand, best.values))
-    assert best.chi2 == pytest.approx(chi_square(np.concatenate([exact.vector(ref.train), prior])),
+    assert best.chi2 == pytest.approx(_exact_chi2(problem, ref, model, cand, best.values),
                                       rel=1e-3, abs=0.01)
 
 

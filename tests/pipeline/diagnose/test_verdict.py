@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from pipeline.diagnose.effects import Candidate, Location
-from pipeline.diagnose.verdict import decide, on_bound, round_scores, within_scatter
+from pipeline.diagnose.verdict import at_bound, decide, on_bound, round_scores, within_scatter
 
 N = 400                      # training residuals of the tables
 LN = log(N)
@@ -210,3 +210,18 @@ def test_on_bound_only_at_a_non_zero_bound():
     assert on_bound(0.0995, 0.0, 0.10)
     assert not on_bound(0.098, 0.0, 0.10)
     assert not on_bound(0.0, 0.0, 0.10)
+
+
+def test_at_bound_names_the_parameters_on_a_non_zero_bound():
+    """A taper fitted at scale +0.3 (its upper bound) and taper -0.12 names the scale; a bow at
+    0 on the quadrant's 0 bound and 0.15 on its upper bound names only the second; a fit
+    inside its range names nothing."""
+    from pipeline.diagnose.effects import Candidate, Location
+
+    taper = Candidate("member_taper", Location(elements=(1,)), "member", ("scale", "taper"),
+                      (-0.3, -0.8), (0.3, 0.8), (0.1, 0.3))
+    assert at_bound(taper, [0.3, -0.122]) == ["scale = 0.3"]
+    assert at_bound(taper, [0.11, -0.12]) == []
+    bow = Candidate("member_curvature", Location(elements=(1,)), "member bow +y +z",
+                    ("bow_1", "bow_2"), (0.0, 0.0), (0.15, 0.15), (0.05, 0.05))
+    assert at_bound(bow, [0.0, 0.15]) == ["bow_2 = 0.15"]
