@@ -1,10 +1,7 @@
 """The gap between model and test (before / after), and the measurement that separates two fits.
 
 Gap metrics (issue 14 step 6, the contract's JSON keys), over all configurations, of the modes
-paired as a correlation report pairs them (:func:`pipeline.diagnose.evidence.mac_pairing`: MAC
-assignment, eq. 23; the fits pair by likelihood, :func:`pipeline.diagnose.evidence.pair`, which
-within a pair of close modes follows the frequencies where the shapes cannot tell them apart, and
-would make a cross-orthogonality off-diagonal of such a pair ~1 by construction):
+paired as a correlation report pairs them (:func:`pipeline.diagnose.evidence.report_pairing`):
 
 - ``frequency_rms_held_out`` / ``frequency_rms``: RMS of 100 (f_FE - f_GVT) / f_GVT (paper eq. 18)
   over the held-out paired modes / all paired modes [%];
@@ -26,7 +23,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from pipeline.diagnose.evidence import elastic_index, mac_pairing
+from pipeline.diagnose.evidence import elastic_index, report_pairing
 from pipeline.diagnose.weighing import mass_references
 from structures.correlation import cross_orthogonality, mac, serep_coordinates
 
@@ -49,7 +46,7 @@ def gap_metrics(problem, evaluations) -> dict:
     cross, cross_held, macs, macs_held = [], [], [], []
     mass_by = {}
     for ref, ev in zip(problem.refs, evaluations):
-        paired = mac_pairing(ref, ev.modes)
+        paired = report_pairing(ref, ev.modes)
         f_fe = ev.modes["frequency"].values[paired]
         err = 100.0 * (f_fe - ref.test_frequency) / ref.test_frequency       # eq. 18 in %
         errors.append(err)

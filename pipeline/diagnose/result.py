@@ -130,7 +130,8 @@ class DiagnoseResult:
         :mod:`pipeline.diagnose.loadpath`: its ``grids``, ``stiffness``, ``chi2``, ``n_pairs``,
         ``score`` and the named effect's ``named_score``), else null; ``gap`` (when the round
         named an effect: the gap of the model with it and every earlier one, keys as
-        ``gap_after``; the last such round's is ``gap_after``), else null.
+        ``gap_after``; the last such round's is ``gap_after``) and ``nominal`` (its model's nominal
+        parameters, as the top-level ``nominal``), else null.
     """
 
     verdict: str

@@ -431,6 +431,7 @@ def diagnose(configurations, settings: DiagnoseSettings = DiagnoseSettings(), *,
                 break
             chosen = fits[best]
             rounds[-1]["gap"] = gap_metrics(problem, chosen.evaluations)
+            rounds[-1]["nominal"] = {n: float(t) for n, t in zip(problem.names, chosen.theta)}
             records.append(EffectRecord(chosen.candidate, chosen.values, lead))
             effects.append((chosen.candidate, chosen.values))
             theta, none_evs = chosen.theta, chosen.evaluations
@@ -501,7 +502,7 @@ def _round_record(k: int, verdict: str, fits, best, runner, none, held_out, n_da
             "none_n_params": none.n_params,
             "none_held_out_chi2": float(modes_none.sum()),
             "none_held_out_modes_chi2": modes_none.tolist(),
-            "gap": None, "best": entry(best), "runner_up": entry(runner),
+            "gap": None, "nominal": None, "best": entry(best), "runner_up": entry(runner),
             "fits": [entry(i) for i in range(len(fits))],
             "load_path": None if path is None else {
                 "grids": list(path[0].grids), "stiffness": path[0].stiffness,

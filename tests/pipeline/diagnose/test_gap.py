@@ -14,8 +14,8 @@ def test_held_out_cross_orthogonality_and_mac_by_hand():
     """Three elastic modes, identity shapes at three sensors. Test mode 2 (held out) is
     cos(a) phi_2 + sin(a) phi_3, test mode 3 (training) cos(b) phi_3 + sin(b) phi_1, b > a: the
     largest off-diagonal cross-orthogonality is sin(b) over all rows, sin(a) over the held-out row;
-    MAC min cos^2(b) over all, cos^2(a) held out. The gap pairs by MAC (mode k with test mode k
-    here), whatever pairing the fit used (``paired``: modes 2 and 3 swapped)."""
+    MAC min cos^2(b) over all, cos^2(a) held out. The gap pairs as a report does (mode k with
+    test mode k here), whatever pairing the fit used (``paired``: modes 2 and 3 swapped)."""
     a, b = 0.2, 0.5
     shapes = np.array([[1.0, 0.0, 0.0], [0.0, np.cos(a), np.sin(a)],
                        [np.sin(b), 0.0, np.cos(b)]])
@@ -25,7 +25,8 @@ def test_held_out_cross_orthogonality_and_mac_by_hand():
                        coords={"mode": [1, 2, 3]})
     ref = SimpleNamespace(frequency_sigma=np.full(3, 0.01), train=np.array([True, False, True]),
                           has_shapes=True, sensor_index=np.arange(3), shapes=shapes,
-                          measured_mass={}, name="c", test_frequency=f_test)
+                          measured_mass={}, name="c", test_frequency=f_test,
+                          shape_sigma=np.full(3, 0.05))
     ev = SimpleNamespace(modes=modes, paired=np.array([0, 2, 1]), props=None)
     gap = gap_metrics(SimpleNamespace(refs=(ref,)), [ev])
     assert gap["max_cross_orthogonality_offdiag"] == pytest.approx(np.sin(b), rel=1e-12)
