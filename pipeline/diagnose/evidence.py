@@ -386,10 +386,7 @@ def pairing_cost(ref: Reference, frequency, sensor_shapes) -> np.ndarray:
     -------
     (n_test, n_fe) float
     """
-    f = np.asarray(frequency, float)
     a = np.asarray(sensor_shapes, float)
-    f_cost = ((f[None, :] - ref.test_frequency[:, None]) / ref.test_frequency[:, None]
-              / ref.frequency_sigma[:, None]) ** 2
     w = ref.shape_keep / ref.shape_scale ** 2                              # (n_test, m)
     u = ref.shapes @ ref.projector.T                                       # (n_test, m)
     v = a @ ref.projector.T                                                # (n_fe, m)
@@ -398,7 +395,7 @@ def pairing_cost(ref: Reference, frequency, sensor_shapes) -> np.ndarray:
                       where=norm[None, :] > 0.0)                           # (n_test, n_fe)
     s_cost = (np.sum(w * u * u, axis=1)[:, None] - 2.0 * alpha * ((w * u) @ v.T)
               + alpha ** 2 * (w @ (v * v).T))
-    return f_cost + s_cost
+    return _frequency_cost(ref, frequency) + s_cost
 
 
 def pair(ref: Reference, modes: xr.Dataset, *, sensor_shapes=None) -> np.ndarray:
@@ -425,9 +422,23 @@ def pair(ref: Reference, modes: xr.Dataset, *, sensor_shapes=None) -> np.ndarray
     elastic = _elastic(ref, modes)
     if sensor_shapes is None:
         sensor_shapes = modes["shape"].values[:, ref.sensor_index]
-    rows, cols = linear_sum_assignment(pairing_cost(ref, modes["frequency"].values[elastic],
-                                                    np.asarray(sensor_shapes)[elastic]))
-    out = np.empty(ref.test_frequency.size, int)
+    return _assign(pairing_cost(ref, modes["frequency"].values[elastic],
+                                np.asarray(sensor_shapes)[elastic]), elastic)
+
+
+def _frequency_cost(ref: Reference, frequency) -> np.ndarray:
+    """(n_test, n_fe) ((f_k - f_jG) / f_jG / sigma_fj)^2: each test mode's frequency entry of
+    chi^2 when paired with each analysis mode."""
+    f = np.asarray(frequency, float)
+    return ((f[None, :] - ref.test_frequency[:, None]) / ref.test_frequency[:, None]
+            / ref.frequency_sigma[:, None]) ** 2
+
+
+def _assign(cost, elastic) -> np.ndarray:
+    """Index along ``modes.mode`` of each test mode's analysis mode in the assignment (Hungarian)
+    of least total ``cost`` (n_test, n_elastic)."""
+    rows, cols = linear_sum_assignment(cost)
+    out = np.empty(cost.shape[0], int)
     out[rows] = cols
     return elastic[out]
 
@@ -473,13 +484,8 @@ def report_pairing(ref: Reference, modes: xr.Dataset, *, sensor_shapes=None) -> 
     seen = np.asarray(sensor_shapes)[elastic]
     rms = np.sqrt(np.mean(seen ** 2, axis=1))
     metric = mac(ref.shapes.T, seen.T) * (rms >= INVISIBLE * rms.max())[None, :]   # eq. 23
-    cost = (((f_fe[None, :] - ref.test_frequency[:, None]) / ref.test_frequency[:, None]
-             / ref.frequency_sigma[:, None]) ** 2
-            + ref.shapes.shape[1] * (1.0 - metric) / ref.shape_sigma[:, None] ** 2)
-    rows, cols = linear_sum_assignment(cost)
-    out = np.empty(ref.test_frequency.size, int)
-    out[rows] = cols
-    return elastic[out]
+    return _assign(_frequency_cost(ref, f_fe)
+                   + ref.shapes.shape[1] * (1.0 - metric) / ref.shape_sigma[:, None] ** 2, elastic)
 
 
 def evaluate(ref: Reference, model: FEModel, modes: xr.Dataset | None = None) -> Evaluation:

@@ -48,12 +48,12 @@ so the same basis serves (:func:`reduce_mass`: Psi = [Phi, R], R the residual at
 of the three unit loads), with K_r = diag(Lambda, R^T K R) fixed and
 M_r(x) = I + mu W W^T, W = Psi^T E; each size is one dense eigen-solution of the standard form
 M_r^-1/2 K_r M_r^-1/2 z = lambda z, y = M_r^-1/2 z, with M_r^-1/2 = I + U ((1 + mu s^2)^-1/2 - 1)
-U^T from the thin SVD W = U diag(s) V^T (exact: M_r = I + U diag(mu s^2) U^T). A linear screening of a mass misses
-the sizes a real one has: on the frame (blind-study mass seed 9, 3.9 % of the mass on the tail,
-chi^2 44615 without it) the secant through 2 % ranked the right grid below a mass elsewhere and
-a joint; the modes move through each other as the mass grows. The rigid-body motions are the
-current model's (a point mass restrains none); the mass properties follow from the rigid-body
-mass matrix, M0(x) = M0 + mu D_g^T D_g (D_g the grid's rigid-body translations).
+U^T from the thin SVD W = U diag(s) V^T (exact: M_r = I + U diag(mu s^2) U^T). A linear screening
+of a mass misses the sizes a real one has: on the frame (blind-study mass seed 9, 3.9 % of the mass
+on the tail, chi^2 44615 without it) the secant through 2 % ranked the right grid below a mass
+elsewhere and a joint; the modes move through each other as the mass grows. The rigid-body motions
+are the current model's (a point mass restrains none); the mass properties follow from the
+rigid-body mass matrix, M0(x) = M0 + mu D_g^T D_g (D_g the grid's rigid-body translations).
 
 The changed model's rigid-body motions are those of the current model that do not move d
 (:func:`structures.modal.rigid_body_modes` on the current assembly with the spring added: the

@@ -48,11 +48,11 @@ every configuration (:mod:`pipeline.diagnose.evidence`). The routes:
   r(x) = r0 + S monomials(x) of :mod:`pipeline.diagnose.quadratic` from exact reanalyses at
   h_k, 2 h_k and h_k + h_l for a bow, +-2 h_k and 2 h_k + 2 h_l for a taper (the first-order
   eigenvalue perturbation would miss the (phi_k^T dK_1 phi_j)^2 / (lambda_j - lambda_k) term of
-  the couplings, the same order in the bow as the stiffness change; samples shared by a member's two quadrant candidates), fitted
-  within the sampled span; the :data:`pipeline.diagnose.quadratic.LINE_SEARCH_TOP` best of
-  each kind then get an exact line search
-  to their bounds (:func:`pipeline.diagnose.quadratic.line_search`), whose best size and exact
-  chi^2 are their screening result.
+  the couplings, the same order in the bow as the stiffness change; samples shared by a
+  member's two quadrant candidates), fitted within the sampled span; the
+  :data:`pipeline.diagnose.quadratic.LINE_SEARCH_TOP` best of each kind then get an exact line
+  search to their bounds (:func:`pipeline.diagnose.quadratic.line_search`), whose best size and
+  exact chi^2 are their screening result.
 
 **Ranking** (:func:`screen`): a candidate's best size and chi^2 are ``exact``, else the
 quadratic model's fit within its bounds and sampled span; the candidates are ranked by the drop

@@ -344,7 +344,8 @@ def diagnose(configurations, settings: DiagnoseSettings = DiagnoseSettings(), *,
         notes += list(cal.flags)
         gap_before = gap_metrics(problem, cal.evaluations)
         effects, records, rounds = [], [], []
-        theta, none_chi2, none_evs = cal.theta, cal.chi2, cal.evaluations
+        theta, none_evs = cal.theta, cal.evaluations
+        gap_after = gap_before                                  # nothing named: the same model
         table, separating, first = (), None, None
         for k in range(settings.max_effects):
             _say(progress, f"round {k + 1}: screening")
@@ -430,13 +431,11 @@ def diagnose(configurations, settings: DiagnoseSettings = DiagnoseSettings(), *,
             if verdict != "effect":
                 break
             chosen = fits[best]
-            rounds[-1]["gap"] = gap_metrics(problem, chosen.evaluations)
+            gap_after = rounds[-1]["gap"] = gap_metrics(problem, chosen.evaluations)
             rounds[-1]["nominal"] = {n: float(t) for n, t in zip(problem.names, chosen.theta)}
             records.append(EffectRecord(chosen.candidate, chosen.values, lead))
             effects.append((chosen.candidate, chosen.values))
             theta, none_evs = chosen.theta, chosen.evaluations
-        after_evs = none_evs
-        gap_after = gap_metrics(problem, after_evs)
     verdict = "effect" if records else first
     notes.append(f"diagnose took {time.perf_counter() - t0:.1f} s "
                  f"({len(rounds)} round{'s' if len(rounds) > 1 else ''}).")
