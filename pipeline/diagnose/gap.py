@@ -82,13 +82,25 @@ def gap_metrics(problem, evaluations) -> dict:
             "mass": worst, "mass_by_configuration": mass_by, "flutter_speed": None}
 
 
-def separating_measurement(problem, fit_a, fit_b) -> str:
+#: Two fitted models whose predictions differ by less than this many noise standard deviations
+#: at every paired frequency and at every translational DOF of the model (measured or not) are
+#: one explanation: no measurement of the test's accuracy tells them apart (a spring anywhere
+#: along a member that is rigid in its direction, :func:`indistinguishable`).
+EQUIVALENT_SIGMAS = 0.1
+
+
+def prediction_difference(problem, fit_a, fit_b) -> tuple:
     """Where two fitted models' predictions differ most relative to the noise.
 
-    Compares the paired frequencies of every configuration (relative to the frequency scale) and
-    the paired mode shapes at every translational DOF of the model (each shape at unit RMS over
-    the sensors, signs aligned, relative to the shape scale): a DOF that is not measured yet is a
-    sensor to add.
+    Compares the paired frequencies of every configuration (relative to the frequency scale) and,
+    for a configuration with shapes, the paired mode shapes at every translational DOF of the
+    model (each shape at unit RMS over the sensors, signs aligned, relative to the shape noise):
+    a DOF that is not measured yet is a sensor to add.
+
+    Returns
+    -------
+    frequency : (float, str), the largest difference in standard deviations and the test mode.
+    shape : (float, str), the same for the shapes and the DOF ((0.0, "") without shapes).
     """
     best_f = (0.0, "")
     best_s = (0.0, "")
@@ -119,6 +131,24 @@ def separating_measurement(problem, fit_a, fit_b) -> str:
             comp = int(modes_a["component"].values[dof])
             best_s = (float(diff[j, d]), f"a sensor at grid {grid} component {comp} in test mode "
                                          f"{ref.test_mode[j]} of configuration {ref.name}")
+    return best_f, best_s
+
+
+def indistinguishable(problem, fit_a, fit_b) -> bool:
+    """True when two fitted models predict the same data: every paired frequency and every
+    translational DOF of the model's shapes within :data:`EQUIVALENT_SIGMAS` noise standard
+    deviations (:func:`prediction_difference`). Judged only when every configuration has shapes
+    (without them, sites that differ only in the shapes, e.g. the two sides of a symmetric
+    structure, would look the same): False otherwise."""
+    if not all(ref.has_shapes for ref in problem.refs):
+        return False
+    (df, _), (ds, _) = prediction_difference(problem, fit_a, fit_b)
+    return max(df, ds) < EQUIVALENT_SIGMAS
+
+
+def separating_measurement(problem, fit_a, fit_b) -> str:
+    """The measurement that separates two fits (:func:`prediction_difference`), as a sentence."""
+    best_f, best_s = prediction_difference(problem, fit_a, fit_b)
     label_a = fit_a.candidate.label if fit_a.candidate else "nothing missing"
     label_b = fit_b.candidate.label if fit_b.candidate else "nothing missing"
     text = (f"to separate {fit_a.candidate.kind} {label_a} from {fit_b.candidate.kind} {label_b}: "

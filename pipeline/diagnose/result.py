@@ -123,7 +123,9 @@ class DiagnoseResult:
         ``none_held_out_modes_chi2`` (per mode), and the refitted candidates (``fits``, the
         ``best`` and the ``runner_up``: kind, label, chi2, chi2_modal, bic, n_params,
         held_out_chi2, held_out_modes_chi2, held_out_modes_kept (the modes either model
-        reproduces), held_out_evidence, parameters); the held-out chi^2 is over the held-out
+        reproduces), held_out_evidence, parameters), ``alike`` (the labels of the fits that
+        predict the same data as the best, :func:`pipeline.diagnose.gap.indistinguishable`:
+        one explanation with it, not its rival); the held-out chi^2 is over the held-out
         modes' residual entries (:func:`pipeline.diagnose.predictive.held_out_modes`,
         :func:`pipeline.diagnose.predictive.held_out_evidence`); ``load_path`` (when the
         round's verdict named an effect, or would have: the best spring between two grids,

@@ -13,7 +13,8 @@ candidates whose size exceeds what the nominal scatter could do by itself
   held-out modes do not contradict it by more than the margin
   (:func:`pipeline.diagnose.predictive.held_out_evidence`: on the modes that "none" or the fit
   reproduces; a mode neither reproduces is a mis-paired one and is left out);
-- ``ambiguous``: it beats "none" but not the runner-up;
+- ``ambiguous``: it beats "none" but not the runner-up (a fit that predicts the same data as
+  the best at every frequency and DOF, ``alike``, is the same explanation, not a rival);
 - ``none``: no candidate beats "none" and "none" passes the goodness-of-fit test;
 - ``unexplained``: no candidate beats "none" and "none" fails the goodness-of-fit test, or the
   best beats both but the held-out modes contradict it (a fit that compensates on the training
@@ -138,7 +139,7 @@ def round_scores(none_fit, fits, n_data: int, n_candidates: int = 1, *, n_modal:
 
 
 def decide(none_fit, fits, margin: float, near, n_data: int, n_candidates: int = 1, *,
-           n_modal: int, held_out=None) -> tuple:
+           n_modal: int, held_out=None, alike=None) -> tuple:
     """Verdict of one round from its score table.
 
     Parameters
@@ -156,6 +157,10 @@ def decide(none_fit, fits, margin: float, near, n_data: int, n_candidates: int =
         entries) of the held-out modes, optional
         (:func:`pipeline.diagnose.predictive.held_out_modes`); without it the predictive check
         is skipped.
+    alike : callable(i, j) -> bool, optional
+        True when fits i and j predict the same data (no measurement separates them,
+        :func:`pipeline.diagnose.gap.indistinguishable`): such a fit is one explanation with
+        the best, not its runner-up, whatever its kind and location.
 
     Returns
     -------
@@ -221,7 +226,8 @@ def decide(none_fit, fits, margin: float, near, n_data: int, n_candidates: int =
     best = int(np.argmin(scores))
     kind, loc = fits[best][0], fits[best][1]
     rivals = [i for i, f in enumerate(fits)
-              if i != best and (f[0] != kind or not near(loc, f[1]))]
+              if i != best and (f[0] != kind or not near(loc, f[1]))
+              and not (alike is not None and alike(best, i))]
     runner = min(rivals, key=lambda i: scores[i]) if rivals else None
     lead = float(min(none_score, scores[runner] if runner is not None else np.inf) - scores[best])
     if not scores[best] + margin < none_score:

@@ -39,7 +39,8 @@ from pipeline.diagnose.calibrate import Problem, calibrate
 from pipeline.diagnose.effects import KINDS, candidates, neighbours
 from pipeline.diagnose.evidence import (SELF_ORTHOGONALITY_LIMIT, build_reference, chi_square,
                                          elastic_index)
-from pipeline.diagnose.gap import gap_metrics, separating_measurement
+from pipeline.diagnose.gap import (EQUIVALENT_SIGMAS, gap_metrics, indistinguishable,
+                                   separating_measurement)
 from pipeline.diagnose.loadpath import best_load_path, outscores
 from pipeline.diagnose.mirror import sites
 from pipeline.diagnose.predictive import held_out_evidence, held_out_modes, kept_modes
@@ -388,7 +389,17 @@ def diagnose(configurations, settings: DiagnoseSettings = DiagnoseSettings(), *,
                       int(problem.modal_rows().sum()))
             verdict, best, runner, lead, reason, c = decide(
                 scored[0], scored[1], settings.margin, near, n_data, len(cands),
-                n_modal=scored[2], held_out=(modes_none, modes, entries))
+                n_modal=scored[2], held_out=(modes_none, modes, entries),
+                alike=lambda i, j: indistinguishable(problem, fits[i], fits[j]))
+            same = [] if best is None else [
+                f.candidate.label for i, f in enumerate(fits)
+                if i != best and indistinguishable(problem, fits[best], f)]
+            if same and reason != "no_gain":
+                notes.append(f"round {k + 1}: {fits[best].candidate.kind} "
+                             f"{fits[best].candidate.label} and {', '.join(same)} predict every "
+                             "paired frequency and every DOF's shape within "
+                             f"{EQUIVALENT_SIGMAS:g} sigma of each other: one explanation, no "
+                             "measurement separates them; the best fit stands for them.")
             path = None
             if verdict == "effect":
                 cand = fits[best].candidate
@@ -405,7 +416,7 @@ def diagnose(configurations, settings: DiagnoseSettings = DiagnoseSettings(), *,
                                                  settings.margin)
             rounds.append(_round_record(k, verdict, fits, best, runner, none,
                                         (modes_none, modes, entries), n_data, scored + (c,),
-                                        path))
+                                        path, same))
             if path is not None and verdict == "unexplained":
                 cand = fits[best].candidate
                 notes.append(f"round {k + 1}: {cand.kind} {cand.label} is not named: a load "
@@ -469,7 +480,7 @@ def _load_path_check(problem: Problem, theta, effects, evaluations, r0, scored, 
 
 
 def _round_record(k: int, verdict: str, fits, best, runner, none, held_out, n_data: int,
-                  scored, path=None) -> dict:
+                  scored, path=None, alike=()) -> dict:
     """The JSON record of round k (:class:`pipeline.diagnose.result.DiagnoseResult` ``rounds``).
 
     ``held_out`` is (modes_none, per fit modes, entries) of
@@ -477,7 +488,8 @@ def _round_record(k: int, verdict: str, fits, best, runner, none, held_out, n_da
     rows, n_modal, c) that :func:`pipeline.diagnose.verdict.decide` took and returned (rows
     (..., chi2_modal, chi2_stated, n_params), c the modal dispersion); ``path`` is
     (LoadPath, its score, the named effect's score) of :func:`_load_path_check`, or None when
-    the round named nothing.
+    the round named nothing; ``alike`` the labels of the fits that predict the same data as the
+    best (:func:`pipeline.diagnose.gap.indistinguishable`).
     """
     modes_none, modes, entries = held_out
     none_row, rows, n_modal, c = scored
@@ -502,6 +514,7 @@ def _round_record(k: int, verdict: str, fits, best, runner, none, held_out, n_da
             "none_held_out_chi2": float(modes_none.sum()),
             "none_held_out_modes_chi2": modes_none.tolist(),
             "gap": None, "nominal": None, "best": entry(best), "runner_up": entry(runner),
+            "alike": list(alike),
             "fits": [entry(i) for i in range(len(fits))],
             "load_path": None if path is None else {
                 "grids": list(path[0].grids), "stiffness": path[0].stiffness,

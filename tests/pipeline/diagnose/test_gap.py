@@ -37,3 +37,47 @@ def test_held_out_cross_orthogonality_and_mac_by_hand():
     assert gap["frequency_rms_held_out"] == pytest.approx(2.0, rel=1e-12)
     assert gap["frequency_rms"] == pytest.approx(np.sqrt(5.25 / 3.0), rel=1e-10)
 
+
+
+def _fit(shape, frequency, label="k"):
+    """A fitted model's stand-in: one configuration, one paired mode with ``shape`` (1, 6 n_grid)
+    and frequency residual ``frequency`` (in sigmas)."""
+    n = shape.shape[1]
+    modes = xr.Dataset({"shape": (("mode", "dof"), shape)},
+                       coords={"grid": ("dof", np.repeat(np.arange(1, n // 6 + 1), 6)),
+                               "component": ("dof", np.tile(np.arange(1, 7), n // 6))})
+    ev = SimpleNamespace(frequency=np.array([frequency]), modes=modes, paired=np.array([0]))
+    return SimpleNamespace(evaluations=[ev], candidate=SimpleNamespace(kind="k", label=label))
+
+
+@pytest.mark.parametrize("has_shapes", [True, False])
+def test_indistinguishable_by_hand(has_shapes):
+    """Five translations measured (grid 1 all three, grid 2 x and y) at 5 % noise: a shape that differs by
+    0.004 of its RMS at an unmeasured translation (grid 2 component 3) is 0.08 sigma apart, one
+    explanation; by 0.006 it is 0.12 sigma apart and a sensor there would separate them. A
+    frequency 0.05 sigma apart is within the bound, 0.2 is not. A rotation differing counts for
+    nothing (no sensor measures it). Without shapes nothing is judged alike."""
+    from pipeline.diagnose.gap import EQUIVALENT_SIGMAS, indistinguishable, prediction_difference
+
+    assert EQUIVALENT_SIGMAS == 0.1
+    ref = SimpleNamespace(test_mode=np.array([4]), name="c", has_shapes=has_shapes,
+                          sensor_index=np.array([0, 1, 2, 6, 7]), shape_sigma=np.array([0.05]))
+    problem = SimpleNamespace(refs=(ref,))
+    base = np.ones((1, 12))
+
+    def moved(dof, by):
+        out = base.copy()
+        out[0, dof] += by
+        return out
+
+    a = _fit(base, 0.0)
+    close, apart = _fit(moved(8, 0.004), 0.05), _fit(moved(8, 0.006), 0.05)
+    assert indistinguishable(problem, a, close) is has_shapes
+    assert not indistinguishable(problem, a, apart)
+    assert not indistinguishable(problem, a, _fit(base, 0.2))
+    assert indistinguishable(problem, a, _fit(moved(4, 5.0), 0.0)) is has_shapes   # a rotation
+    if has_shapes:
+        (df, _), (ds, where) = prediction_difference(problem, a, apart)
+        assert df == pytest.approx(0.05, rel=1e-12)
+        assert ds == pytest.approx(0.006 / 0.05, rel=1e-9)
+        assert where == "a sensor at grid 2 component 3 in test mode 4 of configuration c"
