@@ -109,8 +109,8 @@ def prediction_difference(problem, fit_a, fit_b) -> tuple:
         df = np.abs(ea.frequency - eb.frequency)
         j = int(np.argmax(df))
         if df[j] > best_f[0]:
-            best_f = (float(df[j]), f"the frequency of test mode {ref.test_mode[j]} in configuration "
-                                    f"{ref.name}")
+            best_f = (float(df[j]), f"the frequency of test mode {ref.test_mode[j]} in "
+                                    f"configuration {ref.name}")
         if not ref.has_shapes:
             continue
         modes_a, modes_b = ea.modes, eb.modes

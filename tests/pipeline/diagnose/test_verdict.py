@@ -231,8 +231,8 @@ def test_a_fit_that_predicts_the_same_data_is_not_the_runner_up():
     """The X-56 blind study's boundary seed 0: grounded z springs at grids 1002, 6001 and 6002
     along a gear strut rigid in z fit alike (the same chi^2 to 0.1); with ``alike`` they are one
     explanation and the best is named over a distinguishable rival 20 behind, else ambiguous."""
-    fits = [("boundary_stiffness", 1002, 390.0, 0.0, 3), ("boundary_stiffness", 6002, 390.0, 0.0, 3),
-            ("lumped_mass", 3209, 410.0, 0.0, 3)]
+    fits = [("boundary_stiffness", 1002, 390.0, 0.0, 3),
+            ("boundary_stiffness", 6002, 390.0, 0.0, 3), ("lumped_mass", 3209, 410.0, 0.0, 3)]
     assert decide((600.0, 0.0, 2), fits, 10.0, _never_near, N, n_modal=N)[0] == "ambiguous"
     alike = lambda i, j: {i, j} == {0, 1}  # noqa: E731
     verdict, best, runner, lead, reason, _ = decide((600.0, 0.0, 2), fits, 10.0, _never_near, N,
