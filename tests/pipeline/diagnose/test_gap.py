@@ -53,10 +53,10 @@ def _fit(shape, frequency, label="k"):
 @pytest.mark.parametrize("has_shapes", [True, False])
 def test_indistinguishable_by_hand(has_shapes):
     """Five translations measured (grid 1 all three, grid 2 x and y) at 5 % noise: a shape that
-    differs by 0.004 of its RMS at an unmeasured translation (grid 2 component 3) is 0.08 sigma apart, one
-    explanation; by 0.006 it is 0.12 sigma apart and a sensor there would separate them. A
-    frequency 0.05 sigma apart is within the bound, 0.2 is not. A rotation differing counts for
-    nothing (no sensor measures it). Without shapes nothing is judged alike."""
+    differs by 0.004 of its RMS at an unmeasured translation (grid 2 component 3) is 0.08 sigma
+    apart, one explanation; by 0.006 it is 0.12 sigma apart and a sensor there would separate
+    them. A frequency 0.05 sigma apart is within the bound, 0.2 is not. A rotation differing
+    counts for nothing (no sensor measures it). Without shapes nothing is judged alike."""
     from pipeline.diagnose.gap import EQUIVALENT_SIGMAS, indistinguishable, prediction_difference
 
     assert EQUIVALENT_SIGMAS == 0.1
