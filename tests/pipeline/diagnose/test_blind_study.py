@@ -21,7 +21,8 @@ import numpy as np
 import pytest
 
 from tests.pipeline.diagnose.truth import KINDS, STRUCTURES, TRUTH_KINDS
-from tests.pipeline.diagnose.truth.study import confusion_text, run_study, score, study_dataset
+from tests.pipeline.diagnose.truth.study import (confusion_text, gap_text, rescore, run_study,
+                                                 score, study_dataset)
 
 VERDICTS = ("effect", "none", "ambiguous", "unexplained")
 #: The quick subset: truth kind -> what the verdict must be (measured on frame seed 0: a lumped
@@ -80,6 +81,41 @@ def test_scores_of_a_study():
     assert int(ds["confusion"].sel(truth_kind_row="outside",
                                    named_kind_column="unexplained")) == 1
     assert "top1_kind_accuracy: 0.500" in confusion_text(ds)
+
+
+def _write_case(root, structure, kind, seed, truth, result, seconds=None):
+    folder = root / structure / kind / str(seed)
+    folder.mkdir(parents=True)
+    (folder / "truth.json").write_text(json.dumps(truth))
+    (folder / "diagnose.json").write_text(json.dumps(result))
+    if seconds is not None:
+        (folder / "score.json").write_text(json.dumps({"seconds": seconds, "error": ""}))
+
+
+def test_rescore_merges_split_runs_and_reruns(tmp_path):
+    """Two folders of one study (kinds split over processes); the second reruns a case of the
+    first, whose verdict replaces the first's. Times from score.json, else the workflow's note."""
+    first, second = tmp_path / "a", tmp_path / "b"
+    taper = {**TRUTH, "kind": "member_taper"}
+    _write_case(first, "frame", "member_taper", 0, taper,
+                _verdict("member_taper", verdict="ambiguous"), seconds=50.0)
+    _write_case(first, "frame", "member_taper", 1, taper,
+                {**_verdict("member_taper", elements=[2003], before=2.0, after=2.5),
+                 "notes": ["diagnose took 61.5 s (1 round)."]})
+    _write_case(second, "frame", "none", 0, {**TRUTH, "kind": "none"},
+                _verdict("none", verdict="none"), seconds=40.0)
+    _write_case(second, "frame", "member_taper", 0, taper,
+                _verdict("member_taper", elements=[2004]), seconds=70.0)
+    ds = rescore([first, second])
+    assert ds.sizes["case"] == 3
+    assert ds.attrs["top1_kind_accuracy"] == 1.0 and ds.attrs["none_kept"] == 1.0
+    assert sorted(ds["seconds"].values.tolist()) == [40.0, 61.5, 70.0]
+    assert ds.attrs["gap_shrinks"] == 0.5                 # seed 1's held-out error rose
+    text = gap_text(ds)
+    assert "2.00 ->   2.50  0.300 -> 0.100  RMS up" in text
+    assert text.endswith("drops: RMS 1, off-diagonal 2, both 1 of 2")
+    with pytest.raises(FileNotFoundError):
+        rescore([tmp_path / "empty"])
 
 
 @pytest.fixture(scope="module")

@@ -16,9 +16,11 @@ Scores (issue 14, "Must show"):
 * the gap: held-out RMS frequency error and largest cross-orthogonality off-diagonal before and
   after, per case.
 
-Run ``python -m tests.pipeline.diagnose.truth.study [--structures frame x56] [--seeds 10]
-[--out DIR]`` from the repository root: prints the confusion matrix and the scores, writes
-``DIR/study.nc`` and every case's ``diagnose.json``.
+Run ``python -m tests.pipeline.diagnose.truth.study [--structures frame x56] [--kinds ...]
+[--seeds 10] [--first-seed 0] [--out DIR]`` from the repository root: prints the confusion
+matrix, the scores and the gap of every correctly named case, writes ``DIR/study.nc`` and every
+case's ``diagnose.json`` and ``score.json``. A study split over processes (kinds or seeds per
+core) is scored as one with ``--score DIR [DIR ...]`` (:func:`rescore`; no case is run).
 """
 from __future__ import annotations
 
@@ -109,6 +111,7 @@ def run_study(structures=STRUCTURES, kinds=TRUTH_KINDS, seeds=range(10), out=Non
                 write_text(json.dumps(result, indent=1) + "\n", folder / "diagnose.json")
                 row = {"structure": structure, "truth_kind": kind, "seed": int(seed),
                        "seconds": seconds, "error": error, **score(truth, result)}
+                write_text(json.dumps(row, indent=1) + "\n", folder / "score.json")
                 rows.append(row)
                 if progress:
                     progress(f"{structure:6s} {kind:18s} seed {seed:3d}: {row['named']:18s} "
@@ -117,6 +120,41 @@ def run_study(structures=STRUCTURES, kinds=TRUTH_KINDS, seeds=range(10), out=Non
     ds = study_dataset(rows)
     write_dataset(ds, out / "study.nc")
     return ds
+
+
+def rescore(folders) -> xr.Dataset:
+    """The scored study of the cases already run under ``folders`` (each as ``run_study``'s
+    ``out``: ``<structure>/<kind>/<seed>/`` with ``truth.json`` and ``diagnose.json``); a case in
+    a later folder replaces the same case in an earlier one (a rerun). Scored by :func:`score`
+    again; ``seconds`` and ``error`` from the case's ``score.json``, or without one the
+    workflow's own time (its note "diagnose took ... s").
+
+    Parameters
+    ----------
+    folders : sequence of path
+
+    Returns
+    -------
+    xarray.Dataset, as :func:`run_study`'s.
+    """
+    cases = {}
+    for folder in map(Path, folders):
+        for found in sorted(folder.glob("*/*/*/diagnose.json")):
+            structure, kind, seed = found.parts[-4:-1]
+            cases[structure, kind, int(seed)] = found.parent
+    if not cases:
+        raise FileNotFoundError(f"no <structure>/<kind>/<seed>/diagnose.json under {folders}")
+    rows = []
+    for (structure, kind, seed), case in sorted(cases.items()):
+        result = json.loads((case / "diagnose.json").read_text())
+        stored = case / "score.json"
+        row = json.loads(stored.read_text()) if stored.is_file() else {
+            "seconds": next((float(n.split()[2]) for n in result.get("notes", ())
+                             if n.startswith("diagnose took")), np.nan), "error": ""}
+        rows.append({"structure": structure, "truth_kind": kind, "seed": seed,
+                     "seconds": row["seconds"], "error": row["error"],
+                     **score(json.loads((case / "truth.json").read_text()), result)})
+    return study_dataset(rows)
 
 
 def study_dataset(rows: list[dict]) -> xr.Dataset:
@@ -184,6 +222,27 @@ def confusion_text(ds: xr.Dataset) -> str:
     return "\n".join(lines)
 
 
+def gap_text(ds: xr.Dataset) -> str:
+    """The gap of every correctly named case (a library kind named right): held-out RMS
+    frequency error [%] and largest cross-orthogonality off-diagonal before -> after, marked
+    where one of them does not drop, and how many cases each drops in."""
+    right = ds["kind_correct"].values & np.isin(ds["truth_kind"].values, KINDS)
+    rms, xo = ds["frequency_rms_held_out"].values, ds["max_cross_orthogonality_offdiag"].values
+    rms_drops, xo_drops = rms[:, 1] < rms[:, 0], (xo[:, 1] < xo[:, 0]) | np.isnan(xo[:, 0])
+    lines = [f"gap of the {int(right.sum())} correctly named cases (held-out RMS frequency error "
+             "%, largest cross-orthogonality off-diagonal):"]
+    for i in np.flatnonzero(right):
+        marks = [m for m, ok in (("RMS up", rms_drops[i]), ("off-diagonal up", xo_drops[i]))
+                 if not ok]
+        lines.append(f"  {ds['structure'].values[i]:6s} {ds['truth_kind'].values[i]:18s} seed "
+                     f"{int(ds['seed'].values[i]):3d}: {rms[i, 0]:6.2f} -> {rms[i, 1]:6.2f}  "
+                     f"{xo[i, 0]:.3f} -> {xo[i, 1]:.3f}  {', '.join(marks)}".rstrip())
+    both = int(np.sum(right & rms_drops & xo_drops))
+    lines.append(f"drops: RMS {int(np.sum(right & rms_drops))}, off-diagonal "
+                 f"{int(np.sum(right & xo_drops))}, both {both} of {int(right.sum())}")
+    return "\n".join(lines)
+
+
 def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--structures", nargs="+", default=list(STRUCTURES), choices=STRUCTURES)
@@ -191,10 +250,17 @@ def main(argv=None) -> None:
     parser.add_argument("--seeds", type=int, default=10, help="seeds 0 .. N-1")
     parser.add_argument("--first-seed", type=int, default=0)
     parser.add_argument("--out", type=Path, default=Path("runs/diagnose_blind_study"))
+    parser.add_argument("--score", type=Path, nargs="+", metavar="DIR",
+                        help="score the cases already run under these folders (a later folder's "
+                             "case replaces an earlier one's) instead of running any")
     args = parser.parse_args(argv)
-    ds = run_study(args.structures, args.kinds,
-                   range(args.first_seed, args.first_seed + args.seeds), args.out)
+    if args.score:
+        ds = rescore(args.score)
+    else:
+        ds = run_study(args.structures, args.kinds,
+                       range(args.first_seed, args.first_seed + args.seeds), args.out)
     print(confusion_text(ds))
+    print(gap_text(ds))
 
 
 if __name__ == "__main__":
