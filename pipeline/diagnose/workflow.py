@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass
+from functools import cache
 from pathlib import Path
 from typing import Mapping
 
@@ -387,13 +388,12 @@ def diagnose(configurations, settings: DiagnoseSettings = DiagnoseSettings(), *,
             modes = [held_out_modes(problem, f.evaluations)[0] for f in fits]
             scored = ((*_chi2_split(problem, none), none.n_params), _score_rows(problem, fits),
                       int(problem.modal_rows().sum()))
+            alike = cache(lambda i, j: indistinguishable(problem, fits[i], fits[j]))
             verdict, best, runner, lead, reason, c = decide(
                 scored[0], scored[1], settings.margin, near, n_data, len(cands),
-                n_modal=scored[2], held_out=(modes_none, modes, entries),
-                alike=lambda i, j: indistinguishable(problem, fits[i], fits[j]))
-            same = [] if best is None else [
-                f.candidate.label for i, f in enumerate(fits)
-                if i != best and indistinguishable(problem, fits[best], f)]
+                n_modal=scored[2], held_out=(modes_none, modes, entries), alike=alike)
+            same = [] if best is None else [fits[i].candidate.label for i in range(len(fits))
+                                            if i != best and alike(best, i)]
             if same and reason != "no_gain":
                 notes.append(f"round {k + 1}: {fits[best].candidate.kind} "
                              f"{fits[best].candidate.label} and {', '.join(same)} predict every "

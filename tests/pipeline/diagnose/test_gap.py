@@ -38,7 +38,6 @@ def test_held_out_cross_orthogonality_and_mac_by_hand():
     assert gap["frequency_rms"] == pytest.approx(np.sqrt(5.25 / 3.0), rel=1e-10)
 
 
-
 def _fit(shape, frequency, label="k"):
     """A fitted model's stand-in: one configuration, one paired mode with ``shape`` (1, 6 n_grid)
     and frequency residual ``frequency`` (in sigmas)."""
