@@ -10,15 +10,16 @@ from the nominal model):
 - **shape** of every paired mode j (when the test has shapes): the test shape t_j scaled to unit
   RMS over the sensors, minus the least-squares fit of the analysis shape a_j,
   d_j = t_j - (a_j . t_j / a_j . a_j) a_j, written in the nominal model's modal coordinates at the
-  sensors, q_j = A0^+ d_j (A0: the nominal rigid and paired modes at the sensors, each at unit
-  RMS; SEREP, paper eq. 14; q_kj is the cross-orthogonality off-diagonal S_jk of eq. 20 in the
-  sensors' metric). Entry k of q_j is divided by its standard deviation: sensor noise,
-  sigma_nj^2 (A0^+ A0^+T)_kk, plus the mixing the nominal scatter causes: by first-order
-  perturbation (modal expansion, Fox & Kapoor 1968) the coefficient of mode k in mode j is
+  sensors, q_j = A0^+ d_j (A0: the nominal rigid modes and the elastic modes of the test band,
+  :func:`residual_basis`, at the sensors, each at unit RMS; SEREP, paper eq. 14; q_kj is the
+  cross-orthogonality off-diagonal S_jk of eq. 20 in the sensors' metric). Entry k of q_j is
+  divided by its standard deviation: sensor noise, sigma_nj^2 (A0^+ A0^+T)_kk, plus the mixing
+  the nominal scatter causes: by first-order perturbation (modal expansion, Fox & Kapoor 1968)
+  the coefficient of mode k in mode j is
   c_kj = -phi_k^T (dK - lambda_j dM) phi_j / (lambda_k - lambda_j) (:func:`scatter_scales`),
   times rho_k / rho_j for the unit-RMS scaling, capped at ``MIXING_CAP`` (close modes mix
-  freely: the data cannot tell their combination from a model error). The own coordinate k = j is left out. d_j is orthogonal to a_j, so the sign of a shape
-  does not matter;
+  freely: the data cannot tell their combination from a model error). The own coordinate k = j
+  is left out. d_j is orthogonal to a_j, so the sign of a shape does not matter;
 - **mass** properties present in the measured mass (the paper's J1..J10, eqs. 1-10): weight and
   inertias relative to the measured value, CG relative to the radius of gyration, each divided by
   its stated accuracy (:mod:`pipeline.diagnose.weighing`).
@@ -58,6 +59,16 @@ GOF_QUANTILE = 0.999
 UNMATCHED_NOISE = 3.0
 #: Fewest sensor DOFs outside the analysis modes' span for the out-of-span noise estimate.
 MIN_NOISE_DOF = 5
+#: The shape residual's basis holds every visible analysis mode up to this share above the highest
+#: test frequency (a mode just above the band mixes into the top test modes like one inside it).
+BAND_MARGIN = 0.1
+#: A band mode within this many standard deviations of a test mode's frequency may be its
+#: counterpart (:func:`partner_mixing`).
+PARTNER_SIGMAS = 3.0
+#: A band mode joins the basis when at least this share of its sensor shape (unit norm) lies
+#: outside the span of the modes already in: one the sensors see as a combination of those only
+#: inflates the coordinates' noise.
+DISTINCT = 0.1
 #: Largest off-diagonal of the test-mode orthogonality (SEREP, analysis mass) before the data
 #: quality is questioned (NASA-STD-5002 style limit 0.10, doubled for noise: 0.2).
 SELF_ORTHOGONALITY_LIMIT = 0.2
@@ -288,6 +299,85 @@ def pair_frequency_only(test_frequency, fe_frequency) -> np.ndarray:
     return out
 
 
+def residual_basis(frequency, sensor_shapes, elastic, paired, f_top: float) -> np.ndarray:
+    """Elastic analysis modes of the shape residual's basis A0: the paired ones and every other
+    mode of the test band the sensors can tell from them.
+
+    A test mode is a mixture of the analysis modes near its frequency (the nominal scatter mixes
+    close modes freely), whichever of them the pairing picked. A band mode left out of A0 would
+    alias onto the modes in it, whose coordinates have noise-level scales: on the X-56 blind
+    study's 'none' seed 9 a test mode in a cluster of three analysis modes (20.5-20.8 Hz), paired
+    with a 32 Hz mode, left one of the three out and had a shape chi^2 of 2808 though it lies in
+    the cluster's span to the noise.
+
+    Parameters
+    ----------
+    frequency : (n_fe,) analysis frequencies [Hz].
+    sensor_shapes : (n_fe, n_dof) analysis shapes at the measured DOFs.
+    elastic : (n_el,) positions of the elastic modes.
+    paired : (n_test,) positions of the paired modes (always in the basis).
+    f_top : float
+        Highest test frequency; the band runs to f_top (1 + ``BAND_MARGIN``).
+
+    Returns
+    -------
+    ndarray of int, sorted
+        Positions along ``mode``: the paired modes, then, in frequency order while the basis has
+        fewer than n_dof - ``MIN_NOISE_DOF`` modes, every visible (:data:`INVISIBLE`) band mode
+        whose unit-RMS sensor shape keeps at least ``DISTINCT`` of its norm outside the span of
+        those already in.
+    """
+    f = np.asarray(frequency, float)
+    a = np.asarray(sensor_shapes, float)
+    rms = np.sqrt(np.mean(a ** 2, axis=1))
+    visible = rms >= INVISIBLE * rms[elastic].max()
+    chosen = list(np.asarray(paired, int))
+    others = [int(k) for k in elastic
+              if k not in chosen and visible[k] and f[k] <= f_top * (1.0 + BAND_MARGIN)]
+    limit = a.shape[1] - MIN_NOISE_DOF
+    for k in sorted(others, key=lambda k: f[k]):
+        if len(chosen) >= limit:
+            break
+        q, _ = np.linalg.qr((a[chosen] / rms[chosen, None]).T)
+        u = a[k] / np.linalg.norm(a[k])
+        if np.linalg.norm(u - q @ (q.T @ u)) >= DISTINCT:
+            chosen.append(k)
+    return np.sort(np.asarray(chosen, int))
+
+
+def partner_mixing(test_frequency, band_frequency, band_sigma, paired, mixing) -> np.ndarray:
+    """Standard deviation of every modal coordinate of each test mode's shape residual, whichever
+    of its possible partners the test mode is.
+
+    A test mode's partners are its paired band mode and every band mode whose frequency is within
+    ``PARTNER_SIGMAS`` standard deviations of the test frequency. Any of them could be the test
+    mode's counterpart (the nominal pairing picks one of a cluster of close modes by shapes that
+    the scatter mixes), so each coordinate gets the largest mixing standard deviation over the
+    partners, and every partner's own coordinate the cap (:data:`MIXING_CAP`): the residual does
+    not depend on which of them the nominal pairing chose.
+
+    Parameters
+    ----------
+    test_frequency : (n_test,) Hz.
+    band_frequency : (n_band,) nominal analysis frequencies of the basis's elastic modes [Hz].
+    band_sigma : (n_band,) relative standard deviation of each band mode's frequency (noise and
+        scatter).
+    paired : (n_test,) position in the band of every test mode's nominal partner.
+    mixing : (n_band, m) mixing standard deviations with each band mode as its own
+        (:func:`scatter_scales`).
+
+    Returns
+    -------
+    ndarray, shape (n_test, m)
+    """
+    f_t = np.asarray(test_frequency, float)[:, None]
+    near = (np.abs(np.asarray(band_frequency, float)[None, :] / f_t - 1.0)
+            <= PARTNER_SIGMAS * np.asarray(band_sigma, float)[None, :])
+    near[np.arange(f_t.shape[0]), np.asarray(paired, int)] = True
+    mixing = np.asarray(mixing, float)
+    return np.max(np.where(near[:, :, None], mixing[None, :, :], 0.0), axis=1)
+
+
 # ------------------------------------------------------------------------------ configuration
 @dataclass(frozen=True)
 class Reference:
@@ -301,7 +391,7 @@ class Reference:
     shapes : (n_test, n_dof) test shapes at unit RMS, or None (frequency-only data).
     sensor_index : (n_dof,) position of every measured DOF along the modes Dataset's ``dof``.
     sensor_grid, sensor_component : (n_dof,) the measured DOFs.
-    projector : (m, n_dof) A0^+ (nominal rigid + paired modes at the sensors, unit RMS), or None.
+    projector : (m, n_dof) A0^+ (nominal rigid and band modes at the sensors, unit RMS), or None.
     shape_scale : (n_test, m) standard deviation of every modal coordinate of the shape residual.
     shape_keep : (n_test, m) bool, coordinates kept (all but the mode's own).
     frequency_sigma : (n_test,) relative standard deviation of every frequency.
@@ -573,17 +663,23 @@ def build_reference(name: str, model: FEModel, gvt: xr.Dataset, measured_mass: M
     paired = report_pairing(ref, modes)
     facts["paired_fe_mode"] = modes["mode"].values[paired].tolist()
     rigid = np.setdiff1d(np.arange(modes.sizes["mode"]), elastic_index(modes))
-    keep = np.concatenate([rigid, paired])
-    own = np.arange(rigid.size, keep.size)
-    lam = (2.0 * np.pi * modes["frequency"].values[keep]) ** 2
     phi_m = modes["shape"].values[:, sensor_index] if has_shapes else None
+    band = (residual_basis(modes["frequency"].values, phi_m, elastic_index(modes), paired,
+                           f_test.max()) if has_shapes else np.sort(paired))
+    keep = np.concatenate([rigid, band])
+    own = rigid.size + np.searchsorted(band, paired)
+    lam = (2.0 * np.pi * modes["frequency"].values[keep]) ** 2
     rho = np.sqrt(np.mean(phi_m[keep] ** 2, axis=1)) if has_shapes else np.ones(keep.size)
-    freq_sd, mixing_sd = scatter_scales(model, modes["shape"].values[keep].T, lam, own, rho,
-                                        model_scatter)
+    band_at = np.arange(rigid.size, keep.size)
+    band_sd, band_mixing = scatter_scales(model, modes["shape"].values[keep].T, lam, band_at, rho,
+                                          model_scatter)
+    freq_sd = band_sd[own - rigid.size]
+    mixing_sd = partner_mixing(f_test, lam[band_at] ** 0.5 / (2.0 * np.pi),
+                               np.hypot(frequency_noise, band_sd), own - rigid.size, band_mixing)
     ref = replace(ref, frequency_sigma=np.hypot(frequency_noise, freq_sd))
     if has_shapes:
         a0 = phi_m[keep].T / rho                                            # unit RMS columns
-        projector = serep_pseudo_inverse(a0, what="Phi_M (rigid and paired modes)")  # eq. 13
+        projector = serep_pseudo_inverse(a0, what="Phi_M (rigid and band modes)")    # eq. 13
         noise_sd = noise[:, None] * np.sqrt(np.sum(projector ** 2, axis=1))[None, :]
         scale = np.sqrt(noise_sd ** 2 + mixing_sd ** 2)
         keep_mask = np.ones(scale.shape, bool)
