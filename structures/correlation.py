@@ -43,7 +43,7 @@ import xarray as xr
 from structures.acceptance import DEFAULT_CRITERIA, evaluate_checks
 from structures.common.errors import InputError
 from structures.gvt import check_dofs_in_model, validate_gvt
-from structures.modes import check_modes
+from structures.modes import check_modes, elastic_index
 from structures.pairing import pair_modes
 
 _PAIR_BY = ("mac", "cross_orthogonality")
@@ -341,7 +341,10 @@ def correlate(fe_modes: xr.Dataset, gvt: xr.Dataset, settings: CorrelationSettin
         ``paired_fe_mode(test_mode)``, ``paired_fe_frequency``, ``paired_mac``, ``interchanged``,
         ``test_frequency``, ``test_damping``, ``test_generalized_mass``, optional ``test_name``,
         ``fe_frequency(fe_mode)``, and the pass/fail variables of
-        :func:`structures.acceptance.evaluate_checks` on (check, test_mode).
+        :func:`structures.acceptance.evaluate_checks` on (check, test_mode). The pairing assigns
+        elastic analysis modes only (:func:`structures.modes.elastic_index`; a rigid-body mode
+        has no elastic test counterpart, and a poorly matched test mode would otherwise take one
+        at 0 Hz, a 100 % frequency error), unless a test mode has zero frequency.
     """
     index, a_mask, basis = _prepare(fe_modes, gvt, settings)
     phi_fe = fe_modes["shape"].values.T                                    # Phi_A (all dofs x n_fe)
@@ -358,8 +361,10 @@ def correlate(fe_modes: xr.Dataset, gvt: xr.Dataset, settings: CorrelationSettin
     mac_m = mac(phi_gm, phi_fe[index])
     f_test, f_fe = gvt["frequency"].values, fe_modes["frequency"].values
     metric = mac_m if settings.pair_by == "mac" else np.abs(cross)
-    pairing = pair_modes(metric, f_test, f_fe)
-    paired = fe_modes["mode"].values[pairing.fe_index]
+    elastic = elastic_index(fe_modes) if np.all(f_test > 0) else np.arange(f_fe.size)
+    pairing = pair_modes(metric[:, elastic], f_test, f_fe[elastic])
+    fe_index = elastic[pairing.fe_index]
+    paired = fe_modes["mode"].values[fe_index]
     test_modes = gvt["mode"].values
     t, tf = ("test_mode",), ("test_mode", "fe_mode")
     ds = xr.Dataset(
@@ -368,11 +373,11 @@ def correlate(fe_modes: xr.Dataset, gvt: xr.Dataset, settings: CorrelationSettin
                            {"long_name": "test-mode mass orthogonality, diagonal normalised to 1 (eq. 11)"}),
          "cross_orthogonality": (tf, cross,
                                  {"long_name": "cross-orthogonality, unit generalised masses (eq. 20)"}),
-         "frequency_error": (t, frequency_error(f_fe[pairing.fe_index], f_test),
+         "frequency_error": (t, frequency_error(f_fe[fe_index], f_test),
                              {"units": "%", "long_name": "100 (f_FE - f_GVT) / f_GVT (eq. 18)"}),
          "paired_fe_mode": (t, paired),
-         "paired_fe_frequency": (t, f_fe[pairing.fe_index], {"units": "Hz"}),
-         "paired_mac": (t, mac_m[np.arange(test_modes.size), pairing.fe_index]),
+         "paired_fe_frequency": (t, f_fe[fe_index], {"units": "Hz"}),
+         "paired_mac": (t, mac_m[np.arange(test_modes.size), fe_index]),
          "interchanged": (t, pairing.interchanged),
          "test_frequency": (t, f_test, {"units": "Hz"}),
          "test_damping": (t, gvt["damping"].values, {"units": "1", "long_name": "zeta"}),

@@ -70,6 +70,22 @@ def check_modes(ds: xr.Dataset, where: str = "modes Dataset") -> xr.Dataset:
     return ds
 
 
+def elastic_index(ds: xr.Dataset) -> np.ndarray:
+    """Positions along ``mode`` of the elastic modes.
+
+    The rigid-body modes are those that coordinate ``rigid_motion(mode)`` names
+    (:func:`structures.modal.compute_modes`); a Dataset without it (an OP2's modes) has no mode
+    marked rigid, and all its modes count as elastic.
+
+    Returns
+    -------
+    ndarray of int, shape (n_elastic,)
+    """
+    if "rigid_motion" in ds.coords:
+        return np.flatnonzero(ds["rigid_motion"].values.astype(str) == "")
+    return np.arange(ds.sizes["mode"])
+
+
 def write_modes(ds: xr.Dataset, path) -> None:
     """Write a modes Dataset atomically to netCDF4."""
     write_dataset(check_modes(ds), path)

@@ -47,6 +47,7 @@ from structures.assembly import element_matrices
 from structures.massprops import MassProperties, mass_properties
 from structures.modal import compute_modes
 from structures.model import FEModel
+from structures.modes import elastic_index
 
 #: Largest standard deviation of a mixing coefficient (unit-RMS shapes): two modes closer than
 #: the nominal scatter can mix in any proportion.
@@ -448,13 +449,6 @@ class Evaluation:
     def vector(self, train: np.ndarray) -> np.ndarray:
         """Residual vector over the modes in ``train`` (bool (n_test,)) plus the mass entries."""
         return np.concatenate([self.frequency[train], self.shape[train].ravel(), self.mass])
-
-
-def elastic_index(modes: xr.Dataset) -> np.ndarray:
-    """Positions along ``mode`` of the elastic (non rigid-body) modes."""
-    if "rigid_motion" in modes.coords:
-        return np.flatnonzero(modes["rigid_motion"].values == "")
-    return np.arange(modes.sizes["mode"])
 
 
 def pairing_cost(ref: Reference, frequency, sensor_shapes) -> np.ndarray:

@@ -23,9 +23,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from pipeline.diagnose.evidence import elastic_index, report_pairing
+from pipeline.diagnose.evidence import report_pairing
 from pipeline.diagnose.weighing import mass_references
 from structures.correlation import cross_orthogonality, mac, serep_coordinates
+from structures.modes import elastic_index
 
 
 

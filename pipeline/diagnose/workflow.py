@@ -38,8 +38,7 @@ from threadpoolctl import threadpool_limits
 
 from pipeline.diagnose.calibrate import Problem, calibrate
 from pipeline.diagnose.effects import KINDS, candidates, neighbours
-from pipeline.diagnose.evidence import (SELF_ORTHOGONALITY_LIMIT, build_reference, chi_square,
-                                         elastic_index)
+from pipeline.diagnose.evidence import SELF_ORTHOGONALITY_LIMIT, build_reference, chi_square
 from pipeline.diagnose.gap import (EQUIVALENT_SIGMAS, gap_metrics, indistinguishable,
                                    separating_measurement)
 from pipeline.diagnose.loadpath import best_load_path, outscores
@@ -53,6 +52,7 @@ from structures.common.errors import InputError
 from structures.massprops import check_measured_mass
 from structures.modal import compute_modes
 from structures.model import FEModel
+from structures.modes import elastic_index
 
 #: Rigid-body modes added to twice the test modes for the default analysis mode count.
 N_RIGID = 6

@@ -288,6 +288,30 @@ def test_swapped_close_modes_are_paired_and_flagged(base):
         assert corr.attrs["interchanges"] == "16<->17"
 
 
+def test_a_test_mode_resembling_a_rigid_mode_is_paired_with_an_elastic_one(base):
+    """Test mode 12's shape replaced by 0.8 rigid mode 2 + 0.6 of itself (a poorly measured mode
+    with a rigid-body component): its best MAC is the rigid mode's, but a rigid-body mode has no
+    elastic test counterpart. With the rigid modes named (``rigid_motion``, as compute_modes
+    names them) it pairs with its elastic self; without the names every mode is a candidate and
+    it takes the 0 Hz mode, a 100 % frequency error (the stage-1 efew report of the example)."""
+    _, _, modes = base
+    sens = sensors_120(modes)
+    gvt = gvt_from(modes, FLEX, sens)
+    shape = gvt["shape"].values.copy()
+    i = FLEX.index(12)
+    own, rigid = (modes["shape"].sel(mode=m).values[sens] for m in (12, 2))
+    shape[i] = (0.8 * rigid / np.linalg.norm(rigid) + 0.6 * own / np.linalg.norm(own))
+    mixed = gvt.copy(data={**{k: v.values for k, v in gvt.data_vars.items()}, "shape": shape})
+    names = np.array(["x", "y", "z", "rx", "ry", "rz"] + [""] * (modes.sizes["mode"] - 6))
+    named = modes.assign_coords(rigid_motion=("mode", names))
+    corr = correlate(named, mixed)
+    np.testing.assert_array_equal(corr["paired_fe_mode"].values, FLEX)
+    assert abs(float(corr["frequency_error"].sel(test_mode=12))) < 1e-9
+    unnamed = correlate(modes, mixed)
+    assert int(unnamed["paired_fe_mode"].sel(test_mode=12)) == 2
+    assert float(unnamed["frequency_error"].sel(test_mode=12)) == pytest.approx(-100.0, abs=0.01)
+
+
 # ---------------------------------------------------------------------------------- bad input
 def test_fewer_measured_dofs_than_serep_modes_raises(base):
     _, _, modes = base
