@@ -300,7 +300,7 @@ def pair_frequency_only(test_frequency, fe_frequency) -> np.ndarray:
     return out
 
 
-def residual_basis(frequency, sensor_shapes, elastic, paired, f_top: float) -> np.ndarray:
+def residual_basis(frequency, sensor_shapes, rigid, elastic, paired, f_top: float) -> np.ndarray:
     """Elastic analysis modes of the shape residual's basis A0: the paired ones and every other
     mode of the test band the sensors can tell from them.
 
@@ -315,6 +315,7 @@ def residual_basis(frequency, sensor_shapes, elastic, paired, f_top: float) -> n
     ----------
     frequency : (n_fe,) analysis frequencies [Hz].
     sensor_shapes : (n_fe, n_dof) analysis shapes at the measured DOFs.
+    rigid : (n_rigid,) positions of the rigid-body modes (always in A0).
     elastic : (n_el,) positions of the elastic modes.
     paired : (n_test,) positions of the paired modes (always in the basis).
     f_top : float
@@ -323,26 +324,28 @@ def residual_basis(frequency, sensor_shapes, elastic, paired, f_top: float) -> n
     Returns
     -------
     ndarray of int, sorted
-        Positions along ``mode``: the paired modes, then, in frequency order while the basis has
-        fewer than n_dof - ``MIN_NOISE_DOF`` modes, every visible (:data:`INVISIBLE`) band mode
-        whose unit-RMS sensor shape keeps at least ``DISTINCT`` of its norm outside the span of
-        those already in.
+        Positions along ``mode``: the paired modes and, in frequency order while A0 (with the
+        rigid modes) has fewer than n_dof - ``MIN_NOISE_DOF`` columns, every visible
+        (:data:`INVISIBLE`) band mode whose unit-RMS sensor shape keeps at least ``DISTINCT`` of
+        its norm outside the span of the columns already in A0.
     """
     f = np.asarray(frequency, float)
     a = np.asarray(sensor_shapes, float)
     rms = np.sqrt(np.mean(a ** 2, axis=1))
     visible = rms >= INVISIBLE * rms[elastic].max()
-    chosen = list(np.asarray(paired, int))
+    chosen = [int(k) for k in paired]
+    fixed = [int(k) for k in rigid] + chosen
     others = [int(k) for k in elastic
               if k not in chosen and visible[k] and f[k] <= f_top * (1.0 + BAND_MARGIN)]
     limit = a.shape[1] - MIN_NOISE_DOF
     for k in sorted(others, key=lambda k: f[k]):
-        if len(chosen) >= limit:
+        if len(fixed) >= limit:
             break
-        q, _ = np.linalg.qr((a[chosen] / rms[chosen, None]).T)
+        q, _ = np.linalg.qr((a[fixed] / rms[fixed, None]).T)
         u = a[k] / np.linalg.norm(a[k])
         if np.linalg.norm(u - q @ (q.T @ u)) >= DISTINCT:
             chosen.append(k)
+            fixed.append(k)
     return np.sort(np.asarray(chosen, int))
 
 
@@ -658,7 +661,7 @@ def build_reference(name: str, model: FEModel, gvt: xr.Dataset, measured_mass: M
     facts["paired_fe_mode"] = modes["mode"].values[paired].tolist()
     rigid = np.setdiff1d(np.arange(modes.sizes["mode"]), elastic_index(modes))
     phi_m = modes["shape"].values[:, sensor_index] if has_shapes else None
-    band = (residual_basis(modes["frequency"].values, phi_m, elastic_index(modes), paired,
+    band = (residual_basis(modes["frequency"].values, phi_m, rigid, elastic_index(modes), paired,
                            f_test.max()) if has_shapes else np.sort(paired))
     keep = np.concatenate([rigid, band])
     own = rigid.size + np.searchsorted(band, paired)

@@ -11,9 +11,9 @@ from scipy.optimize import linear_sum_assignment
 
 from pipeline.diagnose.evidence import (Reference, bic, build_reference, chi_square, evaluate,
                                         evaluate_modes, gof_limit, holdout_mask, pair,
-                                        pair_frequency_only, pairing_cost, report_pairing,
-                                        runs_test, scatter_scales, shape_noise, shape_residual,
-                                        unit_rms)
+                                        pair_frequency_only, pairing_cost, partner_mixing,
+                                        report_pairing, residual_basis, runs_test, scatter_scales,
+                                        shape_noise, shape_residual, unit_rms)
 from structures.bdf import read_model
 from structures.common.errors import InputError
 from structures.correlation import mac
@@ -91,6 +91,36 @@ def test_frequency_only_pairing_by_hand():
     assert pair_frequency_only([18.0, 20.0], [19.0, 19.5, 60.0]).tolist() == [0, 1]
     with pytest.raises(InputError):
         pair_frequency_only([1.0, 2.0, 3.0], [1.0, 2.0])
+
+
+def test_residual_basis_by_hand():
+    """Positions 0-1 rigid, 2-7 elastic at 1, 2, 2.05, 3, 3.2, 10 Hz, 12 sensor DOFs; paired 2
+    and 5, highest test frequency 3 Hz (band to 3.3 Hz): mode 3 joins (a shape of its own),
+    mode 4 does not (mode 3's shape plus 1e-3: 99.9 % of it in the span), mode 6 does not (the
+    sensors do not see it), mode 7 is above the band. With 8 DOFs A0 may have 8 - MIN_NOISE_DOF
+    = 3 columns, fewer than the rigid and paired modes (always in): nothing joins."""
+    rng = np.random.default_rng(0)
+    shapes = rng.standard_normal((8, 12))
+    shapes[4] = shapes[3] + 1e-3 * rng.standard_normal(12)
+    shapes[6] *= 1e-9
+    frequency = np.array([0.0, 0.0, 1.0, 2.0, 2.05, 3.0, 3.2, 10.0])
+    basis = residual_basis(frequency, shapes, [0, 1], np.arange(2, 8), [5, 2], 3.0)
+    np.testing.assert_array_equal(basis, [2, 3, 5])
+    narrow = residual_basis(frequency, shapes[:, :8], [0, 1], np.arange(2, 8), [5, 2], 3.0)
+    np.testing.assert_array_equal(narrow, [2, 5])
+
+
+def test_partner_mixing_by_hand():
+    """Band modes at 10, 10.2 and 15 Hz, each frequency known to 1 % (partners within 3 %):
+    the test mode at 10.1 Hz may be either of the first two (the largest of their rows; its
+    pairing with mode 0 alone would give row 0), the one at 15 Hz only the third."""
+    mixing = np.array([[1.0, 0.2, 0.01, 0.3],
+                       [0.1, 1.0, 0.05, 0.02],
+                       [0.01, 0.03, 1.0, 0.4]])
+    out = partner_mixing([10.1, 15.0], [10.0, 10.2, 15.0], [0.01, 0.01, 0.01], [0, 2], mixing)
+    np.testing.assert_array_equal(out, [[1.0, 1.0, 0.05, 0.3], mixing[2]])
+    far = partner_mixing([10.1, 15.0], [10.0, 10.2, 15.0], [0.001, 0.001, 0.001], [0, 2], mixing)
+    np.testing.assert_array_equal(far, mixing[[0, 2]])
 
 
 def test_scatter_scales_single_spring_mass(tmp_path):
