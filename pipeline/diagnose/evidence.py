@@ -659,20 +659,21 @@ def build_reference(name: str, model: FEModel, gvt: xr.Dataset, measured_mass: M
                     measured_mass=measured, mass_scale=mass_scales(measured, mass_properties(model)), nmodes=nmodes)
     paired = report_pairing(ref, modes)
     facts["paired_fe_mode"] = modes["mode"].values[paired].tolist()
-    rigid = np.setdiff1d(np.arange(modes.sizes["mode"]), elastic_index(modes))
+    elastic = elastic_index(modes)
+    rigid = np.setdiff1d(np.arange(modes.sizes["mode"]), elastic)
+    f_fe = modes["frequency"].values
     phi_m = modes["shape"].values[:, sensor_index] if has_shapes else None
-    band = (residual_basis(modes["frequency"].values, phi_m, rigid, elastic_index(modes), paired,
-                           f_test.max()) if has_shapes else np.sort(paired))
+    band = (residual_basis(f_fe, phi_m, rigid, elastic, paired, f_test.max()) if has_shapes
+            else np.sort(paired))
+    own = np.searchsorted(band, paired)                                    # position in the band
     keep = np.concatenate([rigid, band])
-    own = rigid.size + np.searchsorted(band, paired)
-    lam = (2.0 * np.pi * modes["frequency"].values[keep]) ** 2
+    lam = (2.0 * np.pi * f_fe[keep]) ** 2
     rho = np.sqrt(np.mean(phi_m[keep] ** 2, axis=1)) if has_shapes else np.ones(keep.size)
-    band_at = np.arange(rigid.size, keep.size)
-    band_sd, band_mixing = scatter_scales(model, modes["shape"].values[keep].T, lam, band_at, rho,
-                                          model_scatter)
-    freq_sd = band_sd[own - rigid.size]
-    mixing_sd = partner_mixing(f_test, lam[band_at] ** 0.5 / (2.0 * np.pi),
-                               np.hypot(frequency_noise, band_sd), own - rigid.size, band_mixing)
+    band_sd, band_mixing = scatter_scales(model, modes["shape"].values[keep].T, lam,
+                                          np.arange(rigid.size, keep.size), rho, model_scatter)
+    freq_sd = band_sd[own]
+    mixing_sd = partner_mixing(f_test, f_fe[band], np.hypot(frequency_noise, band_sd), own,
+                               band_mixing)
     ref = replace(ref, frequency_sigma=np.hypot(frequency_noise, freq_sd))
     if has_shapes:
         a0 = phi_m[keep].T / rho                                            # unit RMS columns
@@ -680,7 +681,7 @@ def build_reference(name: str, model: FEModel, gvt: xr.Dataset, measured_mass: M
         noise_sd = noise[:, None] * np.sqrt(np.sum(projector ** 2, axis=1))[None, :]
         scale = np.sqrt(noise_sd ** 2 + mixing_sd ** 2)
         keep_mask = np.ones(scale.shape, bool)
-        keep_mask[np.arange(own.size), own] = False
+        keep_mask[np.arange(own.size), rigid.size + own] = False
         facts["mac"] = np.diag(mac(shapes.T, phi_m[paired].T)).tolist()
         try:
             # the mass-normalised modes: q^T q is then the orthogonality in the analysis mass
