@@ -210,8 +210,15 @@ def test_pairing_cost_is_the_residual_and_the_pairing_its_minimum(frame_case):
     """On the frame against a test of the frame with 3 % of its mass added at a wing grid: the
     cost of the chosen pairing is every test mode's chi^2 (frequency and shape entries of
     evaluate) to round-off, and no other assignment gives less: the MAC assignment and every
-    swap of two test modes' partners cost at least as much."""
+    swap of two test modes' partners cost at least as much.
+
+    Round-off: pairing_cost expands sum w (u - alpha v)^2 into three sums that cancel, so its
+    error scales with the largest, sum w u^2 (1283 here), not with the chi^2 left (1e-28 for
+    the perfect model): one CI machine gave 1.1e-12 = 9e-16 of it. Allowed: relative 1e-10 of
+    the chi^2 plus 1e-13 of the cancelled sum."""
     model, changed, ref = frame_case
+    cancelled = np.sum(ref.shape_keep * (ref.shapes @ ref.projector.T) ** 2
+                       / ref.shape_scale ** 2, axis=1)                     # (n_test,)
     for m in (model, changed):
         ev = evaluate(ref, m)
         modes = ev.modes
@@ -220,19 +227,21 @@ def test_pairing_cost_is_the_residual_and_the_pairing_its_minimum(frame_case):
         cost = pairing_cost(ref, modes["frequency"].values[elastic], seen[elastic])
         col = np.searchsorted(elastic, ev.paired)
         per_mode = ev.frequency ** 2 + np.sum(ev.shape ** 2, axis=1)
-        assert cost[np.arange(col.size), col] == pytest.approx(per_mode, rel=1e-10)
+        np.testing.assert_array_less(np.abs(cost[np.arange(col.size), col] - per_mode),
+                                     1e-10 * per_mode + 1e-13 * cancelled)
         total = per_mode.sum()
+        tol = 1e-10 * total + 1e-13 * cancelled.sum()
         rows, best = linear_sum_assignment(cost)
-        assert cost[rows, best].sum() == pytest.approx(total, rel=1e-12)
+        assert abs(cost[rows, best].sum() - total) <= tol
         by_mac = linear_sum_assignment(mac(ref.shapes.T, seen[elastic].T), maximize=True)[1]
         mac_ev = evaluate_modes(ref, modes["frequency"].values, seen, ev.props,
                                 paired=elastic[by_mac])
         assert chi_square(mac_ev.vector(np.ones(col.size, bool))[:-mac_ev.mass.size]) \
-            >= total * (1.0 - 1e-12)
+            >= total - tol
         for i in range(col.size - 1):
             swapped = col.copy()
             swapped[[i, i + 1]] = swapped[[i + 1, i]]
-            assert cost[np.arange(col.size), swapped].sum() >= total * (1.0 - 1e-12)
+            assert cost[np.arange(col.size), swapped].sum() >= total - tol
 
 
 def test_report_pairing_by_hand():
