@@ -86,6 +86,16 @@ def elastic_index(ds: xr.Dataset) -> np.ndarray:
     return np.arange(ds.sizes["mode"])
 
 
+def rigid_index(ds: xr.Dataset) -> np.ndarray:
+    """Positions along ``mode`` of the rigid-body modes: those :func:`elastic_index` leaves out.
+
+    Returns
+    -------
+    ndarray of int, shape (n_mode - n_elastic,)
+    """
+    return np.setdiff1d(np.arange(ds.sizes["mode"]), elastic_index(ds))
+
+
 def write_modes(ds: xr.Dataset, path) -> None:
     """Write a modes Dataset atomically to netCDF4."""
     write_dataset(check_modes(ds), path)

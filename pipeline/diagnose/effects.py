@@ -95,6 +95,7 @@ from pipeline.diagnose.mirror import mirror_pairs, site_values
 from structures.common.errors import InputError, card_message
 from structures.massprops import mass_properties
 from structures.model import FEModel, Property
+from structures.modes import elastic_index
 
 KINDS = ("lumped_mass", "joint_flexibility", "member_taper", "member_curvature",
          "boundary_stiffness")
@@ -214,8 +215,8 @@ def _fixed_masks(model: FEModel) -> np.ndarray:
 def _lowest_elastic_frequency(model: FEModel) -> float:
     from structures.modal import compute_modes
     ds = compute_modes(model, 8)
-    elastic = ds["frequency"].values[(ds["rigid_motion"].values == "")
-                                     & (ds["frequency"].values > 0)]
+    f = ds["frequency"].values[elastic_index(ds)]
+    elastic = f[f > 0]
     if not elastic.size:
         raise InputError(card_message("no elastic mode among the 8 lowest modes, so the boundary "
                                       "stiffness scale cannot be set.", filename=model.filename,

@@ -47,7 +47,7 @@ from structures.assembly import element_matrices
 from structures.massprops import MassProperties, mass_properties
 from structures.modal import compute_modes
 from structures.model import FEModel
-from structures.modes import elastic_index
+from structures.modes import elastic_index, rigid_index
 
 #: Largest standard deviation of a mixing coefficient (unit-RMS shapes): two modes closer than
 #: the nominal scatter can mix in any proportion.
@@ -660,7 +660,7 @@ def build_reference(name: str, model: FEModel, gvt: xr.Dataset, measured_mass: M
     paired = report_pairing(ref, modes)
     facts["paired_fe_mode"] = modes["mode"].values[paired].tolist()
     elastic = elastic_index(modes)
-    rigid = np.setdiff1d(np.arange(modes.sizes["mode"]), elastic)
+    rigid = rigid_index(modes)
     f_fe = modes["frequency"].values
     phi_m = modes["shape"].values[:, sensor_index] if has_shapes else None
     band = (residual_basis(f_fe, phi_m, rigid, elastic, paired, f_test.max()) if has_shapes

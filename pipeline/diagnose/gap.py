@@ -26,14 +26,14 @@ import numpy as np
 from pipeline.diagnose.evidence import report_pairing
 from pipeline.diagnose.weighing import mass_references
 from structures.correlation import cross_orthogonality, mac, serep_coordinates
-from structures.modes import elastic_index
+from structures.modes import rigid_index
 
 
 
 def _cross_offdiag(ref, modes, paired) -> tuple[float, float]:
     """Largest |S_ij|, i != j, over all test modes and over the held-out ones (rows i)."""
     phi_m = modes["shape"].values[:, ref.sensor_index]
-    rigid = np.setdiff1d(np.arange(modes.sizes["mode"]), elastic_index(modes))
+    rigid = rigid_index(modes)
     keep = np.concatenate([rigid, paired])
     q = serep_coordinates(phi_m[keep].T, ref.shapes.T)                     # eq. 14
     s = np.abs(cross_orthogonality(q, np.eye(keep.size)))[:, rigid.size:]   # eq. 20, paired block

@@ -18,7 +18,7 @@ from structures.bdf import read_model
 from structures.common.errors import InputError, MissingReferenceError
 from structures.massprops import mass_properties
 from structures.modal import RIGID_TOL, compute_modes, rigid_body_modes, solve_eigen
-from structures.modes import read_modes, write_modes
+from structures.modes import elastic_index, read_modes, rigid_index, write_modes
 from structures.nastran_results import read_f06_eigenvalues
 from tests.structures.beam_decks import AREA, LENGTH, RHO, beam_deck
 
@@ -177,6 +177,10 @@ def test_modes_file_keeps_the_contract_and_the_rigid_names(tmp_path):
     assert {"source", "deck", "units"} <= set(back.attrs)
     assert list(back["rigid_motion"].values[:3]) == ["plunge", "pitch", ""]
     assert back.attrs["rigid_modes"] == 2 and back.attrs["rigid_residual"] <= RIGID_TOL
+    assert rigid_index(back).tolist() == [0, 1]
+    assert elastic_index(back).tolist() == list(range(2, 8))
+    unnamed = back.drop_vars("rigid_motion")          # an OP2's modes: none marked rigid
+    assert rigid_index(unnamed).size == 0 and elastic_index(unnamed).tolist() == list(range(8))
 
 
 def test_rigid_count_check_refuses_to_replace_an_elastic_mode():
