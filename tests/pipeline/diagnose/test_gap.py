@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from pipeline.diagnose.gap import gap_metrics
+from pipeline.diagnose.gap import close_groups, close_mode_pairing, gap_metrics
 
 
 def test_held_out_cross_orthogonality_and_mac_by_hand():
@@ -36,6 +36,58 @@ def test_held_out_cross_orthogonality_and_mac_by_hand():
     # frequency errors 1, -2, 0.5 % -> held-out RMS 2 %, all sqrt(5.25 / 3) %
     assert gap["frequency_rms_held_out"] == pytest.approx(2.0, rel=1e-12)
     assert gap["frequency_rms"] == pytest.approx(np.sqrt(5.25 / 3.0), rel=1e-10)
+
+
+def test_close_groups_by_hand():
+    """PARTNER_SIGMAS = 3 at sigma 1 %: a group takes the modes within 3 % of its lowest, so
+    10.35 Hz (1.5 % above 10.2 but 3.5 % above 10) starts a group of its own."""
+    groups = close_groups([10.0, 10.2, 10.35, 11.0, 20.0], 0.01)
+    assert [g.tolist() for g in groups] == [[0, 1], [2], [3], [4]]
+    assert [g.tolist() for g in close_groups([5.0], 0.01)] == [[0]]
+
+
+def _close_pair_case(f3):
+    """Analysis modes e1, e2, e3, e4 (unit vectors at six sensors) at 10, 20, f3, 40 Hz; test
+    modes e1, cos(t) e2 + sin(t) e3, -sin(t) e2 + cos(t) e3, e4 at 10, 19.9, 20.3, 40.4 Hz."""
+    t = np.radians(40.0)
+    shapes = np.zeros((4, 6))
+    shapes[0, 0] = shapes[3, 3] = 1.0
+    shapes[1, 1:3] = np.cos(t), np.sin(t)
+    shapes[2, 1:3] = -np.sin(t), np.cos(t)
+    modes = xr.Dataset({"shape": (("mode", "dof"), np.eye(6)[:4]),
+                        "frequency": ("mode", [10.0, 20.0, f3, 40.0])},
+                       coords={"mode": [1, 2, 3, 4]})
+    ref = SimpleNamespace(frequency_sigma=np.full(4, 0.01), sensor_index=np.arange(6),
+                          shapes=shapes, test_frequency=np.array([10.0, 19.9, 20.3, 40.4]),
+                          shape_sigma=np.full(4, 0.05), has_shapes=True)
+    return t, modes, ref
+
+
+def test_close_modes_are_paired_as_their_span():
+    """Modes 2 and 3 at 20 and 20.1 Hz (0.5 %, within 3 sigma) are one group: the test modes,
+    two 40-degree mixtures of them, are matched by the group's modes turned onto them (MAC 1,
+    cross-orthogonality off-diagonal 0) at their Rayleigh quotients sqrt(cos^2 20^2 + sin^2
+    20.1^2) and sqrt(sin^2 20^2 + cos^2 20.1^2). The other modes are paired as they are."""
+    t, modes, ref = _close_pair_case(20.1)
+    frequency, cross, shapes = close_mode_pairing(ref, modes)
+    c2, s2 = np.cos(t) ** 2, np.sin(t) ** 2
+    np.testing.assert_allclose(frequency, [10.0, np.sqrt(c2 * 400.0 + s2 * 20.1 ** 2),
+                                           np.sqrt(s2 * 400.0 + c2 * 20.1 ** 2), 40.0], rtol=1e-12)
+    np.testing.assert_allclose(cross, np.eye(4), atol=1e-12)
+    np.testing.assert_allclose(np.abs(np.sum(shapes * ref.shapes, axis=1)), 1.0, rtol=1e-12)
+
+
+def test_separate_modes_are_paired_one_by_one():
+    """Mode 3 at 25 Hz (25 % above mode 2): no group. The report's pairing, test mode k with
+    mode k (cost 991 + 0.25 + 991 + 536 = 2518, shape entries 6 (1 - cos^2 40) / 0.05^2; crossed
+    1409 + 657 + 1409 + 2 = 3477), and the mode-by-mode cross-orthogonality: off-diagonal
+    sin(40 deg), diagonal cos(40 deg), frequencies as they are."""
+    t, modes, ref = _close_pair_case(25.0)
+    frequency, cross, _ = close_mode_pairing(ref, modes)
+    np.testing.assert_allclose(frequency, [10.0, 20.0, 25.0, 40.0], rtol=1e-12)
+    want = np.eye(4)
+    want[1:3, 1:3] = [[np.cos(t), np.sin(t)], [np.sin(t), np.cos(t)]]
+    np.testing.assert_allclose(cross, want, atol=1e-12)
 
 
 def _fit(shape, frequency, label="k"):
