@@ -168,8 +168,9 @@ def test_quick_gap_shrinks_on_the_named_mass(quick_run):
     "frame 'outside' named). Measured at a1e2655: frame, seeds 0-9, every kind: top-1 kind "
     "0.94, location 0.98, no effect named on 'none' 10/10 (20/20 with seeds 10-19), 'outside' "
     "given a library name 1/10 (a taper; 1/20), held-out frequency error and largest "
-    "cross-orthogonality off-diagonal both drop in 24 of 47 correctly named cases; X-56, seeds 0-9: top-1 0.86 (joints 7/10, tapers 8/10, "
-    "masses and curvature 9/10, boundary 10/10), location 1.00, 'none' kept 9/10 (17/20 with "
+    "cross-orthogonality off-diagonal both drop in 24 of 47 correctly named cases; X-56, seeds "
+    "0-9: top-1 0.86 (joints 7/10, tapers 8/10, masses and curvature 9/10, boundary 10/10), "
+    "location 1.00, 'none' kept 9/10 (17/20 with "
     "seeds 10-19), 'outside' named 0/10 (0/20), gap both drop 37/43 (the gap with close modes "
     "paired as their span, recomputed on the finished cases' models)"))
 def test_full_blind_study(tmp_path):
