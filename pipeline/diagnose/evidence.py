@@ -506,7 +506,7 @@ def pair(ref: Reference, modes: xr.Dataset, *, sensor_shapes=None) -> np.ndarray
     """
     if ref.projector is None or not ref.has_shapes:
         return report_pairing(ref, modes, sensor_shapes=sensor_shapes)
-    elastic = _elastic(ref, modes)
+    elastic = pairable_modes(ref, modes)
     if sensor_shapes is None:
         sensor_shapes = modes["shape"].values[:, ref.sensor_index]
     return _assign(pairing_cost(ref, modes["frequency"].values[elastic],
@@ -530,7 +530,9 @@ def _assign(cost, elastic) -> np.ndarray:
     return elastic[out]
 
 
-def _elastic(ref: Reference, modes: xr.Dataset) -> np.ndarray:
+def pairable_modes(ref: Reference, modes: xr.Dataset) -> np.ndarray:
+    """Positions along ``mode`` of the elastic modes; raises when they are fewer than the test
+    modes (each test mode needs its own)."""
     elastic = elastic_index(modes)
     if elastic.size < ref.test_frequency.size:
         raise InputError(f"configuration {ref.name}: {ref.test_frequency.size} test modes but only "
@@ -562,7 +564,7 @@ def report_pairing(ref: Reference, modes: xr.Dataset, *, sensor_shapes=None) -> 
     ndarray of int, shape (n_test,)
         Index along ``modes.mode``.
     """
-    elastic = _elastic(ref, modes)
+    elastic = pairable_modes(ref, modes)
     f_fe = modes["frequency"].values[elastic]
     if not ref.has_shapes:
         return elastic[pair_frequency_only(ref.test_frequency, f_fe)]

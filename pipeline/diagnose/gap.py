@@ -45,10 +45,10 @@ import numpy as np
 from scipy.optimize import linear_sum_assignment
 
 from pipeline.diagnose.evidence import (INVISIBLE, PARTNER_SIGMAS, frequency_cost,
-                                        report_pairing, residual_basis)
+                                        pairable_modes, report_pairing, residual_basis)
 from pipeline.diagnose.weighing import mass_references
 from structures.correlation import cross_orthogonality, mac, serep_coordinates
-from structures.modes import elastic_index, rigid_index
+from structures.modes import rigid_index
 
 
 def close_groups(frequency, sigma: float) -> list:
@@ -93,7 +93,7 @@ def close_mode_pairing(ref, modes) -> tuple:
     cross : (n_test, n_test) |S_ij| of test mode i with test mode j's paired analysis mode.
     shapes : (n_test, n_dof) sensor shapes of the paired (turned) analysis modes.
     """
-    elastic, rigid = elastic_index(modes), rigid_index(modes)
+    elastic, rigid = pairable_modes(ref, modes), rigid_index(modes)
     f_all = modes["frequency"].values
     phi_m = modes["shape"].values[:, ref.sensor_index]                     # (n_modes, n_dof)
     a = phi_m[elastic]

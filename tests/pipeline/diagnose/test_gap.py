@@ -8,6 +8,7 @@ import pytest
 import xarray as xr
 
 from pipeline.diagnose.gap import close_groups, close_mode_pairing, gap_metrics
+from structures.common.errors import InputError
 
 
 def test_held_out_cross_orthogonality_and_mac_by_hand():
@@ -75,6 +76,14 @@ def test_close_modes_are_paired_as_their_span():
                                            np.sqrt(s2 * 400.0 + c2 * 20.1 ** 2), 40.0], rtol=1e-12)
     np.testing.assert_allclose(cross, np.eye(4), atol=1e-12)
     np.testing.assert_allclose(np.abs(np.sum(shapes * ref.shapes, axis=1)), 1.0, rtol=1e-12)
+
+
+def test_more_test_modes_than_analysis_modes_raise():
+    """Four test modes against three analysis modes: each test mode needs its own partner."""
+    _, modes, ref = _close_pair_case(20.1)
+    ref.name = "c"
+    with pytest.raises(InputError, match="configuration c: 4 test modes but only 3 elastic"):
+        close_mode_pairing(ref, modes.isel(mode=slice(0, 3)))
 
 
 def test_separate_modes_are_paired_one_by_one():
