@@ -482,7 +482,7 @@ def pairing_cost(ref: Reference, frequency, sensor_shapes) -> np.ndarray:
                       where=norm[None, :] > 0.0)                           # (n_test, n_fe)
     s_cost = (np.sum(w * u * u, axis=1)[:, None] - 2.0 * alpha * ((w * u) @ v.T)
               + alpha ** 2 * (w @ (v * v).T))
-    return frequency_cost(ref, frequency) + s_cost
+    return _frequency_cost(ref, frequency) + s_cost
 
 
 def pair(ref: Reference, modes: xr.Dataset, *, sensor_shapes=None) -> np.ndarray:
@@ -513,7 +513,7 @@ def pair(ref: Reference, modes: xr.Dataset, *, sensor_shapes=None) -> np.ndarray
                                 np.asarray(sensor_shapes)[elastic]), elastic)
 
 
-def frequency_cost(ref: Reference, frequency) -> np.ndarray:
+def _frequency_cost(ref: Reference, frequency) -> np.ndarray:
     """(n_test, n_fe) ((f_k - f_jG) / f_jG / sigma_fj)^2: each test mode's frequency entry of
     chi^2 when paired with each analysis mode."""
     f = np.asarray(frequency, float)
@@ -573,8 +573,16 @@ def report_pairing(ref: Reference, modes: xr.Dataset, *, sensor_shapes=None) -> 
     seen = np.asarray(sensor_shapes)[elastic]
     rms = np.sqrt(np.mean(seen ** 2, axis=1))
     metric = mac(ref.shapes.T, seen.T) * (rms >= INVISIBLE * rms.max())[None, :]   # eq. 23
-    return _assign(frequency_cost(ref, f_fe)
-                   + ref.shapes.shape[1] * (1.0 - metric) / ref.shape_sigma[:, None] ** 2, elastic)
+    return _assign(report_cost(ref, f_fe, metric), elastic)
+
+
+def report_cost(ref: Reference, frequency, metric) -> np.ndarray:
+    """(n_test, n_fe) cost of :func:`report_pairing`: ((f_k - f_jG) / f_jG / sigma_fj)^2
+    + n_DOF (1 - metric_jk) / sigma_nj^2, ``metric`` (n_test, n_fe) the MAC of each test mode
+    with each analysis mode (or with a span of modes,
+    :func:`pipeline.diagnose.gap.close_mode_pairing`)."""
+    shape = ref.shapes.shape[1] * (1.0 - np.asarray(metric, float))
+    return _frequency_cost(ref, frequency) + shape / ref.shape_sigma[:, None] ** 2
 
 
 def evaluate(ref: Reference, model: FEModel, modes: xr.Dataset | None = None) -> Evaluation:

@@ -44,8 +44,8 @@ from __future__ import annotations
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
-from pipeline.diagnose.evidence import (INVISIBLE, PARTNER_SIGMAS, frequency_cost,
-                                        pairable_modes, report_pairing, residual_basis)
+from pipeline.diagnose.evidence import (INVISIBLE, PARTNER_SIGMAS, pairable_modes, report_cost,
+                                        report_pairing, residual_basis)
 from pipeline.diagnose.weighing import mass_references
 from structures.correlation import cross_orthogonality, mac, serep_coordinates
 from structures.modes import rigid_index
@@ -108,9 +108,7 @@ def close_mode_pairing(ref, modes) -> tuple:
             u, sv, _ = np.linalg.svd(a[seen].T, full_matrices=False)
             u = u[:, sv > 1e-8 * sv[0]]
             share[:, seen] = np.sum((t @ u) ** 2, axis=1)[:, None]        # MAC with the span
-    cost = (frequency_cost(ref, f_all[elastic])
-            + t.shape[1] * (1.0 - share) / ref.shape_sigma[:, None] ** 2)
-    tests, cols = linear_sum_assignment(cost)
+    tests, cols = linear_sum_assignment(report_cost(ref, f_all[elastic], share))
     paired = np.empty(t.shape[0], int)
     paired[tests] = cols                                                   # positions in elastic
     group_of = np.empty(elastic.size, int)
@@ -134,11 +132,11 @@ def close_mode_pairing(ref, modes) -> tuple:
         z = np.zeros((rows.size, rows.size))
         z[:, :js.size] = q[np.ix_(rows, js)]
         u, _, vt = np.linalg.svd(z)
-        turn[np.ix_(rows, rows)] = u @ vt                                  # Procrustes
+        rotation = u @ vt                                                  # Procrustes
+        turn[np.ix_(rows, rows)] = rotation
         lam = (2.0 * np.pi * f_all[members]) ** 2
-        for c, j in enumerate(js):
-            column[j] = rows[c]
-            frequency[j] = np.sqrt(np.sum((u @ vt)[:, c] ** 2 * lam)) / (2.0 * np.pi)
+        column[js] = rows[:js.size]
+        frequency[js] = np.sqrt(lam @ rotation[:, :js.size] ** 2) / (2.0 * np.pi)
     cross = np.abs(cross_orthogonality(turn.T @ q, np.eye(keep.size)))[:, column]   # eq. 20
     shapes = (phi_m[keep].T @ turn[:, column]).T
     return frequency, cross, shapes
