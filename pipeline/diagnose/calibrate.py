@@ -92,9 +92,9 @@ def mass_prior_scale(model: FEModel, scatter: float) -> float:
     (the variance of a weighted mean of independent errors; N_eff is Kish's (1965) effective
     number: N equal masses give s / sqrt(N), one mass gives s).
 
-    The residual scales (:func:`pipeline.diagnose.evidence.scatter_scales`) already count the
-    same per-mass scatter as noise, its uniform part included, so along the direction of a
-    uniform scale the data and this prior both carry it. That uniform part is the share
+    The residual's covariance (:mod:`pipeline.diagnose.scatter`) already counts the same
+    per-mass scatter, its uniform part included, so along the direction of a uniform scale the
+    data and this prior both carry it. That uniform part is the share
     1 / N_eff of the mass scatter's variance (0.04 on the frame, N_eff = 23.3): counted twice, a
     uniform mass change is allowed the variance 2 sigma_m^2 instead of sigma_m^2 (sqrt(2) in
     standard deviation), while the per-mass noise that hides single masses is unchanged.
@@ -222,7 +222,7 @@ class Problem:
 
     def vector(self, evaluations) -> np.ndarray:
         """Training residual vector of the data over the configurations."""
-        return np.concatenate([ev.vector(ref.train) for ev, ref in zip(evaluations, self.refs)])
+        return np.concatenate([ev.vector(ref) for ev, ref in zip(evaluations, self.refs)])
 
     @property
     def bounds(self) -> np.ndarray:
@@ -331,7 +331,7 @@ def _per_configuration(problem: Problem, evs, jac, theta, flags: list) -> dict:
     out, covs = {}, {}
     start = 0
     for ev, ref in zip(evs, problem.refs):
-        r_c = ev.vector(ref.train)
+        r_c = ev.vector(ref)
         j_c = jac[start:start + r_c.size]
         start += r_c.size
         jtj = j_c.T @ j_c

@@ -1,12 +1,12 @@
 """Evidence of a model-test disagreement: pairing, residual vector with known scales, chi^2, BIC.
 
-The residual of one configuration is a vector whose entries are (nearly) independent with unit
-variance when the model is right (the ``Reference`` fixes how it is built, once per configuration,
-from the nominal model):
+The residual of one configuration is built from entries of unit variance when the model is right
+(the ``Reference`` fixes how, once per configuration, from the nominal model):
 
 - **frequency** of every paired mode j: (f_j - f_jG) / f_jG / sigma_fj (paper eq. 18 without the
   100), sigma_fj^2 = frequency_noise^2 + the variance the nominal scatter causes
-  (:func:`scatter_scales`: every property and CONM2 scattering independently by model_scatter);
+  (:mod:`pipeline.diagnose.scatter`: every section quantity and CONM2 scattering independently
+  by model_scatter);
 - **shape** of every paired mode j (when the test has shapes): the test shape t_j scaled to unit
   RMS over the sensors, minus the least-squares fit of the analysis shape a_j,
   d_j = t_j - (a_j . t_j / a_j . a_j) a_j, written in the nominal model's modal coordinates at the
@@ -16,18 +16,23 @@ from the nominal model):
   divided by its standard deviation: sensor noise, sigma_nj^2 (A0^+ A0^+T)_kk, plus the mixing
   the nominal scatter causes: by first-order perturbation (modal expansion, Fox & Kapoor 1968)
   the coefficient of mode k in mode j is
-  c_kj = -phi_k^T (dK - lambda_j dM) phi_j / (lambda_k - lambda_j) (:func:`scatter_scales`),
-  times rho_k / rho_j for the unit-RMS scaling, capped at ``MIXING_CAP`` (close modes mix
-  freely: the data cannot tell their combination from a model error). The own coordinate k = j
-  is left out. d_j is orthogonal to a_j, so the sign of a shape does not matter;
+  c_kj = -phi_k^T (dK - lambda_j dM) phi_j / (lambda_k - lambda_j)
+  (:func:`pipeline.diagnose.scatter.scatter_effects`), times rho_k / rho_j for the unit-RMS
+  scaling, capped at ``scatter.MIXING_CAP`` (close modes mix freely: the data cannot tell their
+  combination from a model error). The own coordinate k = j is left out. d_j is orthogonal to
+  a_j and turned to the sign of t_j's own coordinate, so neither shape's sign matters and
+  q_kj ~ +c_kj rho_k / rho_j in the nominal modes' signs;
 - **mass** properties present in the measured mass (the paper's J1..J10, eqs. 1-10): weight and
   inertias relative to the measured value, CG relative to the radius of gyration, each divided by
   its stated accuracy (:mod:`pipeline.diagnose.weighing`).
 
-chi^2 = |r|^2 over the training modes; BIC = chi^2 + p ln n (Schwarz 1978), n the number of
-training residuals; a BIC difference above 10 is "very strong" evidence (Kass & Raftery 1995).
-Goodness of fit: chi^2 below the ``GOF_QUANTILE`` quantile of the chi-square distribution with
-n - p degrees of freedom.
+One property's error moves several modes together, so the modal entries are correlated: the
+training modal entries are multiplied by the whitening W of their scatter covariance
+(:func:`pipeline.diagnose.scatter.whitening`, generalised least squares), the mass entries are
+independent. chi^2 = |r|^2 of that residual over the training modes; BIC = chi^2 + p ln n
+(Schwarz 1978), n the number of training residuals; a BIC difference above 10 is "very
+strong" evidence (Kass & Raftery 1995). Goodness of fit: chi^2 below the ``GOF_QUANTILE``
+quantile of the chi-square distribution with n - p degrees of freedom.
 """
 from __future__ import annotations
 
@@ -39,19 +44,16 @@ import scipy.stats
 import xarray as xr
 from scipy.optimize import linear_sum_assignment
 
+from pipeline.diagnose.scatter import scatter_effects, scatter_scales, whitening
 from pipeline.diagnose.weighing import mass_residual, mass_scales
 from structures.common.errors import InputError
 from structures.correlation import (mac, measured_dof_index, orthogonality, serep_coordinates,
                                     serep_pseudo_inverse)
-from structures.assembly import element_matrices
 from structures.massprops import MassProperties, mass_properties
 from structures.modal import compute_modes
 from structures.model import FEModel
 from structures.modes import elastic_index, rigid_index
 
-#: Largest standard deviation of a mixing coefficient (unit-RMS shapes): two modes closer than
-#: the nominal scatter can mix in any proportion.
-MIXING_CAP = 1.0
 #: Goodness-of-fit quantile: chi^2 above the 99.9 % chi-square quantile is a misfit (1 false alarm
 #: in 1000 fits of a right model).
 GOF_QUANTILE = 0.999
@@ -175,7 +177,8 @@ def shape_noise(phi_m, shapes) -> np.ndarray:
 
 
 def shape_residual(projector, test_shapes, analysis_shapes, scale, keep) -> np.ndarray:
-    """Shape residual per mode: (A0^+ (t_j - alpha_j a_j))_k / scale_kj over the kept k.
+    """Shape residual per mode: +-(A0^+ (t_j - alpha_j a_j))_k / scale_kj over the kept k, the
+    sign that makes t_j's own (left-out) coordinate positive.
 
     Parameters
     ----------
@@ -188,81 +191,21 @@ def shape_residual(projector, test_shapes, analysis_shapes, scale, keep) -> np.n
     scale : array_like, shape (n_mode, m)
         Standard deviation of every coordinate.
     keep : array_like of bool, shape (n_mode, m)
-        Coordinates kept (the same number per mode).
+        Coordinates kept: all but the mode's own.
 
     Returns
     -------
-    ndarray, shape (n_mode, n_keep)
+    ndarray, shape (n_mode, m - 1)
     """
     t, a = np.asarray(test_shapes, float), np.asarray(analysis_shapes, float)
     alpha = np.sum(a * t, axis=1) / np.sum(a * a, axis=1)                   # least-squares scale
     d = t - alpha[:, None] * a
-    q = d @ np.asarray(projector, float).T / np.asarray(scale, float)       # eq. 14 coordinates
+    projector = np.asarray(projector, float)
     keep = np.asarray(keep, bool)
+    own = np.argmin(keep, axis=1)                                           # the left-out one
+    turn = np.where((t @ projector.T)[np.arange(t.shape[0]), own] < 0.0, -1.0, 1.0)
+    q = turn[:, None] * (d @ projector.T) / np.asarray(scale, float)        # eq. 14 coordinates
     return q[keep].reshape(q.shape[0], -1)
-
-
-_STIFFNESS_FAMILIES = ("CBAR", "CBEAM", "CROD", "CELAS", "CMASS2", "CBUSH", "CQUAD4", "CTRIA3")
-
-
-def _scatter_energies(model: FEModel, phi) -> tuple[np.ndarray, np.ndarray]:
-    """sum over scattered groups of (phi_k^T K_g phi_j)^2 and (phi_k^T M_g phi_j)^2, (m, m) each.
-
-    A group is a property (every element of one PID scatters together: one card, one
-    specification) or a CONM2; ``phi`` (6 n_grid, m) holds g-set basic-frame shapes.
-    """
-    m = phi.shape[1]
-    shapes = phi.reshape(-1, 6, m)
-    sum_k, sum_m = np.zeros((m, m)), np.zeros((m, m))
-    families = [es for kind, es in model.elements.items() if kind in _STIFFNESS_FAMILIES]
-    pids = [es.pids for es in families] + [model.masses.eids + 10 ** 12]
-    for (gi, k_e, m_e), group in zip(element_matrices(model), pids):
-        phi_e = shapes[gi].reshape(gi.shape[0], -1, m)                    # (ne, nd, m)
-        for mat, total in ((k_e, sum_k), (m_e, sum_m)):
-            if mat is None:
-                continue
-            energy = np.einsum("eak,eab,ebj->ekj", phi_e, mat, phi_e)     # phi_k^T X_e phi_j
-            uniq, inverse = np.unique(group, return_inverse=True)
-            summed = np.zeros((uniq.size, m, m))
-            np.add.at(summed, inverse, energy)
-            total += np.sum(summed ** 2, axis=0)
-    return sum_k, sum_m * model.wtmass ** 2
-
-
-def scatter_scales(model: FEModel, phi, lam, own, rho, scatter: float) -> tuple:
-    """Standard deviations the nominal scatter causes in frequencies and mode mixing.
-
-    Every property (all elements of one PID) and every CONM2 scatters independently with
-    relative standard deviation s = ``scatter``, so phi_k^T dK phi_j has the variance
-    s^2 sum_p (phi_k^T K_p phi_j)^2 and phi_k^T dM phi_j likewise. First-order perturbation
-    (Fox & Kapoor 1968): d lambda_j = phi_j^T (dK - lambda_j dM) phi_j, mixing coefficient
-    c_kj = -phi_k^T (dK - lambda_j dM) phi_j / (lambda_k - lambda_j).
-
-    Parameters
-    ----------
-    model : FEModel
-    phi : (6 n_grid, m) g-set basic shapes of the basis modes (mass-normalised).
-    lam : (m,) their eigenvalues.
-    own : (n,) position in the basis of every paired mode.
-    rho : (m,) RMS of the basis modes at the sensors.
-    scatter : float
-
-    Returns
-    -------
-    frequency : (n,) standard deviation of df_j / f_j = d lambda_j / (2 lambda_j).
-    mixing : (n, m) standard deviation of the coefficient of mode k in unit-RMS mode j (capped at
-        ``MIXING_CAP``).
-    """
-    sk, sm = _scatter_energies(model, np.asarray(phi, float))
-    lam = np.asarray(lam, float)
-    lam_j = lam[own]
-    var = scatter ** 2 * (sk[:, own] + lam_j[None, :] ** 2 * sm[:, own])   # var(phi_k^T (dK - l_j dM) phi_j)
-    freq = np.sqrt(var[own, np.arange(own.size)]) / (2.0 * lam_j)         # Fox & Kapoor 1968
-    gap = np.abs(lam[:, None] - lam_j[None, :])
-    with np.errstate(divide="ignore", invalid="ignore"):
-        c = np.where(gap > 0, np.sqrt(var) / gap, np.inf)
-    c = (c * np.asarray(rho, float)[:, None] / np.asarray(rho, float)[own][None, :]).T
-    return freq, np.minimum(c, MIXING_CAP)
 
 
 def self_orthogonality(phi_m, shapes) -> float:
@@ -357,8 +300,9 @@ def partner_mixing(test_frequency, band_frequency, band_sigma, paired, mixing) -
     ``PARTNER_SIGMAS`` standard deviations of the test frequency. Any of them could be the test
     mode's counterpart (the nominal pairing picks one of a cluster of close modes by shapes that
     the scatter mixes), so each coordinate gets the largest mixing standard deviation over the
-    partners, and every partner's own coordinate the cap (:data:`MIXING_CAP`): the residual does
-    not depend on which of them the nominal pairing chose.
+    partners, and every partner's own coordinate the cap
+    (:data:`pipeline.diagnose.scatter.MIXING_CAP`): the residual does not depend on which of them
+    the nominal pairing chose.
 
     Parameters
     ----------
@@ -368,7 +312,7 @@ def partner_mixing(test_frequency, band_frequency, band_sigma, paired, mixing) -
         scatter).
     paired : (n_test,) position in the band of every test mode's nominal partner.
     mixing : (n_band, m) mixing standard deviations with each band mode as its own
-        (:func:`scatter_scales`).
+        (:func:`pipeline.diagnose.scatter.scatter_scales`).
 
     Returns
     -------
@@ -404,6 +348,10 @@ class Reference:
     measured_mass : {quantity: value}
     mass_scale : {quantity: standard deviation}
     nmodes : int, analysis modes computed.
+    scatter_rows : (n_train_rows, n_g) the training modal entries (the frequencies, then the
+        kept shape coordinates mode by mode) per standard deviation of every scatter group's
+        error (:func:`scatter_rows`), or None.
+    whitening : (n_train_rows, n_train_rows) W applied to those entries, or None (independent).
     """
 
     name: str
@@ -422,6 +370,8 @@ class Reference:
     measured_mass: Mapping
     mass_scale: Mapping
     nmodes: int
+    scatter_rows: np.ndarray | None = None
+    whitening: np.ndarray | None = None
 
     @property
     def has_shapes(self) -> bool:
@@ -449,9 +399,13 @@ class Evaluation:
     mass: np.ndarray
     props: MassProperties
 
-    def vector(self, train: np.ndarray) -> np.ndarray:
-        """Residual vector over the modes in ``train`` (bool (n_test,)) plus the mass entries."""
-        return np.concatenate([self.frequency[train], self.shape[train].ravel(), self.mass])
+    def vector(self, ref: Reference) -> np.ndarray:
+        """Residual vector: the training modes' entries (``ref.train``) whitened by
+        ``ref.whitening``, then the mass entries."""
+        modal = np.concatenate([self.frequency[ref.train], self.shape[ref.train].ravel()])
+        if ref.whitening is not None:
+            modal = ref.whitening @ modal
+        return np.concatenate([modal, self.mass])
 
 
 def pairing_cost(ref: Reference, frequency, sensor_shapes) -> np.ndarray:
@@ -677,17 +631,27 @@ def build_reference(name: str, model: FEModel, gvt: xr.Dataset, measured_mass: M
             else np.sort(paired))
     own = np.searchsorted(band, paired)                                    # position in the band
     keep = np.concatenate([rigid, band])
-    lam = (2.0 * np.pi * f_fe[keep]) ** 2
-    rho = np.sqrt(np.mean(phi_m[keep] ** 2, axis=1)) if has_shapes else np.ones(keep.size)
-    band_sd, band_mixing = scatter_scales(model, modes["shape"].values[keep].T, lam,
-                                          np.arange(rigid.size, keep.size), rho, model_scatter)
+    d_freq, d_mix = scatter_effects(model, modes["shape"].values.T, (2.0 * np.pi * f_fe) ** 2,
+                                    band)
+    inside = np.arange(band.size)
+    if has_shapes:
+        rho = np.sqrt(np.mean(phi_m[keep] ** 2, axis=1))
+        a0 = phi_m[keep].T / rho                                            # unit RMS columns
+        projector = serep_pseudo_inverse(a0, what="Phi_M (rigid and band modes)")    # eq. 13
+        # every computed mode mixes in, seen in A0's coordinates: A0^+ sum_k c_kj a_k / rho_j
+        # (a mode outside A0 aliases onto its columns; a column of A0 is its own coordinate)
+        d_mix[:, inside, band] = 0.0
+        with np.errstate(invalid="ignore"):
+            d_mix = d_mix @ (projector @ phi_m.T).T / rho[rigid.size:][None, :, None]
+    else:
+        d_mix = d_mix[:, :, keep]
+    d_mix[:, inside, rigid.size + inside] = np.inf                         # the own: free
+    band_sd, band_mixing = scatter_scales(d_freq, d_mix, model_scatter)
     freq_sd = band_sd[own]
     mixing_sd = partner_mixing(f_test, f_fe[band], np.hypot(frequency_noise, band_sd), own,
                                band_mixing)
     ref = replace(ref, frequency_sigma=np.hypot(frequency_noise, freq_sd))
     if has_shapes:
-        a0 = phi_m[keep].T / rho                                            # unit RMS columns
-        projector = serep_pseudo_inverse(a0, what="Phi_M (rigid and band modes)")    # eq. 13
         noise_sd = noise[:, None] * np.sqrt(np.sum(projector ** 2, axis=1))[None, :]
         scale = np.sqrt(noise_sd ** 2 + mixing_sd ** 2)
         keep_mask = np.ones(scale.shape, bool)
@@ -699,4 +663,33 @@ def build_reference(name: str, model: FEModel, gvt: xr.Dataset, measured_mass: M
         except InputError:
             facts["self_orthogonality"] = None
         ref = replace(ref, projector=projector, shape_scale=scale, shape_keep=keep_mask)
-    return ref, facts
+    rows = scatter_rows(ref, d_freq[:, own], d_mix[:, own], model_scatter)
+    return replace(ref, scatter_rows=rows, whitening=whitening(rows)), facts
+
+
+def scatter_rows(ref: Reference, d_frequency, d_mixing, scatter: float) -> np.ndarray:
+    """Training modal residual entries (in :meth:`Evaluation.vector`'s order) per standard
+    deviation of every scatter group's error.
+
+    A truth that differs from the model by the errors e_g has r_f,j = -(df_j / f_j) / sigma_fj
+    and q_kj = +c_kj rho_k / rho_j / scale_kj (the shape residual turned to a_j's sign) to first
+    order, so the rows are those derivatives times ``scatter``.
+
+    Parameters
+    ----------
+    ref : Reference, its scales set.
+    d_frequency : (n_g, n_test) d(df_j / f_j) / d e_g of every test mode's partner
+        (:func:`pipeline.diagnose.scatter.scatter_effects`).
+    d_mixing : (n_g, n_test, m) d(c_kj rho_k / rho_j) / d e_g over the basis.
+    scatter : float, standard deviation of every e_g.
+
+    Returns
+    -------
+    ndarray, shape (n_rows, n_g)
+    """
+    train = ref.train
+    rows = [-scatter * np.asarray(d_frequency)[:, train].T / ref.frequency_sigma[train, None]]
+    if ref.has_shapes:
+        mix = scatter * np.asarray(d_mixing)[:, train] / ref.shape_scale[train][None]
+        rows.append(np.transpose(mix, (1, 2, 0))[ref.shape_keep[train]])     # mode by mode
+    return np.concatenate(rows)

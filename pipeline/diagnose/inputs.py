@@ -12,7 +12,7 @@ The optional ``[diagnose]`` table of a case file (every key optional; defaults s
     margin = 10.0            # BIC margin by which the named candidate beats the runner-up
     refit = 6                # candidates refitted after the linear screening
     nmodes = 30              # analysis modes; left out: 2 x test modes + 6 rigid
-    model_scatter = 0.03     # element-by-element scatter of the nominal properties (fraction)
+    model_scatter = 0.03     # scatter of every section quantity and CONM2 (fraction)
     before_tuning = false    # pipeline run: diagnose after stage 0 and before the tuning stages
                              # (false: after the last stage, before the report)
     flutter = true           # flutter speed before / after (default: true when [flutter] is given)

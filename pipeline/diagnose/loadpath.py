@@ -183,7 +183,7 @@ def best_load_path(problem, theta, effects, evaluations, r0) -> LoadPath | None:
             modes, shapes = red.modes(size)
             parts.append(evaluate_modes(ref, modes["frequency"].values,
                                         shapes if ref.has_shapes else None, red.properties(size),
-                                        modes=modes).vector(ref.train))
+                                        modes=modes).vector(ref))
         return np.concatenate(parts + [prior])
 
     coarse = []

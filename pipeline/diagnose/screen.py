@@ -191,7 +191,7 @@ def signatures(problem: Problem, theta, effects, evaluations, candidates, *, pro
 
     def residual(cand, step):
         """Training residual of the candidate at ``step`` by exact reanalysis."""
-        return np.concatenate([evaluate(ref, apply_effect(model, cand, step)).vector(ref.train)
+        return np.concatenate([evaluate(ref, apply_effect(model, cand, step)).vector(ref)
                                for ref, model in zip(problem.refs, models)] + [prior])
 
     def reduced(cand):
@@ -213,7 +213,7 @@ def signatures(problem: Problem, theta, effects, evaluations, candidates, *, pro
             e1 = evaluate_modes(ref, modes["frequency"].values,
                                 shapes if ref.has_shapes else None, basis.properties(size),
                                 modes=modes)
-            parts.append(e1.vector(ref.train))
+            parts.append(e1.vector(ref))
         return np.concatenate(parts + [prior])
 
     springs = []

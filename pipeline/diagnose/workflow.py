@@ -106,8 +106,9 @@ class DiagnoseSettings:
     refit : candidates refitted after the screening.
     nmodes : analysis modes (None: 2 x test modes + 6).
     model_scatter : relative scatter of the nominal section and mass properties that the few
-        nominal parameters cannot follow (element by element); it widens the residual scales
-        (frequency by model_scatter / 2, f ~ sqrt(k / m); shapes by model_scatter per DOF).
+        nominal parameters cannot follow: every section quantity of every property card and
+        every CONM2 errs independently by it (:mod:`pipeline.diagnose.scatter`); it sets the
+        residual's covariance (its scales and the correlation between modes).
     """
 
     kinds: tuple = KINDS

@@ -30,12 +30,12 @@ def test_calibration_runs_test_sees_the_training_modes_only():
 
     def evaluate(theta, effects=()):
         r = v + theta[0]
-        return [SimpleNamespace(frequency=r, vector=lambda keep, r=r: r[keep])]
+        return [SimpleNamespace(frequency=r, vector=lambda ref, r=r: r[ref.train])]
 
     ref = SimpleNamespace(train=train, name="c")
     problem = SimpleNamespace(n_theta=1, names=("E1",), refs=(ref,), evaluate=evaluate,
                               prior=np.array([np.inf]), bounds=np.array([0.1]),
-                              residual=lambda theta, evs: evs[0].vector(train))
+                              residual=lambda theta, evs: evs[0].vector(ref))
     cal = calibrate(problem)
     assert abs(cal.theta[0]) < 1e-6                       # ten +1, ten -1: no shift
     assert any("runs test" in flag for flag in cal.flags)
@@ -79,9 +79,11 @@ def test_calibration_keeps_the_weighing(tmp_path):
     """The test is the model's own frequencies, the weighing 6 % heavier. A uniform mass scale
     theta moves every frequency by (1 + theta)^-1/2 and the weight by (1 + theta), so the
     calibration minimises, by hand,
-        sum_j ((1 + theta)^-1/2 - 1)^2 / sigma_j^2 + ((1 + theta) W0 - W) / (0.005 W))^2
-        + (theta / sigma_m)^2
-    over the training modes (1-D minimisation here, eigen-solves in the code). A free scale
+        r^T C^-1 r + ((1 + theta) W0 - W) / (0.005 W))^2 + (theta / sigma_m)^2,
+        r_j = ((1 + theta)^-1/2 - 1) / sigma_j
+    over the training modes, C their covariance in those units (Delta + G G^T, G the
+    reference's scatter rows, Delta = 1 - diag(G G^T), inverted directly here; the code whitens
+    by the Woodbury form) (1-D minimisation here, eigen-solves in the code). A free scale
     (no prior) would take the 6 % within its +-10 % bound and leave the weighing nothing; with
     the prior, truncated at 3 sigma_m = 3.708 %, the weighing and prior rows keep at least their
     own minimum 0.06^2 / ((0.005 W / W0)^2 + sigma_m^2) = 19.9 (the frequencies and the
@@ -89,10 +91,12 @@ def test_calibration_keeps_the_weighing(tmp_path):
     problem, ref, w0 = _chain_problem(tmp_path, 1.06)
     w, sd_m = 1.06 * w0, problem.prior[0]
     sigma = ref.frequency_sigma[ref.train]
+    g = ref.scatter_rows
+    c_inv = np.linalg.inv(np.diag(1.0 - np.sum(g ** 2, axis=1)) + g @ g.T)
 
     def chi2(t):
         r_f = ((1.0 + t) ** -0.5 - 1.0) / sigma
-        return np.sum(r_f ** 2) + (((1.0 + t) * w0 - w) / (0.005 * w)) ** 2 + (t / sd_m) ** 2
+        return r_f @ c_inv @ r_f + (((1.0 + t) * w0 - w) / (0.005 * w)) ** 2 + (t / sd_m) ** 2
 
     hand = minimize_scalar(chi2, bounds=(-3 * sd_m, 3 * sd_m), method="bounded",
                            options={"xatol": 1e-9})

@@ -157,7 +157,7 @@ def _made_by(model, cand, size):
 
 def _exact(problem, ref, model, cand, x):
     theta = np.zeros(len(problem.names))
-    return np.concatenate([evaluate(ref, apply_effect(model, cand, x)).vector(ref.train),
+    return np.concatenate([evaluate(ref, apply_effect(model, cand, x)).vector(ref),
                            problem.prior_residual(theta)])
 
 

@@ -265,7 +265,7 @@ def bowed_tail(frame_reference):
     evs = problem.evaluate(theta)
 
     def residual(x):
-        return np.concatenate([evaluate(ref, apply_effect(model, cand, x)).vector(ref.train),
+        return np.concatenate([evaluate(ref, apply_effect(model, cand, x)).vector(ref),
                                problem.prior_residual(theta)])
     return model, cand, x_true, problem, theta, evs, residual
 
@@ -293,9 +293,11 @@ def test_quadratic_bow_model_matches_reanalysis_of_a_bowed_member(bowed_tail):
 def test_screening_recovers_a_bowed_members_bow(bowed_tail):
     """The screening of the bowed member's two quadrant candidates (quadratic model, exact line
     search) puts the right quadrant first, its bow within 0.01 of the truth (0.09, 0.06) and its
-    exact chi^2 below 3 % of the unbowed model's (measured (0.091, 0.066), 5.3 of 272); the
-    secant signature's S x is the exact residual change there. The linear secant fit instead
-    ran to (0.068, 0.114), its linearised chi^2 180 (measured with the residual of ec12e4e)."""
+    exact chi^2 below 5 % of the unbowed model's (measured (0.088, 0.068), 8.3 of 255 with the
+    residual whitened for the correlated scatter; (0.091, 0.066), 5.3 of 272 with independent
+    entries); the secant signature's S x is the exact residual change there. The linear secant
+    fit instead ran to (0.068, 0.114), its linearised chi^2 180 (measured with the residual of
+    ec12e4e)."""
     model, cand, x_true, problem, theta, evs, residual = bowed_tail
     pair = [c for c in candidates(model, ("member_curvature",)) if c.location == cand.location]
     r0, signed, skipped = screen.signatures(problem, theta, (), evs, pair)
@@ -303,7 +305,7 @@ def test_screening_recovers_a_bowed_members_bow(bowed_tail):
     assert not skipped and rows[0].candidate.label == cand.label
     best = rows[0]
     assert best.values == pytest.approx(x_true, abs=0.01)
-    assert best.chi2 < 0.03 * float(r0 @ r0)
+    assert best.chi2 < 0.05 * float(r0 @ r0)
     assert r0 + best.signature @ best.values == pytest.approx(residual(best.values), abs=1e-9)
 
 

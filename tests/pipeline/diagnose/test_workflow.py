@@ -194,9 +194,10 @@ def test_chi2_split_separates_the_modal_rows():
     keep = np.ones((3, 3), bool)
     keep[np.arange(3), np.arange(3)] = False
     refs = (SimpleNamespace(train=np.array([True, False, True]), has_shapes=True,
-                            shape_keep=keep, mass_scale={"weight": 1.0, "x_cg": 1.0}),
+                            shape_keep=keep, mass_scale={"weight": 1.0, "x_cg": 1.0},
+                            whitening=None),
             SimpleNamespace(train=np.array([False, True]), has_shapes=False, shape_keep=None,
-                            mass_scale={}))
+                            mass_scale={}, whitening=None))
     evs = [Evaluation(None, np.arange(3), np.array([1.0, 50.0, -3.0]),
                       np.array([[2.0, 0.0], [50.0, 50.0], [1.0, -1.0]]), np.array([3.0, -4.0]),
                       None),
