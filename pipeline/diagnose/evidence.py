@@ -672,8 +672,9 @@ def scatter_rows(ref: Reference, d_frequency, d_mixing, scatter: float) -> np.nd
     deviation of every scatter group's error.
 
     A truth that differs from the model by the errors e_g has r_f,j = -(df_j / f_j) / sigma_fj
-    and q_kj = +c_kj rho_k / rho_j / scale_kj (the shape residual turned to a_j's sign) to first
-    order, so the rows are those derivatives times ``scatter``.
+    and q_kj = +c_kj rho_k / rho_j / scale_kj (the shape residual turned to the sign of the test
+    shape's own coordinate, :func:`shape_residual`) to first order, so the rows are those
+    derivatives times ``scatter``.
 
     Parameters
     ----------

@@ -48,10 +48,16 @@ FIRST_ORDER_FLOOR = 0.01
 _FAMILIES = ("CBAR", "CBEAM", "CROD", "CELAS", "CMASS2", "CBUSH", "CQUAD4", "CTRIA3")
 
 
+def _scatters(prop: Property | None, field: str) -> bool:
+    """Whether ``prop`` (None: no property card) scatters its (nonzero) ``field``."""
+    return (prop is not None and field in SCATTER_FIELDS.get(prop.card, ())
+            and bool(prop.fields.get(field)))
+
+
 def _scaled(model: FEModel, field: str, factor: float) -> FEModel:
     """``model`` with ``field`` of every card that scatters it multiplied by ``factor``."""
     props = {pid: (Property(pid, p.card, {**p.fields, field: p.fields[field] * factor})
-                   if field in SCATTER_FIELDS.get(p.card, ()) and p.fields.get(field) else p)
+                   if _scatters(p, field) else p)
              for pid, p in model.properties.items()}
     return replace(model, properties=props)
 
@@ -78,7 +84,7 @@ def group_matrices(model: FEModel, phi) -> tuple[np.ndarray, np.ndarray, list]:
     shapes = phi.reshape(-1, 6, m)
     families = [es for kind, es in model.elements.items() if kind in _FAMILIES]
     fields = sorted({f for p in model.properties.values()
-                     for f in SCATTER_FIELDS.get(p.card, ()) if p.fields.get(f)})
+                     for f in SCATTER_FIELDS.get(p.card, ()) if _scatters(p, f)})
     bk, bm, labels = [], [], []
 
     def add(gi, k_e, m_e, ids, mask, quantity, card=None):
@@ -94,9 +100,7 @@ def group_matrices(model: FEModel, phi) -> tuple[np.ndarray, np.ndarray, list]:
         labels.extend((card or _card(model, i), int(i), quantity) for i in uniq)
 
     def scattered(pid, field):
-        prop = model.properties.get(int(pid))
-        return (prop is not None and field in SCATTER_FIELDS.get(prop.card, ())
-                and bool(prop.fields.get(field)))
+        return _scatters(model.properties.get(int(pid)), field)
 
     matrices = list(element_matrices(model))
     for (gi, k_e, m_e), es in zip(matrices, families):
