@@ -9,29 +9,38 @@ scale of the model (so that bounds do not depend on units):
     before PARAM WTMASS); bounds [0, 0.10]. One candidate per grid that carries structure
     (referenced by an element, a rigid element or a CONM2) and whose translations are not all
     constrained.
-``joint_flexibility`` of a rigid element, parameter ``compliance`` = k_ref / k
-    An RBE2, or an RBAR with all six independent components on one grid, is removed and every
-    dependent grid is tied to the independent grid by a CBUSH (basic axes, CID = 0, at mid-length)
-    of translational stiffness k_ref,t / compliance and rotational stiffness k_ref,r / compliance
-    on the rigid element's dependent components. k_ref is the median over the CBAR/CBEAM elements
+``joint_flexibility`` of a rigid element, parameters ``compliance`` and ``rotation``
+    An RBE2, or an RBAR with all six independent components on one grid, stays rigid but is
+    moved onto a new grid (id: the largest + 1) at its independent grid, which hangs on a
+    zero-length CBUSH (basic axes, CID = 0, all six components) to the independent grid: the
+    hung part moves as one body on a flexible attachment where the rigid element meets the
+    structure (an engine on its mounts, a store or a control surface on its fittings; the usual
+    idealisation of a joint, a zero-length spring between coincident grids). Its translational
+    stiffness is k_ref,t / c_t and its rotational stiffness k_ref,r / c_r, with
+    c_t = compliance 10^(-rotation / 2) and c_r = compliance 10^(rotation / 2): ``compliance``
+    is the joint's geometric-mean compliance and ``rotation`` the decades by which its rotations
+    are softer than its translations against the reference ratio (a joint's translational and
+    rotational stiffness are separate properties of its fittings, a flange stiff in shear and
+    soft in rocking or the reverse). k_ref is the median over the CBAR/CBEAM elements
     touching the element's grids (all beams of the model when none touch them) of
     k_ref,t = 12 E I / L^3 (the transverse stiffness term of the beam element),
     I = (I1 + I2) / 2; k_ref,r = k_ref,t I_h / m_h for the CONM2s on the hung grids (m_h their
-    mass, I_h their largest moment of inertia about the independent grid: one compliance puts the
-    hung part's local translation and rotation modes at one frequency); without hung mass,
+    mass, I_h their largest moment of inertia about the independent grid: at rotation 0 one
+    compliance puts the hung part's local translation and rotation modes at one frequency);
+    without hung mass,
     k_ref,r = E I / L (the beam's bending stiffness per radian over its length) + k_ref,t d^2, d
     the largest distance of a hung grid from the independent one. At compliance 1 the joint is
     about as flexible as one adjacent element. Bounds [0, 1e5]: a joint whose hung mass has its
     local mode a few times the first elastic frequency is 10^0.5 - 10^4.5 times softer than an
     adjacent element (k_ref is the beam's, not the joint's);
-    compliance 0 keeps the rigid element. An RBE2 with several dependent grids is instead kept
-    rigid and moved onto a new grid (id: the largest + 1) at its independent grid, which hangs on
-    one CBUSH to the independent grid: the hung part moves as one body (a control surface or a
-    store on flexible fittings). Such an RBE2 also gives one
-    candidate per dependent grid (detail ``dependent``): that grid alone leaves the RBE2 (written
-    again without it) and hangs on its CBUSH, the others stay rigid (a joint that is flexible on
-    one side only, e.g. one control surface on its hinge line). The response is far from linear in the compliance, so
-    the screening samples it on a ladder of sizes (:data:`pipeline.diagnose.screen.LADDER`). Skipped: rigid elements whose partial dependent
+    compliance 0 keeps the rigid element (whatever the rotation). Bounds of ``rotation``
+    [-2, 2]. An RBE2 with several dependent grids also gives one candidate per dependent grid
+    (detail ``dependent``): that grid alone leaves the RBE2 (written again without it) and hangs
+    on a CBUSH to the independent grid (at mid-length, on its dependent components), the others
+    stay rigid (a joint that is flexible on one side only, e.g. one control surface on its
+    hinge line). The response is far from linear in the compliance, so the screening samples it
+    on a ladder of sizes at rotation 0 (:data:`pipeline.diagnose.screen.LADDER`) and the refit
+    frees the rotation. Skipped: rigid elements whose partial dependent
     components are not in basic axes. Very small compliances make K ill-conditioned: at 1e-6 on
     the X-56 wing ribs the rigid-body eigenvalues carry round-off of 2e-6 of the first elastic
     one, which :mod:`structures.modal` rejects; 1e-5 is fine there.
@@ -75,7 +84,8 @@ scale of the model (so that bounds do not depend on units):
     One candidate per grid of ``lumped_mass`` and unconstrained direction.
 
 The screening step of each parameter (:attr:`Candidate.reference`, :data:`PARAMETER_RANGES`) is
-a plausible, clearly visible size: mass 0.02, compliance 100, scale 0.1, taper 0.3, bow 0.05, k 0.1.
+a plausible, clearly visible size: mass 0.02, compliance 100, rotation 0.5, scale 0.1, taper 0.3,
+bow 0.05, k 0.1.
 New elements take ids from the model's largest element, CONM2 or rigid-element id + 1; new
 properties from its largest PID + 1.
 """
@@ -104,7 +114,7 @@ DIRECTIONS = ("x", "y", "z")
 #: (lower, upper, reference) of each parameter, by kind and parameter name.
 PARAMETER_RANGES = {
     "lumped_mass": {"mass": (0.0, 0.10, 0.02)},
-    "joint_flexibility": {"compliance": (0.0, 1.0e5, 100.0)},
+    "joint_flexibility": {"compliance": (0.0, 1.0e5, 100.0), "rotation": (-2.0, 2.0, 0.5)},
     "member_taper": {"scale": (-0.3, 0.3, 0.1), "taper": (-0.8, 0.8, 0.3)},
     "member_curvature": {"bow_1": (-0.15, 0.15, 0.05), "bow_2": (-0.15, 0.15, 0.05)},
     "boundary_stiffness": {f"k_{d}": (0.0, 1.0, 0.1) for d in DIRECTIONS},
@@ -264,7 +274,7 @@ def candidates(model: FEModel, kinds=KINDS, *, frequency: float | None = None
                                           (("direction", d), ("k_ref", k_ref))))
         elif kind == "joint_flexibility":
             out += [_candidate(kind, Location(grids=grids_j, elements=(eid,)), label,
-                               ("compliance",), detail)
+                               tuple(PARAMETER_RANGES[kind]), detail)
                     for grids_j, eid, label, detail in joint_sites(model)]
         else:
             for m in members:
@@ -348,9 +358,10 @@ def _boundary(model, candidate, x):
 
 
 def _joint(model, candidate, x):
+    split = 10.0 ** (0.5 * x[1])                         # c_t = c / split, c_r = c split
     return flexible_joint(model, candidate.location.elements[0],
-                          candidate.get("k_translation") / x[0],
-                          candidate.get("k_rotation") / x[0], candidate.get("dependent"))
+                          candidate.get("k_translation") * split / x[0],
+                          candidate.get("k_rotation") / (split * x[0]), candidate.get("dependent"))
 
 
 def _taper(model, candidate, x):

@@ -153,9 +153,10 @@ def flexible_joint(model: FEModel, eid: int, kt: float, kr: float, only=None) ->
     Returns
     -------
     FEModel
-        A multi-dependent RBE2 (``only`` None) stays rigid on a new grid hung by one CBUSH; else
-        every hung dependent grid gets a CBUSH on its dependent components and leaves the
-        rigid element.
+        The whole joint (``only`` None): the rigid element stays rigid on a new grid at its
+        independent grid, hung there by one zero-length CBUSH (all six components); one-sided:
+        the hung dependent grid gets a CBUSH to the independent grid on its dependent
+        components and leaves the rigid element.
     """
     rigid = next((r for r in model.rigid if r.eid == eid), None)
     joint = None if rigid is None else joint_grids(rigid)
@@ -170,7 +171,7 @@ def flexible_joint(model: FEModel, eid: int, kt: float, kr: float, only=None) ->
         raise InputError(card_message(f"grid {only} is not a dependent grid of this RBE2.",
                                       card=rigid.card, card_id=eid, filename=model.filename,
                                       fix="build the candidate with candidates() on this model."))
-    if only is None and rigid.card == "RBE2" and len(deps) > 1:
+    if only is None:
         return _hang_whole(model, rigid, indep, kt, kr)
     hung = [d for d in deps if d not in kept]
     stiffness = [[(kt if c < 3 else kr) if str(c + 1) in comps else 0.0 for c in range(6)]
@@ -182,8 +183,9 @@ def flexible_joint(model: FEModel, eid: int, kt: float, kr: float, only=None) ->
 
 
 def _hang_whole(model: FEModel, rigid, indep: int, kt: float, kr: float) -> FEModel:
-    """The RBE2 kept rigid but moved onto a new grid at its independent grid, which hangs on a
-    CBUSH (all six components) to the independent grid."""
+    """The rigid element kept rigid but moved onto a new grid at its independent grid, which
+    hangs on a zero-length CBUSH (all six components) to the independent grid (written back as
+    an RBE2: an RBAR independent on one grid is one)."""
     model, (new,) = add_grids(model, model.grids.xyz[model.grids.index([indep])])
     moved = tuple(replace(r, independent=((int(new), "123456"),)) if r.eid == rigid.eid else r
                   for r in model.rigid)

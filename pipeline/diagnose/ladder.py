@@ -1,7 +1,8 @@
 """Reanalysis of a joint over its ladder of compliances on one Craig-Bampton basis.
 
-A ``joint_flexibility`` candidate at compliance c hangs the joint's grids on CBUSHes of stiffness
-k_ref / c (:mod:`pipeline.diagnose.joints`). The changed model's a-set, constraint map T and mass
+A ``joint_flexibility`` candidate at compliance c (and rotation 0, the ladder's: the refit frees
+the rotation) hangs the joint's grids on CBUSHes of stiffness k_ref / c
+(:mod:`pipeline.diagnose.joints`). The changed model's a-set, constraint map T and mass
 M do not depend on c, and its stiffness is linear in 1 / c:
 
     K(c) = K_0 + B / c,
@@ -114,11 +115,12 @@ def reduce_joint(model: FEModel, candidate, sensor_index, nmodes: int) -> Reduce
     """
     from pipeline.diagnose.effects import apply_effect
 
-    changed = apply_effect(model, candidate, [_C1])
+    rest = [0.0] * (len(candidate.parameters) - 1)                        # rotation 0
+    changed = apply_effect(model, candidate, [_C1, *rest])
     s1 = assemble(changed, warn=False)
     if s1.K.shape[0] > DENSE_LIMIT:
         return None
-    s2 = assemble(apply_effect(model, candidate, [_C2]), warn=False)
+    s2 = assemble(apply_effect(model, candidate, [_C2, *rest]), warn=False)
     if not np.array_equal(s1.a_dofs, s2.a_dofs):
         return None
     k1 = s1.K.toarray()

@@ -9,9 +9,9 @@ model's training residual at x (the secant (r(x*) - r0) / x* with m(x) = x for a
 second-order model of :mod:`pipeline.diagnose.quadratic` otherwise); r is the training residual of
 every configuration (:mod:`pipeline.diagnose.evidence`). The routes:
 
-- *ladder* (``joint_flexibility``, one parameter that changes the constraints and acts far from
+- *ladder* (``joint_flexibility``, whose compliance changes the constraints and acts far from
   linearly: a joint's local mode falls as 1 / sqrt(compliance) and sweeps through the measured
-  modes): reanalysis at every size of :data:`LADDER` (quarter decades of the parameter's range)
+  modes; sampled at rotation 0, the refit frees the rotation): reanalysis at every size of :data:`LADDER` (quarter decades of the parameter's range)
   and at the eighth decades either side of the best (:data:`LADDER_REFINE`); the best size x*
   and its exact chi^2 are the candidate's screening result, the secant (r(x*) - r0) / x* its
   signature. The rungs are analysed on one Craig-Bampton basis per joint and configuration
@@ -259,8 +259,8 @@ def signatures(problem: Problem, theta, effects, evaluations, candidates, *, pro
                 if cand.kind in LADDER_KINDS and all(
                         hangs_nothing(m, site.location.elements[0], site.get("dependent"))
                         for m in models for site in sites(cand)):
-                    out.append((cand, np.zeros((r0.size, 1)),
-                                (np.array([cand.upper[0] * LADDER[0]]), chi_square(r0))))
+                    out.append((cand, np.zeros((r0.size, len(cand.parameters))),
+                                (_first(cand, cand.upper[0] * LADDER[0]), chi_square(r0))))
                     continue
                 if cand.kind in RITZ_KINDS:
                     out.append(ritz_ladder(cand))
@@ -283,10 +283,16 @@ def signatures(problem: Problem, theta, effects, evaluations, candidates, *, pro
     return r0, out, skipped
 
 
+def _first(cand, size: float) -> np.ndarray:
+    """(npar,) parameters of a ladder rung: its first parameter at ``size``, the others at 0
+    (a joint's ``rotation``: the reference ratio)."""
+    return np.r_[size, np.zeros(len(cand.parameters) - 1)]
+
+
 def _ladder(cand, r0, residual, approximate=None, sizes=None) -> tuple:
-    """(Candidate, secant S, (x*, chi2*)) of a one-parameter candidate sampled on :data:`LADDER`
-    (sizes whose model cannot be analysed are passed over). ``approximate`` (size -> residual,
-    :mod:`pipeline.diagnose.ladder`) samples the rungs; x* is then analysed again exactly, and the
+    """(Candidate, secant S, (x*, chi2*)) of a candidate sampled on :data:`LADDER` along its
+    first parameter, the others at 0 (sizes whose model cannot be analysed are passed over).
+    ``approximate`` (size -> residual, :mod:`pipeline.diagnose.ladder`) samples the rungs; x* is then analysed again exactly, and the
     exact ladder runs instead when that fails. ``sizes`` (a grounded spring's rungs,
     :func:`pipeline.diagnose.grounded.ladder_sizes`) replaces the ladder and its refinement, and
     x* keeps the ``approximate`` residual (the Ritz basis's accuracy, grounded.py)."""
@@ -296,7 +302,7 @@ def _ladder(cand, r0, residual, approximate=None, sizes=None) -> tuple:
         nonlocal best, failure
         try:
             r = approximate(size) if approximate is not None else \
-                residual(cand, np.array([size]))
+                residual(cand, _first(cand, size))
         except (InputError, SolverError) as exc:
             failure = exc
             return
@@ -313,12 +319,12 @@ def _ladder(cand, r0, residual, approximate=None, sizes=None) -> tuple:
     size = best[0]
     if approximate is not None and sizes is None:
         try:
-            r = residual(cand, np.array([size]))
+            r = residual(cand, _first(cand, size))
         except (InputError, SolverError):
             return _ladder(cand, r0, residual)
         best = (size, r, chi_square(r))
     size, r, chi2 = best
-    return cand, secant(r0, r, [size]), (np.array([size]), chi2)
+    return cand, secant(r0, r, _first(cand, size)), (_first(cand, size), chi2)
 
 
 def screen(r0, signed) -> list:

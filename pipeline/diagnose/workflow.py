@@ -209,6 +209,24 @@ def _prefer_one_side(problem: Problem, theta, effects, rows, fits, none, n_data:
     return fits, None
 
 
+def unnamed(cands, effects) -> list:
+    """The candidates none of whose sites is already named: a site is named once, a joint once
+    per rigid element (a named joint's rigid element stays rigid on a new grid, so its joint
+    candidates of the next round have a location of their own).
+
+    Parameters
+    ----------
+    cands : sequence of Candidate, a round's library.
+    effects : sequence of (Candidate, values), the effects named so far.
+    """
+    named = {(s.kind, s.location) for c, _ in effects for s in sites(c)}
+    hung = {s.location.elements[0] for c, _ in effects for s in sites(c)
+            if s.kind == "joint_flexibility"}
+    return [c for c in cands if not any(
+        (s.kind, s.location) in named
+        or (s.kind == "joint_flexibility" and s.location.elements[0] in hung) for s in sites(c))]
+
+
 def _say(progress, text: str) -> None:
     if progress is not None:
         progress(text)
@@ -353,9 +371,7 @@ def diagnose(configurations, settings: DiagnoseSettings = DiagnoseSettings(), *,
         for k in range(settings.max_effects):
             _say(progress, f"round {k + 1}: screening")
             model0 = problem.model(0, theta, effects)
-            named = {(s.kind, s.location) for c, _ in effects for s in sites(c)}
-            cands = [c for c in candidates(model0, settings.kinds)      # a site named once
-                     if not any((s.kind, s.location) in named for s in sites(c))]
+            cands = unnamed(candidates(model0, settings.kinds), effects)
             r0, signed, skipped = signatures(problem, theta, effects, none_evs, cands,
                                              progress=progress)
             if skipped:

@@ -347,21 +347,24 @@ def test_joint_compliance_tends_to_the_rigid_joint(x56, x56_candidates, label, c
     in the rigid-body ones, which structures.modal rejects (limit 1e-6)."""
     cand = _pick(x56_candidates, "joint_flexibility", label)
     rigid = _elastic(x56, 20)
-    stiff = _elastic(apply_effect(x56, cand, [compliance]), 20)
+    stiff = _elastic(apply_effect(x56, cand, [compliance, 0.0]), 20)
     np.testing.assert_allclose(stiff, rigid, rtol=1e-4)
-    soft = _elastic(apply_effect(x56, cand, [cand.upper[0]]), 20)
+    soft = _elastic(apply_effect(x56, cand, [cand.upper[0], 0.0]), 20)
     assert np.all(soft <= rigid * (1 + 1e-9))      # a released constraint never stiffens
     if label != "RBE2 7005":
         assert np.max(1 - soft / rigid) > 0.05      # the engine mount is clearly visible
 
 
-def test_one_dependent_grid_on_its_spring(tmp_path):
+@pytest.mark.parametrize("rho", [0.0, 0.8, -1.5])
+def test_one_dependent_grid_on_its_spring(tmp_path, rho):
     """A clamped grid 1 carries grids 2 and 3 (coincident with 1, so its CBUSH has no length to
     couple translation and rotation) on an RBE2 (masses m2, m3 with inertia i3; a bar 1-4 gives
-    k_ref). The one-dependent candidate of grid 3 leaves 2 rigid and hangs 3 on a CBUSH of
-    k_t / c, k_r / c (k_r = k_t i3 / m3): by hand, the only modes are sqrt(k_t / (c m3)) (x3) and
-    sqrt(k_r / (c i3)) (x3); the written deck reads back to the same K and M."""
+    k_ref). The one-dependent candidate of grid 3 at compliance c and rotation rho leaves 2 rigid
+    and hangs 3 on a CBUSH of k_t / c_t, k_r / c_r (k_r = k_t i3 / m3, c_t = c 10^(-rho / 2),
+    c_r = c 10^(rho / 2)): by hand, the only modes are sqrt(k_t / (c_t m3)) (x3) and
+    sqrt(k_r / (c_r i3)) (x3); the written deck reads back to the same K and M."""
     m2, m3, i3, c = 5.0, 2.0, 0.01, 300.0
+    c_t, c_r = c * 10.0 ** (-rho / 2), c * 10.0 ** (rho / 2)
     deck = _deck(tmp_path, "hinge.bdf", [
         ("GRID", 1, None, 0.0, 0.0, 0.0, None, 123456), ("GRID", 2, None, 0.3, 0.0, 0.0),
         ("GRID", 3, None, 0.0, 0.0, 0.0), ("GRID", 4, None, 0.0, 1.0, 0.0, None, 123456),
@@ -377,13 +380,14 @@ def test_one_dependent_grid_on_its_spring(tmp_path):
     kt, kr = cand.get("k_translation"), cand.get("k_rotation")
     ei = 7.0e10 * 0.5 * (2e-7 + 4e-7)
     assert (kt, kr) == pytest.approx((12 * ei, 12 * ei * i3 / m3), rel=1e-12)   # L = 1
-    changed = apply_effect(model, cand, [c])
+    changed = apply_effect(model, cand, [c, rho])
     assert [r.dependent for r in changed.rigid] == [((2, "123456"),)]
     f = np.sort(compute_modes(changed, 6)["frequency"].values)
-    expected = np.sort([np.sqrt(kt / (c * m3)) / (2 * np.pi)] * 3 +
-                       [np.sqrt(kr / (c * i3)) / (2 * np.pi)] * 3)
+    expected = np.sort([np.sqrt(kt / (c_t * m3)) / (2 * np.pi)] * 3 +
+                       [np.sqrt(kr / (c_r * i3)) / (2 * np.pi)] * 3)
     np.testing.assert_allclose(f, expected, rtol=1e-8)
-    back = read_model(write_effect_deck(deck, tmp_path / "hinge_out.bdf", model, [(cand, [c])]))
+    back = read_model(write_effect_deck(deck, tmp_path / "hinge_out.bdf", model,
+                                        [(cand, [c, rho])]))
     for got, want in zip(assemble_g(back), assemble_g(changed)):
         assert abs(got - want).max() <= 1e-12 * abs(want).max()
     assert [r.dependent for r in back.rigid] == [((2, "123456"),)]
@@ -411,14 +415,15 @@ def test_whole_rbe2_hangs_on_one_spring(tmp_path):
     ei = 7.0e10 * 0.5 * (2e-7 + 4e-7)
     pitch = m2 * a ** 2 + m3 * b ** 2 + i
     assert (kt, kr) == pytest.approx((12 * ei, 12 * ei * pitch / (m2 + m3)), rel=1e-12)
-    changed = apply_effect(model, cand, [c])
+    changed = apply_effect(model, cand, [c, 0.0])
     assert changed.grids.ids.tolist() == [1, 2, 3, 4, 5]
     assert changed.rigid[0].independent == ((5, "123456"),)
     f = np.sort(compute_modes(changed, 6)["frequency"].values)
     expected = np.sort(np.sqrt(np.array([kt / m2 / (1 + m3 / m2)] * 3 + [kr / i]
                                         + [kr / pitch] * 2) / c) / (2 * np.pi))
     np.testing.assert_allclose(f, expected, rtol=1e-8)
-    back = read_model(write_effect_deck(deck, tmp_path / "store_out.bdf", model, [(cand, [c])]))
+    back = read_model(write_effect_deck(deck, tmp_path / "store_out.bdf", model,
+                                        [(cand, [c, 0.0])]))
     for got, want in zip(assemble_g(back), assemble_g(changed)):
         assert abs(got - want).max() <= 1e-12 * abs(want).max()
 
@@ -608,7 +613,7 @@ def test_effect_cards_against_mystran(x56, x56_candidates, tmp_path):
     18 rejects grounded springs, so boundary_stiffness is left out.)"""
     from pyNastran.op2.op2 import read_op2
 
-    picks = [("lumped_mass", "grid 5021", [0.03]), ("joint_flexibility", "RBE2 7501", [4.0]),
+    picks = [("lumped_mass", "grid 5021", [0.03]), ("joint_flexibility", "RBE2 7501", [4.0, 0.6]),
              ("member_taper", "PID 101 (CBAR 1003", [0.1, 0.5]),
              ("member_curvature", "PID 132 (CBAR 5002, grids 5001-5011) bow +y -z", [0.05, -0.05])]
     model, texts = x56, []

@@ -64,7 +64,9 @@ def test_a_pair_keeps_the_model_symmetric_and_one_side_does_not(x56, x56_pairs, 
                 c.kind == kind and kind.startswith("member") and label in c.label)
     values = np.array(pair.reference) * 2.0
     both, whole = _reflection_cosines(apply_effect(x56, pair, values))
-    assert whole and both.min() > 1.0 - 1e-8
+    # a hung joint adds a grid coincident with its independent grid: coincident grids have no
+    # certain image, so the cosines are over the other grids
+    assert (whole or kind == "joint_flexibility") and both.min() > 1.0 - 1e-8
     one, _ = _reflection_cosines(apply_effect(x56, sites(pair)[0], values))
     assert one.min() < 1.0 - 1e-6      # over the grids both share (measured 0.9994 or less)
     assert set(pair.location.grids) == set(sites(pair)[0].location.grids) | set(

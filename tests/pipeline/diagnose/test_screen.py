@@ -111,7 +111,7 @@ def test_reduced_joint_modes_match_exact_reanalysis(frame_reference):
         basis = reduce_joint(model, cand, ref.sensor_index, ref.nmodes)
         assert basis is not None, cand.label
         for size in (1.0, 100.0, 1.0e5):
-            exact = compute_modes(apply_effect(model, cand, [size]), ref.nmodes)
+            exact = compute_modes(apply_effect(model, cand, [size, 0.0]), ref.nmodes)
             reduced, shapes = basis.modes(size)
             f_e, f_r = exact["frequency"].values[:26], reduced["frequency"].values[:26]
             assert list(reduced["rigid_motion"].values[:6] != "") == [True] * 6
@@ -130,7 +130,7 @@ def test_joint_ladder_on_basis_picks_the_exact_ladders_size(frame_reference, mon
     the softened joint fits best."""
     model, _, ref0 = frame_reference
     joints = [c for c in candidates(model, ("joint_flexibility",)) if c.get("dependent") is None][:3]
-    truth = apply_effect(model, joints[0], [300.0])
+    truth = apply_effect(model, joints[0], [300.0, 0.0])
     _, ref = _perfect_reference(truth, model, ref0.nmodes)
     problem = Problem.build([ref], [model], 0.03)
     theta = np.zeros(len(problem.names))
@@ -201,13 +201,13 @@ def test_hangs_nothing_joint_changes_no_mode():
     modes0 = compute_modes(model, 30)
     dof = np.isin(modes0["grid"].values, [3109, 3209])
     for size in (1.0, 1.0e3, 1.0e5):
-        soft = compute_modes(apply_effect(model, joints[7009], [size]), 30)
+        soft = compute_modes(apply_effect(model, joints[7009], [size, 0.0]), 30)
         assert soft["frequency"].values[6:] == pytest.approx(modes0["frequency"].values[6:],
                                                              rel=1e-9)
         s0 = modes0["shape"].values[6:][:, dof]
         s1 = soft["shape"].values[6:][:, np.isin(soft["grid"].values, [3109, 3209])]
         assert np.abs(np.abs(s1) - np.abs(s0)).max() <= 1e-6 * np.abs(s0).max()
-    engine = compute_modes(apply_effect(model, joints[7501], [100.0]), 30)
+    engine = compute_modes(apply_effect(model, joints[7501], [100.0, 0.0]), 30)
     assert np.abs(engine["frequency"].values[6:] / modes0["frequency"].values[6:] - 1).max() > 1e-3
 
 

@@ -6,17 +6,20 @@ from __future__ import annotations
 import json
 from dataclasses import replace
 from math import log
+from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
 from pipeline.case import read_case
-from pipeline.diagnose.effects import Candidate, Location
+from pipeline.diagnose.effects import Candidate, Location, apply_effect, candidates
 from pipeline.diagnose import DiagnoseSettings, diagnose, preflight
 from pipeline.diagnose.inputs import configurations_from_case, settings_from_case
 from pipeline.diagnose.verdict import decide
-from pipeline.diagnose.workflow import _chi2_split, _round_record, _table
+from pipeline.diagnose.mirror import sites
+from pipeline.diagnose.workflow import _chi2_split, _round_record, _table, unnamed
+from structures.bdf import read_model
 from structures.common.errors import InputError
 from structures.common.files import read_dataset, write_dataset
 from tests.pipeline.diagnose.truth import make_case
@@ -307,3 +310,25 @@ def test_a_pair_is_named_only_when_it_beats_its_side_alone_by_the_margin(monkeyp
     assert refitted == [side]                     # the better-screened side, refitted once
     assert [f.candidate for f in out] == ([pair, other, side] if kept else [other, side])
     assert dropped is (None if kept else pair)
+
+
+def test_a_named_joint_is_not_offered_again():
+    """Hung at its independent grid, engine mount RBE2 7501 stays rigid on a new grid: the next
+    round's library holds a joint of 7501 at that grid, which :func:`unnamed` leaves out with
+    every other joint of 7501 (a second spring in series would refit the same joint); its
+    mirror image 7601 and the other kinds at the same grids stay."""
+    x56 = read_model(Path(__file__).parents[3] / "data" / "x56_like" / "x56_efew.bdf")
+    joint = next(c for c in candidates(x56, ("joint_flexibility",))
+                 if c.label == "RBE2 7501 (5011-5021)")
+    named = [(joint, np.array([30.0, -0.2]))]
+    hung = apply_effect(x56, joint, named[0][1])
+    (moved,) = [r for r in hung.rigid if r.eid == 7501]
+    assert moved.independent[0][0] not in x56.grids.ids
+    again = candidates(hung, ("joint_flexibility", "lumped_mass"))
+    assert any(c.location.elements == (7501,) and moved.independent[0][0] in c.location.grids
+               for c in again)
+    kept = unnamed(again, named)
+    assert not any(7501 in s.location.elements for c in kept for s in sites(c)
+                   if s.kind == "joint_flexibility")
+    assert any(c.location.elements == (7601,) for c in kept)
+    assert any(c.kind == "lumped_mass" and c.location.grids == (5021,) for c in kept)
