@@ -4,11 +4,16 @@ Each candidate is one kind of effect at one location with a few parameters, each
 0 means "no effect" (all-zero values give a model with the same K and M) and relative to a stated
 scale of the model (so that bounds do not depend on units):
 
-``lumped_mass`` at a grid, parameter ``mass``
-    A CONM2 (no offset, no inertia) of ``mass`` times the model's total mass (deck mass units,
-    before PARAM WTMASS); bounds [0, 0.10]. One candidate per grid that carries structure
-    (referenced by an element, a rigid element or a CONM2) and whose translations are not all
-    constrained.
+``lumped_mass`` at a grid, parameters ``mass`` and ``inertia``
+    A CONM2 (no offset) of m = ``mass`` times the model's total mass (deck mass units, before
+    PARAM WTMASS) with the moment of inertia m ``inertia`` L^2 about each basic axis, L the
+    model's size (the largest side of its grids' bounding box): ``inertia`` = (r / L)^2, r the
+    radius of gyration, so that a mass spread around the grid (a cable bundle, an equipment
+    rack) carries its rotary inertia (linear in the inertia, so that the refit's gradient does
+    not vanish at a point mass, as it would in r). Bounds mass [0, 0.10], inertia [0, 0.01]
+    (r up to L / 10). One candidate per grid that carries structure (referenced by an element,
+    a rigid element or a CONM2) and whose translations are not all constrained. The screening
+    samples the mass at inertia 0 (a point mass) and the refit frees the inertia.
 ``joint_flexibility`` of a rigid element, parameters ``compliance`` and ``rotation``
     An RBE2, or an RBAR with all six independent components on one grid, stays rigid but is
     moved onto a new grid (id: the largest + 1) at its independent grid, which hangs on a
@@ -84,8 +89,8 @@ scale of the model (so that bounds do not depend on units):
     One candidate per grid of ``lumped_mass`` and unconstrained direction.
 
 The screening step of each parameter (:attr:`Candidate.reference`, :data:`PARAMETER_RANGES`) is
-a plausible, clearly visible size: mass 0.02, compliance 100, rotation 0.5, scale 0.1, taper 0.3,
-bow 0.05, k 0.1.
+a plausible, clearly visible size: mass 0.02, inertia 4e-4 (r = L / 50), compliance 100,
+rotation 0.5, scale 0.1, taper 0.3, bow 0.05, k 0.1.
 New elements take ids from the model's largest element, CONM2 or rigid-element id + 1; new
 properties from its largest PID + 1.
 """
@@ -113,7 +118,7 @@ DIRECTIONS = ("x", "y", "z")
 
 #: (lower, upper, reference) of each parameter, by kind and parameter name.
 PARAMETER_RANGES = {
-    "lumped_mass": {"mass": (0.0, 0.10, 0.02)},
+    "lumped_mass": {"mass": (0.0, 0.10, 0.02), "inertia": (0.0, 0.01, 4.0e-4)},
     "joint_flexibility": {"compliance": (0.0, 1.0e5, 100.0), "rotation": (-2.0, 2.0, 0.5)},
     "member_taper": {"scale": (-0.3, 0.3, 0.1), "taper": (-0.8, 0.8, 0.3)},
     "member_curvature": {"bow_1": (-0.15, 0.15, 0.05), "bow_2": (-0.15, 0.15, 0.05)},
@@ -260,8 +265,10 @@ def candidates(model: FEModel, kinds=KINDS, *, frequency: float | None = None
     members = find_members(model) if {"member_taper", "member_curvature"} & set(kinds) else ()
     for kind in kinds:
         if kind == "lumped_mass":
-            detail = (("total_mass", props.weight),)
-            out += [_candidate(kind, Location(grids=(g,)), f"grid {g}", ("mass",), detail)
+            detail = (("total_mass", props.weight),
+                      ("length", float(np.ptp(model.grids.xyz, axis=0).max())))
+            out += [_candidate(kind, Location(grids=(g,)), f"grid {g}",
+                               tuple(PARAMETER_RANGES[kind]), detail)
                     for g in free_grids.tolist()]
         elif kind == "boundary_stiffness":
             f1 = _lowest_elastic_frequency(model) if frequency is None else float(frequency)
@@ -339,11 +346,12 @@ def _lumped_mass(model, candidate, x):
     if total is None:
         total = mass_properties(model).weight
     cm = model.masses
+    inertia = x[0] * total * x[1] * candidate.get("length") ** 2 * np.eye(3)     # m (r / L)^2 L^2
     masses = replace(cm, eids=np.append(cm.eids, next_eid(model)),
                      grid=np.append(cm.grid, candidate.location.grids[0]),
                      mass=np.append(cm.mass, x[0] * total),
                      offset=np.concatenate([cm.offset, np.zeros((1, 3))]),
-                     inertia=np.concatenate([cm.inertia, np.zeros((1, 3, 3))]))
+                     inertia=np.concatenate([cm.inertia, inertia[None]]))
     return replace(model, masses=masses)
 
 

@@ -72,7 +72,7 @@ def test_lumped_mass_on_one_and_two_dof_spring_mass(tmp_path):
         ("GRID", 1, None, 0.0, 0.0, 0.0, None, 12456), ("CELAS2", 11, k1, 1, 3),
         ("CONM2", 21, 1, None, m1)]))
     cand = _pick(candidates(one, ["lumped_mass"]), "lumped_mass", "grid 1")
-    f = _elastic(apply_effect(one, cand, [0.05]), 1)
+    f = _elastic(apply_effect(one, cand, [0.05, 0.0]), 1)
     assert f[0] == pytest.approx(np.sqrt(k1 / (1.05 * m1)) / (2 * np.pi), rel=1e-10)
 
     two = read_model(_deck(tmp_path, "two.bdf", [
@@ -82,9 +82,26 @@ def test_lumped_mass_on_one_and_two_dof_spring_mass(tmp_path):
         ("CONM2", 21, 1, None, m1), ("CONM2", 22, 2, None, m2)]))
     cand = _pick(candidates(two, ["lumped_mass"]), "lumped_mass", "grid 2")
     p = 0.08
-    f = _elastic(apply_effect(two, cand, [p]), 2)
+    f = _elastic(apply_effect(two, cand, [p, 0.0]), 2)
     expected = _quadratic_frequencies([[k1 + k2, -k2], [-k2, k2]], [m1, m2 + p * (m1 + m2)])
     np.testing.assert_allclose(f, expected, rtol=1e-10)
+
+
+def test_lumped_mass_inertia_on_a_torsion_spring(tmp_path):
+    """Grid 1 moves along x on a spring k_x and turns about x on a torsion spring k (CELAS2 on
+    components 1 and 4) and carries a CONM2 of mass m and I11 = i; a clamped grid 2 at distance
+    2 makes the model's size L = 2. A mass p m with inertia q adds p m q L^2 about each axis: by
+    hand the modes are sqrt(k_x / ((1 + p) m)) / 2 pi and sqrt(k / (i + p m q L^2)) / 2 pi."""
+    k_x, k, m, i, p, q = 5.0e3, 3.0e3, 4.0, 0.5, 0.05, 4e-3
+    model = read_model(_deck(tmp_path, "torsion.bdf", [
+        ("GRID", 1, None, 0.0, 0.0, 0.0, None, 2356),
+        ("GRID", 2, None, 2.0, 0.0, 0.0, None, 123456), ("CELAS2", 11, k, 1, 4),
+        ("CELAS2", 12, k_x, 1, 1),
+        ("CONM2", 21, 1, None, m, 0.0, 0.0, 0.0, None, i, 0.0, i, 0.0, 0.0, i)]))
+    cand = _pick(candidates(model, ["lumped_mass"]), "lumped_mass", "grid 1")
+    f = compute_modes(apply_effect(model, cand, [p, q]), 2)["frequency"].values
+    expected = [np.sqrt(k_x / ((1 + p) * m)), np.sqrt(k / (i + p * m * q * 2.0 ** 2))]
+    np.testing.assert_allclose(np.sort(f), np.sort(expected) / (2 * np.pi), rtol=1e-10)
 
 
 def test_grounded_spring_on_free_free_two_masses(tmp_path):
@@ -109,7 +126,7 @@ def test_total_mass_and_cg_follow_the_added_mass(x56, x56_candidates):
     before = mass_properties(x56)
     cand = _pick(x56_candidates, "lumped_mass", "grid 3005")
     p = 0.037
-    after = mass_properties(apply_effect(x56, cand, [p]))
+    after = mass_properties(apply_effect(x56, cand, [p, 0.0]))
     assert after.mass - before.mass == pytest.approx(p * before.mass, rel=1e-12)
     x_grid = x56.grids.xyz[x56.grids.index([3005])[0]]
     np.testing.assert_allclose(after.cg, (before.cg + p * x_grid) / (1 + p), rtol=1e-12)
@@ -613,7 +630,7 @@ def test_effect_cards_against_mystran(x56, x56_candidates, tmp_path):
     18 rejects grounded springs, so boundary_stiffness is left out.)"""
     from pyNastran.op2.op2 import read_op2
 
-    picks = [("lumped_mass", "grid 5021", [0.03]), ("joint_flexibility", "RBE2 7501", [4.0, 0.6]),
+    picks = [("lumped_mass", "grid 5021", [0.03, 2e-4]), ("joint_flexibility", "RBE2 7501", [4.0, 0.6]),
              ("member_taper", "PID 101 (CBAR 1003", [0.1, 0.5]),
              ("member_curvature", "PID 132 (CBAR 5002, grids 5001-5011) bow +y -z", [0.05, -0.05])]
     model, texts = x56, []

@@ -19,6 +19,12 @@ from tests.pipeline.diagnose.test_screen import _perfect_reference
 from tests.pipeline.diagnose.truth import frame
 
 
+def _at(cand, size):
+    """A candidate's parameters with the first at ``size`` and the others at 0 (a mass's
+    inertia: a point mass)."""
+    return np.r_[size, np.zeros(len(cand.parameters) - 1)]
+
+
 @pytest.fixture(scope="module")
 def frame_model(tmp_path_factory):
     model = read_model(frame.write_frame(tmp_path_factory.mktemp("frame")))
@@ -41,7 +47,7 @@ def test_reduced_spring_modes_match_exact_reanalysis(frame_model):
     for cand in picked:
         reduced = reduce_spring(basis, cand, 1e-3)
         for size in (1e-3, 1e-2, 0.1, 1.0):
-            exact = compute_modes(apply_effect(model, cand, [size]), ref.nmodes)
+            exact = compute_modes(apply_effect(model, cand, _at(cand, size)), ref.nmodes)
             modes, shapes = reduced.modes(size)
             names = exact["rigid_motion"].values
             assert list(modes["rigid_motion"].values) == list(names), (cand.label, size)
@@ -74,7 +80,7 @@ def test_reduced_mass_modes_match_exact_reanalysis(frame_model, label):
     reduced = reduce_mass(basis, cand)
     moved = 0.0
     for size in (1e-3, 1e-2, 0.05, 0.1):
-        changed = apply_effect(model, cand, [size])
+        changed = apply_effect(model, cand, _at(cand, size))
         exact = compute_modes(changed, ref.nmodes)
         modes, shapes = reduced.modes(size)
         assert list(modes["rigid_motion"].values[:6]) == list(exact["rigid_motion"].values[:6])
@@ -106,7 +112,7 @@ def test_reduced_mirror_pair_of_springs_matches_exact_reanalysis(frame_model, la
     cand = next(c for c in candidates(model, ("boundary_stiffness",)) if c.label == label)
     reduced = reduce_spring(basis, cand, 1e-3)
     for size in (1e-3, 0.1, 1.0):
-        exact = compute_modes(apply_effect(model, cand, [size]), ref.nmodes)
+        exact = compute_modes(apply_effect(model, cand, _at(cand, size)), ref.nmodes)
         modes, shapes = reduced.modes(size)
         names = exact["rigid_motion"].values
         assert list(modes["rigid_motion"].values) == list(names), size
@@ -144,14 +150,14 @@ def _made_by(model, cand, size):
     """The frame against a perfect test of the frame with ``cand`` at ``size``: (problem, ref,
     theta 0, evaluations, r0, the chi^2 of the secant through the exact reanalysis at the
     candidate's reference size, fitted within its bounds)."""
-    _, ref = _perfect_reference(apply_effect(model, cand, [size]), model)
+    _, ref = _perfect_reference(apply_effect(model, cand, _at(cand, size)), model)
     problem = Problem.build([ref], [model], 0.03)
     theta = np.zeros(len(problem.names))
     evs = problem.evaluate(theta)
     r0 = problem.residual(theta, evs)
     h = cand.reference[0]
-    secant = ((_exact(problem, ref, model, cand, [h]) - r0) / h)[:, None]
-    fit = lsq_linear(secant, -r0, bounds=(cand.lower, cand.upper))
+    secant = ((_exact(problem, ref, model, cand, _at(cand, h)) - r0) / h)[:, None]
+    fit = lsq_linear(secant, -r0, bounds=(cand.lower[:1], cand.upper[:1]))
     return problem, ref, theta, evs, r0, chi_square(r0 + secant @ fit.x)
 
 

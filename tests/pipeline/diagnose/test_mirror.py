@@ -98,7 +98,7 @@ def test_a_taper_runs_the_mirror_way_on_the_image(x56, x56_pairs):
 
 def test_a_mass_pair_adds_twice_the_mass_and_keeps_the_cg_on_the_plane(x56, x56_pairs):
     pair = next(c for c in x56_pairs if c.kind == "lumped_mass" and c.label.startswith("grid 3009"))
-    before, after = mass_properties(x56), mass_properties(apply_effect(x56, pair, [0.01]))
+    before, after = mass_properties(x56), mass_properties(apply_effect(x56, pair, [0.01, 0.0]))
     assert after.weight == pytest.approx(before.weight + 2 * 0.01 * pair.get("total_mass"), rel=1e-12)
     assert abs(after.cg[1] - before.cg[1]) <= 1e-9 * abs(after.cg).max()
 

@@ -319,8 +319,8 @@ def test_refit_starts_at_the_best_exactly_analysed_fraction_of_the_screened_size
     problem = Problem.build([ref], [model], 0.03)
     theta0 = np.zeros(len(problem.names))
     r0 = problem.residual(theta0, problem.evaluate(theta0))
-    start = np.array([0.04])
-    row = Screened(cand, start, 0.0, 0.0, np.zeros((r0.size, 1)))
+    start = np.array([0.04, 0.0])
+    row = Screened(cand, start, 0.0, 0.0, np.zeros((r0.size, 2)))
 
     class Stopped:
         def __init__(self, x):
