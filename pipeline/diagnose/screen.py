@@ -11,10 +11,11 @@ every configuration (:mod:`pipeline.diagnose.evidence`). The routes:
 
 - *ladder* (``joint_flexibility``, whose compliance changes the constraints and acts far from
   linearly: a joint's local mode falls as 1 / sqrt(compliance) and sweeps through the measured
-  modes; sampled at rotation 0, the refit frees the rotation): reanalysis at every size of :data:`LADDER` (quarter decades of the parameter's range)
-  and at the eighth decades either side of the best (:data:`LADDER_REFINE`); the best size x*
-  and its exact chi^2 are the candidate's screening result, the secant (r(x*) - r0) / x* its
-  signature. The rungs are analysed on one Craig-Bampton basis per joint and configuration
+  modes; sampled at rotation 0, the refit frees the rotation): reanalysis at every size of
+  :data:`LADDER` (quarter decades of the parameter's range) and at the eighth decades either
+  side of the best (:data:`LADDER_REFINE`); the best size x* and its exact chi^2 are the
+  candidate's screening result, the secant (r(x*) - r0) / x* its signature. The rungs are
+  analysed on one Craig-Bampton basis per joint and configuration
   (:mod:`pipeline.diagnose.ladder`, models of up to :data:`structures.modal.DENSE_LIMIT` free
   DOFs) and the best size x* again exactly (the exact ladder when that fails). The one-sided
   variants of a joint (one dependent grid on its spring) are screened only for the
@@ -65,7 +66,7 @@ BIC = chi^2 + p ln n (Schwarz 1978).
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy.optimize import least_squares
@@ -79,6 +80,7 @@ from pipeline.diagnose.ladder import reduce_joint
 from pipeline.diagnose.mirror import sites
 from pipeline.diagnose.quadratic import (coefficients, line_searches, monomials, quadratic_fit,
                                          sample_points, secant)
+from pipeline.diagnose.verdict import on_bound
 from structures.common.errors import InputError, SolverError
 
 #: Kinds screened on the ladder of sizes by reanalysis (they change the constraint equations).
@@ -115,6 +117,10 @@ PENALTY = 3.0
 #: moves one mode through another changes the pairing) the exact chi^2 jumps; the refit starts at
 #: the best of these (a backtracking line search, Nocedal & Wright 2006 sec. 3.1).
 REFIT_START = (1.0, 0.5, 0.25)
+#: Fractions of the unbounded Gauss-Newton step analysed by :func:`bound_release`.
+RELEASE_STEPS = (1.0, 0.5, 0.25)
+#: Share of a parameter's range by which :func:`bound_release` moves its non-zero bounds out.
+RELEASE_WIDENING = 0.5
 
 
 @dataclass(frozen=True)
@@ -292,10 +298,11 @@ def _first(cand, size: float) -> np.ndarray:
 def _ladder(cand, r0, residual, approximate=None, sizes=None) -> tuple:
     """(Candidate, secant S, (x*, chi2*)) of a candidate sampled on :data:`LADDER` along its
     first parameter, the others at 0 (sizes whose model cannot be analysed are passed over).
-    ``approximate`` (size -> residual, :mod:`pipeline.diagnose.ladder`) samples the rungs; x* is then analysed again exactly, and the
-    exact ladder runs instead when that fails. ``sizes`` (a grounded spring's rungs,
-    :func:`pipeline.diagnose.grounded.ladder_sizes`) replaces the ladder and its refinement, and
-    x* keeps the ``approximate`` residual (the Ritz basis's accuracy, grounded.py)."""
+    ``approximate`` (size -> residual, :mod:`pipeline.diagnose.ladder`) samples the rungs; x* is
+    then analysed again exactly, and the exact ladder runs instead when that fails. ``sizes``
+    (a grounded spring's rungs, :func:`pipeline.diagnose.grounded.ladder_sizes`) replaces the
+    ladder and its refinement, and x* keeps the ``approximate`` residual (the Ritz basis's
+    accuracy, grounded.py)."""
     best, failure = None, None
 
     def rung(size):
@@ -441,3 +448,78 @@ def refit(problem: Problem, theta0, effects, row: Screened | None, *, n_data: in
     chi2 = chi_square(problem.residual(theta, evs))
     p = npar + len(theta0)
     return Refitted(cand, (z * scale)[:npar], theta, chi2, bic(chi2, p, n_data), p, evs)
+
+
+def bound_release(problem: Problem, effects, fit: Refitted, *, jacobian_theta) -> tuple:
+    """Whether the data want a refitted candidate's parameters that sit on a bound beyond it.
+
+    A parameter on its bound (:func:`pipeline.diagnose.verdict.at_bound`) is the model-form
+    signal only when the bound holds it there. A bounded refit of a few iterations
+    (:data:`REFIT_NFEV`) can also stop on a bound the data do not press against (a flat valley).
+    The test: the Gauss-Newton step without bounds from the fit, delta = -(J^T J)^+ J^T r over
+    the effect's and the nominal parameters (the effect's columns by forward differences toward
+    the inside of the bounds, the nominal ones ``jacobian_theta`` as in :func:`refit`), must move
+    a parameter on a bound outward, and the exact chi^2 along it must fall below that along the
+    same step with the parameters on their bounds held (so that what the refit's few iterations
+    left to the nominal parameters or to a free effect parameter is not counted as the bound's
+    gain): each step is analysed again at the fractions :data:`RELEASE_STEPS`, with every
+    non-zero bound moved outward by :data:`RELEASE_WIDENING` of its parameter's range (a zero
+    bound is "no effect" and stays), and the gain is the lowest chi^2 with the bounds held less
+    the lowest released (the exact analyses, not the linearised gain, which overstates it where
+    the effect acts far from linearly, as a taper's I ~ s^4).
+
+    Parameters
+    ----------
+    problem : Problem
+    effects : sequence of (Candidate, values) already in the model.
+    fit : Refitted, with a candidate.
+    jacobian_theta : (n_data, n_theta) d r / d theta.
+
+    Returns
+    -------
+    outward : bool, the step moves a parameter on its bound outward.
+    gain : float, the exact chi^2 the released step gains over the held one (>= 0; 0 when it
+        is not outward).
+    """
+    cand, x = fit.candidate, np.asarray(fit.values, float)
+    r = problem.residual(fit.theta, fit.evaluations)
+    size = np.maximum(np.abs(np.asarray(cand.reference, float)), np.abs(x))
+    cols = []
+    for k in range(x.size):
+        h = FD_STEP * size[k]
+        h = -h if x[k] + h > cand.upper[k] else h
+        step = x.copy()
+        step[k] += h
+        evs = problem.evaluate(fit.theta, tuple(effects) + ((cand, step),))
+        cols.append((problem.residual(fit.theta, evs) - r) / h)
+    jac = np.column_stack(cols + [np.asarray(jacobian_theta, float)])
+    delta = np.linalg.lstsq(jac, -r, rcond=None)[0]
+    held = np.zeros(jac.shape[1], bool)
+    outward = False
+    for k in range(x.size):
+        if on_bound(x[k], cand.lower[k], cand.upper[k]):
+            held[k] = True
+            up = abs(x[k] - cand.upper[k]) <= abs(x[k] - cand.lower[k])
+            outward |= bool(delta[k] > 0 if up else delta[k] < 0)
+    if not outward:
+        return False, 0.0
+    kept = np.zeros_like(delta)                             # the same step with the bounds held
+    kept[~held] = np.linalg.lstsq(jac[:, ~held], -r, rcond=None)[0]
+    lo, hi = np.asarray(cand.lower, float), np.asarray(cand.upper, float)
+    span = RELEASE_WIDENING * (hi - lo)
+    wide = replace(cand, lower=tuple(np.where(lo != 0.0, lo - span, 0.0)),
+                   upper=tuple(np.where(hi != 0.0, hi + span, 0.0)))
+
+    def lowest(step) -> float:
+        best = chi_square(r)
+        for t in RELEASE_STEPS:
+            x_t = np.clip(x + t * step[:x.size], wide.lower, wide.upper)
+            theta_t = np.clip(fit.theta + t * step[x.size:], -problem.bounds, problem.bounds)
+            try:
+                evs = problem.evaluate(theta_t, tuple(effects) + ((wide, x_t),))
+            except (SolverError, InputError):
+                continue
+            best = min(best, chi_square(problem.residual(theta_t, evs)))
+        return best
+
+    return True, float(max(0.0, lowest(kept) - lowest(delta)))

@@ -18,8 +18,10 @@
 
 The verdict of each round is :func:`pipeline.diagnose.verdict.decide`; an effect it names must
 also fit inside its bounds (a parameter on a non-zero bound,
-:func:`pipeline.diagnose.verdict.at_bound`, means the data want more of it than the library's
-plausible range holds: the model-form signal of DESIGN.md section 5.2, not a finding) and beat
+:func:`pipeline.diagnose.verdict.at_bound`, that the data press against, means the data want
+more of it than the library's plausible range holds: the model-form signal of DESIGN.md section
+5.2, not a finding; pressed: the unbounded Gauss-Newton step moves it outward and gains more
+than the margin, :func:`pipeline.diagnose.screen.bound_release`) and beat
 the best load path between two grids, an effect the library does not hold
 (:mod:`pipeline.diagnose.loadpath`), else the round is ``unexplained``.
 The overall verdict is ``effect`` when at least one effect was named, else the first round's.
@@ -45,7 +47,7 @@ from pipeline.diagnose.loadpath import best_load_path, outscores
 from pipeline.diagnose.mirror import sites
 from pipeline.diagnose.predictive import held_out_evidence, held_out_modes, kept_modes
 from pipeline.diagnose.result import CandidateScore, DiagnoseResult, EffectRecord
-from pipeline.diagnose.screen import pick_for_refit, refit, screen, signatures
+from pipeline.diagnose.screen import bound_release, pick_for_refit, refit, screen, signatures
 from pipeline.diagnose.verdict import (SCATTER_SIGMAS, at_bound, decide, round_scores,
                                         within_scatter)
 from structures.common.errors import InputError
@@ -421,12 +423,24 @@ def diagnose(configurations, settings: DiagnoseSettings = DiagnoseSettings(), *,
             if verdict == "effect":
                 cand = fits[best].candidate
                 bound = at_bound(cand, fits[best].values)
-                if bound:
+                outward, gain = (bound_release(problem, effects, fits[best],
+                                               jacobian_theta=cal.jacobian)
+                                 if bound else (False, 0.0))
+                if bound and outward and gain / c > settings.margin:
                     verdict = "unexplained"
                     notes.append(f"round {k + 1}: {cand.kind} {cand.label} fits best but "
-                                 f"{', '.join(bound)} sits on its bound: the data want more "
-                                 "than the library's range of that effect; not named (a "
-                                 "different or larger effect).")
+                                 f"{', '.join(bound)} sits on its bound and the data want "
+                                 f"more (released, chi^2 falls by {gain:.1f} along the "
+                                 f"unbounded Gauss-Newton step, {gain / c:.1f} after the "
+                                 f"dispersion {c:.2f}): more than the library's range of that "
+                                 "effect; not named (a different or larger effect).")
+                elif bound:
+                    notes.append(f"round {k + 1}: {cand.kind} {cand.label}: "
+                                 f"{', '.join(bound)} sits on its bound, but the data do not "
+                                 "press against it (released, the unbounded Gauss-Newton step "
+                                 + (f"gains {gain:.1f} in chi^2, {gain / c:.1f} after the "
+                                    f"dispersion, below the margin {settings.margin:g})."
+                                    if outward else "moves it inward)."))
             if verdict == "effect":
                 verdict, path = _load_path_check(problem, theta, effects, none_evs, r0, scored,
                                                  best, c, n_data, len(cands),

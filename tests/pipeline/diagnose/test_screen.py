@@ -336,3 +336,31 @@ def test_refit_starts_at_the_best_exactly_analysed_fraction_of_the_screened_size
     chi2 = [np.sum(problem.residual(theta0, problem.evaluate(theta0, ((cand, t * start),))) ** 2)
             for t in screen.REFIT_START]
     assert np.argmin(chi2) == np.argmin(screen.REFIT_START)
+
+
+@pytest.mark.parametrize("truth_mass, pressed", [(0.14, True), (0.10, False)])
+def test_bound_release_tells_a_pressed_bound_from_a_touched_one(frame_reference, truth_mass,
+                                                                pressed):
+    """A perfect test made by the frame with a point mass at the tail grid 4004: 14 % of the
+    model's mass, beyond the mass's bound 0.10, or 10 %, on it. Refitted from the bound, the mass
+    sits on it both times; for 14 % the unbounded Gauss-Newton step from there moves it outward
+    and the exact chi^2 along it falls by more than half of the fit's (measured: 2760 of 3524,
+    the nominal model's 51850), for 10 % it gains nothing (measured 3e-16; limit 1e-3 of the
+    nominal chi^2): the data press against the bound only when the truth lies beyond it."""
+    model, _, ref0 = frame_reference
+    cand = next(c for c in candidates(model, ("lumped_mass",)) if c.label == "grid 4004")
+    wide = replace(cand, upper=(0.2, cand.upper[1]))                     # to make the truth
+    _, ref = _perfect_reference(apply_effect(model, wide, [truth_mass, 0.0]), model,
+                                ref0.nmodes)
+    problem = Problem.build([ref], [model], 0.03)
+    theta0 = np.zeros(len(problem.names))
+    r0 = problem.residual(theta0, problem.evaluate(theta0))
+    row = Screened(cand, np.array([0.10, 0.0]), 0.0, 0.0, np.zeros((r0.size, 2)))
+    jac = np.zeros((r0.size, len(theta0)))
+    fit = screen.refit(problem, theta0, (), row, n_data=r0.size, jacobian_theta=jac)
+    assert fit.values[0] == pytest.approx(0.10, abs=1e-3)
+    outward, gain = screen.bound_release(problem, (), fit, jacobian_theta=jac)
+    if pressed:
+        assert outward and gain > 0.5 * fit.chi2
+    else:
+        assert gain < 1e-3 * np.sum(r0 ** 2)
