@@ -427,13 +427,7 @@ def refit(problem: Problem, theta0, effects, row: Screened | None, *, n_data: in
         return cache[key]
 
     def jac(z):
-        r = fun(z)
-        cols = []
-        for k in range(npar):
-            h = FD_STEP if z[k] + FD_STEP <= hi[k] else -FD_STEP
-            step = z.copy()
-            step[k] += h
-            cols.append((fun(step) - r) / h)
+        cols = _forward_columns(fun, z, np.full(npar, FD_STEP), hi)
         return np.column_stack(cols + [j_theta]) if cols else j_theta
 
     z = z0
@@ -448,6 +442,19 @@ def refit(problem: Problem, theta0, effects, row: Screened | None, *, n_data: in
     chi2 = chi_square(problem.residual(theta, evs))
     p = npar + len(theta0)
     return Refitted(cand, (z * scale)[:npar], theta, chi2, bic(chi2, p, n_data), p, evs)
+
+
+def _forward_columns(fun, z, steps, upper, r=None) -> list:
+    """Forward-difference columns d fun / d z_k of the first ``len(steps)`` entries of ``z``,
+    each stepped by ``steps[k]`` toward the inside of ``upper`` (``r``: fun(z), if known)."""
+    r = fun(z) if r is None else r
+    cols = []
+    for k, h in enumerate(steps):
+        h = h if z[k] + h <= upper[k] else -h
+        step = np.array(z, float)
+        step[k] += h
+        cols.append((fun(step) - r) / h)
+    return cols
 
 
 def bound_release(problem: Problem, effects, fit: Refitted, *, jacobian_theta) -> tuple:
@@ -484,14 +491,12 @@ def bound_release(problem: Problem, effects, fit: Refitted, *, jacobian_theta) -
     cand, x = fit.candidate, np.asarray(fit.values, float)
     r = problem.residual(fit.theta, fit.evaluations)
     size = np.maximum(np.abs(np.asarray(cand.reference, float)), np.abs(x))
-    cols = []
-    for k in range(x.size):
-        h = FD_STEP * size[k]
-        h = -h if x[k] + h > cand.upper[k] else h
-        step = x.copy()
-        step[k] += h
-        evs = problem.evaluate(fit.theta, tuple(effects) + ((cand, step),))
-        cols.append((problem.residual(fit.theta, evs) - r) / h)
+
+    def residual(values):
+        evs = problem.evaluate(fit.theta, tuple(effects) + ((cand, values),))
+        return problem.residual(fit.theta, evs)
+
+    cols = _forward_columns(residual, x, FD_STEP * size, cand.upper, r)
     jac = np.column_stack(cols + [np.asarray(jacobian_theta, float)])
     delta = np.linalg.lstsq(jac, -r, rcond=None)[0]
     held = np.zeros(jac.shape[1], bool)
