@@ -71,7 +71,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 from scipy.optimize import least_squares
 
-from pipeline.diagnose.calibrate import THETA_SCALE, Problem
+from pipeline.diagnose.calibrate import THETA_SCALE, Problem, forward_columns, pairings
 from pipeline.diagnose.evidence import bic, chi_square, evaluate, evaluate_modes
 from pipeline.diagnose.grounded import (SPRING_LADDER, ladder_sizes, reduce_mass, reduce_spring,
                                         spring_basis)
@@ -373,7 +373,8 @@ def refit(problem: Problem, theta0, effects, row: Screened | None, *, n_data: in
           jacobian_theta) -> Refitted | None:
     """Bounded nonlinear least squares of a candidate's parameters and the nominal parameters.
 
-    The effect parameters' Jacobian columns are forward differences with reanalysis; the nominal
+    The effect parameters' Jacobian columns are forward differences with reanalysis, the pairing
+    of the point held (:func:`pipeline.diagnose.calibrate.forward_columns`); the nominal
     parameters' columns are ``jacobian_theta`` (n_data, n_theta), d r / d theta of the
     calibration (they change little with a small effect; this saves a reanalysis of every
     configuration per nominal parameter and iteration). ``row`` None refits the nominal
@@ -399,36 +400,43 @@ def refit(problem: Problem, theta0, effects, row: Screened | None, *, n_data: in
         extra = ((cand, x[:npar]),) if cand else ()
         return x[npar:], tuple(effects) + extra
 
-    def residual(z):
+    def residual(z, paired=None):
         theta, eff = split(z)
-        return problem.residual(theta, problem.evaluate(theta, eff))
+        evs = problem.evaluate(theta, eff, paired)
+        return problem.residual(theta, evs), pairings(evs)
 
-    r_start = None
+    start_fit = None
     for t in REFIT_START if cand else (1.0,):
         z_t = np.concatenate([z0[:npar] * t, z0[npar:]])
         try:
-            r_t = residual(z_t)
+            fit_t = residual(z_t)
         except (SolverError, InputError):
             continue
-        if r_start is None or chi_square(r_t) < chi_square(r_start):
-            z_start, r_start = z_t, r_t
-    if r_start is None:
+        if start_fit is None or chi_square(fit_t[0]) < chi_square(start_fit[0]):
+            z_start, start_fit = z_t, fit_t
+    if start_fit is None:
         return None
-    z0 = z_start
-    cache = {z0.tobytes(): r_start}
+    z0, r_start = z_start, start_fit[0]
+    cache = {z0.tobytes(): start_fit}
+
+    def attempt(z, paired=None):
+        try:
+            return residual(z, paired)
+        except (SolverError, InputError):
+            return PENALTY * r_start, None
 
     def fun(z):
         key = z.tobytes()
         if key not in cache:
-            try:
-                cache[key] = residual(z)
-            except (SolverError, InputError):
-                cache[key] = PENALTY * r_start
-        return cache[key]
+            cache[key] = attempt(z)
+        return cache[key][0]
 
     def jac(z):
-        cols = _forward_columns(fun, z, np.full(npar, FD_STEP), hi)
-        return np.column_stack(cols + [j_theta]) if cols else j_theta
+        fun(z)
+        r, paired = cache[z.tobytes()]
+        cols = ([np.zeros_like(r)] * npar if paired is None else       # a mechanism: flat
+                forward_columns(lambda y: attempt(y, paired)[0], z, np.full(npar, FD_STEP), hi, r))
+        return np.column_stack(cols + [j_theta])
 
     z = z0
     if z0.size:
@@ -442,19 +450,6 @@ def refit(problem: Problem, theta0, effects, row: Screened | None, *, n_data: in
     chi2 = chi_square(problem.residual(theta, evs))
     p = npar + len(theta0)
     return Refitted(cand, (z * scale)[:npar], theta, chi2, bic(chi2, p, n_data), p, evs)
-
-
-def _forward_columns(fun, z, steps, upper, r=None) -> list:
-    """Forward-difference columns d fun / d z_k of the first ``len(steps)`` entries of ``z``,
-    each stepped by ``steps[k]`` toward the inside of ``upper`` (``r``: fun(z), if known)."""
-    r = fun(z) if r is None else r
-    cols = []
-    for k, h in enumerate(steps):
-        h = h if z[k] + h <= upper[k] else -h
-        step = np.array(z, float)
-        step[k] += h
-        cols.append((fun(step) - r) / h)
-    return cols
 
 
 def bound_release(problem: Problem, effects, fit: Refitted, *, jacobian_theta) -> tuple:
@@ -492,11 +487,13 @@ def bound_release(problem: Problem, effects, fit: Refitted, *, jacobian_theta) -
     r = problem.residual(fit.theta, fit.evaluations)
     size = np.maximum(np.abs(np.asarray(cand.reference, float)), np.abs(x))
 
+    paired = pairings(fit.evaluations)
+
     def residual(values):
-        evs = problem.evaluate(fit.theta, tuple(effects) + ((cand, values),))
+        evs = problem.evaluate(fit.theta, tuple(effects) + ((cand, values),), paired)
         return problem.residual(fit.theta, evs)
 
-    cols = _forward_columns(residual, x, FD_STEP * size, cand.upper, r)
+    cols = forward_columns(residual, x, FD_STEP * size, cand.upper, r)
     jac = np.column_stack(cols + [np.asarray(jacobian_theta, float)])
     delta = np.linalg.lstsq(jac, -r, rcond=None)[0]
     held = np.zeros(jac.shape[1], bool)

@@ -28,9 +28,10 @@ def test_calibration_runs_test_sees_the_training_modes_only():
     v[held] *= -1.0
     assert runs_test(v) > 0.01 and runs_test(v[train]) < 1e-4
 
-    def evaluate(theta, effects=()):
+    def evaluate(theta, effects=(), paired=None):
         r = v + theta[0]
-        return [SimpleNamespace(frequency=r, vector=lambda ref, r=r: r[ref.train])]
+        return [SimpleNamespace(frequency=r, paired=np.arange(30),
+                                vector=lambda ref, r=r: r[ref.train])]
 
     ref = SimpleNamespace(train=train, name="c")
     problem = SimpleNamespace(n_theta=1, names=("E1",), refs=(ref,), evaluate=evaluate,
