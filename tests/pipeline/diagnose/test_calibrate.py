@@ -17,6 +17,26 @@ from structures.modal import compute_modes
 from tests.pipeline.chain_deck import chain_deck
 
 
+def test_calibration_jacobian_holds_the_pairing():
+    """A residual whose pairing flips under any step (a test mode tied between two analysis
+    modes: here the pairing is the parity of theta / 1e-7 and the paired mode's entry is 5
+    larger) is continuous for a held pairing, r = (theta - 0.03 + 5 p) / 0.01. The calibration's
+    Jacobian (reused by every refit) is its derivative 1 / 0.01 = 100, not the jump over the
+    step (5 / 2e-6 = 2.5e6, what differences that re-pair give)."""
+    ref = SimpleNamespace(train=np.array([True]), name="c")
+
+    def evaluate(theta, effects=(), paired=None):
+        p = int(np.floor(theta[0] / 1e-7)) % 2 if paired is None else paired[0]
+        r = np.array([(theta[0] - 0.03 + 5.0 * p) / 0.01])
+        return [SimpleNamespace(frequency=r, paired=p, vector=lambda ref, r=r: r)]
+
+    problem = SimpleNamespace(n_theta=1, names=("E1",), refs=(ref,), evaluate=evaluate,
+                              prior=np.array([np.inf]), bounds=np.array([0.1]),
+                              residual=lambda theta, evs: evs[0].vector(ref))
+    cal = calibrate(problem)
+    assert cal.jacobian[:, 0] == pytest.approx([100.0], rel=1e-9)
+
+
 def test_calibration_runs_test_sees_the_training_modes_only():
     """30 modes, every third held out. Training residuals +1 (first ten) then -1 (last ten): two
     runs in 20, p = 1.8e-5, flagged. The held-out modes carry the opposite sign of their

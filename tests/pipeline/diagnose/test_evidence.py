@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 
 from dataclasses import replace
+from types import SimpleNamespace
 
 import xarray as xr
 from scipy.optimize import linear_sum_assignment
@@ -13,7 +14,7 @@ from pipeline.diagnose.evidence import (Reference, bic, build_reference, chi_squ
                                         evaluate_modes, gof_limit, holdout_mask, pair,
                                         pair_frequency_only, pairing_cost, partner_mixing,
                                         report_pairing, residual_basis, runs_test,
-                                        shape_noise, shape_residual, unit_rms)
+                                        seen_shapes, shape_noise, shape_residual, unit_rms)
 from structures.bdf import read_model
 from structures.common.errors import InputError
 from structures.correlation import mac
@@ -183,6 +184,36 @@ def test_pairing_by_likelihood_by_hand():
     assert zero[0, 0] == pytest.approx(0.0, abs=1e-12)     # t's only entry is its own coordinate
     ref2 = replace(ref, shapes=np.array([[1.0, 0.5, 0.0]]))
     assert pairing_cost(ref2, np.array([19.5]), np.zeros((1, 3)))[0, 0] == pytest.approx(25.0)
+
+
+def test_a_mode_the_sensors_do_not_see_explains_no_test_shape():
+    """Test shape t = (1, 0.5, 0) at 19.5 Hz. Analysis mode A = (1, 0.4, 0) at 19.0 Hz;
+    B at 19.6 Hz has a sensor shape of rounding noise (RMS 1e-12 of A's), here
+    (1, 0.5, 0) 1e-12: at unit scale it would match t exactly, cost (0.1 / 19.5 / 0.01)^2 =
+    0.263, and take the pairing from A, whose cost is (0.5 / 19.5 / 0.01)^2 +
+    ((0.5 - 0.4 alpha) / 0.1)^2 with alpha = 1.2 / 1.16 (7.318). Seen as zero (seen_shapes),
+    B explains none of t: 0.263 + (0.5 / 0.1)^2 = 25.263, and A is paired, whichever direction
+    the noise has. Paired with B (a pairing held), the shape residual is t's own, (5, 0)."""
+    ref = replace(_one_mode_reference([1.0, 0.0, 0.0], 19.5), shapes=np.array([[1.0, 0.5, 0.0]]))
+    alpha = 1.2 / 1.16
+    modes = xr.Dataset({"frequency": ("mode", [19.0, 19.6])},
+                       coords={"rigid_motion": ("mode", ["", ""])})
+    a = np.array([[1.0, 0.4, 0.0], [1e-12, 0.5e-12, 0.0]])
+    seen = seen_shapes(a)
+    assert seen[0] == pytest.approx(a[0], abs=0.0) and not seen[1].any()
+    assert seen_shapes(a * [[1.0], [1e6]])[1] == pytest.approx(a[1] * 1e6, rel=1e-15)  # 1e-6
+    assert pairing_cost(ref, [19.0, 19.6], a / np.linalg.norm(a, axis=1, keepdims=True))[0, 1] \
+        == pytest.approx((0.1 / 19.5 / 0.01) ** 2, rel=1e-9)
+    cost = pairing_cost(ref, [19.0, 19.6], seen)
+    assert cost[0] == pytest.approx([(0.5 / 19.5 / 0.01) ** 2 + ((0.5 - 0.4 * alpha) / 0.1) ** 2,
+                                     (0.1 / 19.5 / 0.01) ** 2 + 25.0], rel=1e-12)
+    turned = np.array([[1.0, 0.4, 0.0], [0.3e-12, -1e-12, 0.2e-12]])       # other rounding
+    props = SimpleNamespace(as_dict=dict)                                  # nothing weighed
+    for shapes in (a, turned):
+        assert pair(ref, modes, sensor_shapes=shapes).tolist() == [0]
+        assert evaluate_modes(ref, [19.0, 19.6], shapes, props, modes=modes).paired.tolist() == [0]
+        held = evaluate_modes(ref, [19.0, 19.6], shapes, props, modes=modes, paired=[1])
+        assert held.shape[0] == pytest.approx([5.0, 0.0], abs=1e-12)
 
 
 @pytest.fixture(scope="module")
