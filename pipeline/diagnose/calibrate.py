@@ -270,8 +270,8 @@ class Calibration:
     evaluations : list of Evaluation at theta.
     flags : tuple of str, model-form warnings (empty when the fit is clean).
     per_configuration : {configuration: (n_theta,) estimates} from one Gauss-Newton step each.
-    jacobian : (n_data, n_theta) d r / d theta at the solution, prior rows included (reused by
-        the refits).
+    jacobian : (n_data, n_theta) d r / d theta at the solution, prior rows included, the pairing
+        held (:func:`forward_columns`; reused by the refits).
     """
 
     theta: np.ndarray

@@ -10,7 +10,10 @@ that bridges two members). The candidate pairs are the grids joined through at l
 :data:`HOPS` elements (nearer ones are one member's own stiffness, which ``member_taper``
 covers), each grid with its :data:`NEAREST` nearest such grids. When the best load path beats
 the named effect by the margin, the effect is outside the library and the round's verdict is
-``unexplained``, its note naming the load path (:func:`outscores`).
+``unexplained``, its note naming the load path (:func:`outscores`); when neither beats the other
+by the margin, as for any runner-up, the verdict is ``ambiguous`` (the frame blind study's
+'outside' seed 0: a brace from grid 4004 to the fin, load path 382.1 against a taper of the tail
+boom's 383.4) and :func:`load_path_measurement` says what separates them.
 
 **Fit** (the current model at the round's nominal parameters). A spring of stiffness h between
 grids a and b along the unit vector n from a to b is the rank-one change dK = h v v^T,
@@ -228,3 +231,14 @@ def outscores(path: LoadPath, named_score: float, modal, c: float, n_theta: int,
         + (n_theta + 1) * np.log(n_data) \
         + 2.0 * np.log(max(path.n_pairs, 1)) - 2.0 * np.log(max(n_candidates, 1))
     return bool(score + margin < named_score), float(score)
+
+
+def load_path_measurement(candidate, path: LoadPath) -> str:
+    """The measurement that separates a library effect from a load path that fits as well, as a
+    sentence: the spring acts only through the relative motion of its two grids along the line
+    joining them (n . (u_a - u_b), module docstring), so sensors there measure it directly."""
+    a, b = path.grids
+    return (f"to separate {candidate.kind} {candidate.label} from a load path between grids {a} "
+            f"and {b} (a spring the library does not hold, k = {path.stiffness:.4g}): sensors at "
+            f"grids {a} and {b} along the line joining them (their relative motion is what the "
+            "spring acts on).")

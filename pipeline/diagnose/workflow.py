@@ -23,7 +23,10 @@ more of it than the library's plausible range holds: the model-form signal of DE
 5.2, not a finding; pressed: the unbounded Gauss-Newton step moves it outward and gains more
 than the margin, :func:`pipeline.diagnose.screen.bound_release`) and beat
 the best load path between two grids, an effect the library does not hold
-(:mod:`pipeline.diagnose.loadpath`), else the round is ``unexplained``.
+(:mod:`pipeline.diagnose.loadpath`), by the margin, as it must beat the runner-up: a load path
+that beats it by the margin makes the round ``unexplained``, one within the margin either way
+``ambiguous`` (the effect or a load path; sensors at the path's two grids along the line joining
+them separate them, the spring acting on their relative motion).
 The overall verdict is ``effect`` when at least one effect was named, else the first round's.
 """
 from __future__ import annotations
@@ -43,7 +46,7 @@ from pipeline.diagnose.effects import KINDS, candidates, neighbours
 from pipeline.diagnose.evidence import SELF_ORTHOGONALITY_LIMIT, build_reference, chi_square
 from pipeline.diagnose.gap import (EQUIVALENT_SIGMAS, gap_metrics, indistinguishable,
                                    separating_measurement)
-from pipeline.diagnose.loadpath import best_load_path, outscores
+from pipeline.diagnose.loadpath import best_load_path, load_path_measurement, outscores
 from pipeline.diagnose.mirror import sites
 from pipeline.diagnose.predictive import held_out_evidence, held_out_modes, kept_modes
 from pipeline.diagnose.result import CandidateScore, DiagnoseResult, EffectRecord
@@ -448,14 +451,17 @@ def diagnose(configurations, settings: DiagnoseSettings = DiagnoseSettings(), *,
             rounds.append(_round_record(k, verdict, fits, best, runner, none,
                                         (modes_none, modes, entries), n_data, scored + (c,),
                                         path, same))
-            if path is not None and verdict == "unexplained":
+            if path is not None and verdict in ("unexplained", "ambiguous"):
                 cand = fits[best].candidate
+                a, b = path[0].grids
                 notes.append(f"round {k + 1}: {cand.kind} {cand.label} is not named: a load "
-                             "path the library does not hold, a spring between grids "
-                             f"{path[0].grids[0]} and {path[0].grids[1]} "
-                             f"(k = {path[0].stiffness:.4g}), fits the training data better "
-                             f"(score {path[1]:.1f} against {path[2]:.1f}): the effect is "
-                             "outside the library.")
+                             f"path the library does not hold, a spring between grids {a} and "
+                             f"{b} (k = {path[0].stiffness:.4g}), fits the training data "
+                             + ("better (score " if verdict == "unexplained" else
+                                "as well, within the margin (score ")
+                             + f"{path[1]:.1f} against {path[2]:.1f})"
+                             + (": the effect is outside the library." if verdict ==
+                                "unexplained" else "."))
             if reason == "held_out":
                 cand, vetoed = fits[best].candidate, rounds[-1]["best"]
                 kept = np.asarray(vetoed["held_out_modes_kept"])
@@ -469,7 +475,9 @@ def diagnose(configurations, settings: DiagnoseSettings = DiagnoseSettings(), *,
                 first = verdict
                 table = _table(problem, r0, rows, fits, none, n_data, len(cands))
             if verdict == "ambiguous" and not effects:
-                separating = separating_measurement(problem, fits[best], fits[runner])
+                separating = (load_path_measurement(fits[best].candidate, path[0])
+                              if path is not None else
+                              separating_measurement(problem, fits[best], fits[runner]))
             if verdict != "effect":
                 break
             chosen = fits[best]
@@ -500,14 +508,17 @@ def _none_fit(problem: Problem, cal, n_data: int):
 def _load_path_check(problem: Problem, theta, effects, evaluations, r0, scored, best: int,
                      c: float, n_data: int, n_candidates: int, margin: float) -> tuple:
     """(verdict, (LoadPath, its score, the named effect's score) or None): "unexplained" when the
-    best load path (:mod:`pipeline.diagnose.loadpath`) beats the named effect by the margin."""
+    best load path (:mod:`pipeline.diagnose.loadpath`) beats the named effect by the margin,
+    "ambiguous" when neither beats the other by it, else "effect"."""
     found = best_load_path(problem, theta, effects, evaluations, r0)
     if found is None:
         return "effect", None
     scores, _, _ = round_scores(scored[0], scored[1], n_data, n_candidates, n_modal=scored[2])
     beats, score = outscores(found, float(scores[best]), problem.modal_rows(), c,
                              problem.n_theta, n_data, n_candidates, margin)
-    return ("unexplained" if beats else "effect"), (found, score, float(scores[best]))
+    named = float(scores[best])
+    verdict = "unexplained" if beats else ("effect" if named + margin < score else "ambiguous")
+    return verdict, (found, score, named)
 
 
 def _round_record(k: int, verdict: str, fits, best, runner, none, held_out, n_data: int,
