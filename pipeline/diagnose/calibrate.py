@@ -288,6 +288,21 @@ def pairings(evaluations) -> list:
     return [ev.paired for ev in evaluations]
 
 
+def memoised(residual, known=None) -> tuple:
+    """``fun(z)`` -> r and ``at(z)`` -> (r, pairing) over one cache of ``residual(z)`` -> (r,
+    pairing) (``known``: {z.tobytes(): (r, pairing)} already evaluated): the optimiser asks for
+    the residual and then the Jacobian at the same point, whose columns hold its pairing."""
+    cache = dict(known or {})
+
+    def at(z):
+        key = z.tobytes()
+        if key not in cache:
+            cache[key] = residual(z)
+        return cache[key]
+
+    return (lambda z: at(z)[0]), at
+
+
 def forward_columns(residual, z, steps, upper, r) -> list:
     """Forward-difference columns d residual / d z_k of the first ``len(steps)`` entries of
     ``z``, each stepped by ``steps[k]`` toward the inside of ``upper``; ``r`` is residual(z).
@@ -317,21 +332,16 @@ def calibrate(problem: Problem, effects=()) -> Calibration:
         r = problem.residual(np.zeros(0), evs)
         return Calibration(np.zeros(0), chi_square(r), r.size, evs, (), {}, np.zeros((r.size, 0)))
     bound = problem.bounds / THETA_SCALE
-    cache = {}
 
     def residual(z, paired=None):
         theta = z * THETA_SCALE
         evs = problem.evaluate(theta, effects, paired)
         return problem.residual(theta, evs), pairings(evs)
 
-    def fun(z):
-        key = z.tobytes()
-        if key not in cache:
-            cache[key] = residual(z)
-        return cache[key][0]
+    fun, at = memoised(residual)
 
     def jac(z):
-        r, paired = cache[z.tobytes()] if z.tobytes() in cache else residual(z)
+        r, paired = at(z)
         return np.column_stack(forward_columns(lambda y: residual(y, paired)[0], z,
                                                DIFF_STEP * np.maximum(1.0, np.abs(z)), bound, r))
 

@@ -71,7 +71,8 @@ from dataclasses import dataclass, replace
 import numpy as np
 from scipy.optimize import least_squares
 
-from pipeline.diagnose.calibrate import THETA_SCALE, Problem, forward_columns, pairings
+from pipeline.diagnose.calibrate import (THETA_SCALE, Problem, forward_columns, memoised,
+                                         pairings)
 from pipeline.diagnose.evidence import bic, chi_square, evaluate, evaluate_modes
 from pipeline.diagnose.grounded import (SPRING_LADDER, ladder_sizes, reduce_mass, reduce_spring,
                                         spring_basis)
@@ -417,7 +418,6 @@ def refit(problem: Problem, theta0, effects, row: Screened | None, *, n_data: in
     if start_fit is None:
         return None
     z0, r_start = z_start, start_fit[0]
-    cache = {z0.tobytes(): start_fit}
 
     def attempt(z, paired=None):
         try:
@@ -425,15 +425,10 @@ def refit(problem: Problem, theta0, effects, row: Screened | None, *, n_data: in
         except (SolverError, InputError):
             return PENALTY * r_start, None
 
-    def fun(z):
-        key = z.tobytes()
-        if key not in cache:
-            cache[key] = attempt(z)
-        return cache[key][0]
+    fun, at = memoised(attempt, {z0.tobytes(): start_fit})
 
     def jac(z):
-        fun(z)
-        r, paired = cache[z.tobytes()]
+        r, paired = at(z)
         cols = ([np.zeros_like(r)] * npar if paired is None else       # a mechanism: flat
                 forward_columns(lambda y: attempt(y, paired)[0], z, np.full(npar, FD_STEP), hi, r))
         return np.column_stack(cols + [j_theta])

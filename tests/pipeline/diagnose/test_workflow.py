@@ -96,8 +96,9 @@ def test_frame_effect_named_where_it_is(tmp_path, kind):
 
 @pytest.mark.slow
 def test_frame_outside_is_not_named(tmp_path):
-    # measured on seed 0 (a brace from the tail to the fin): unexplained, the best fit a taper of
-    # the tail boom PID 51 with its scale on the bound 0.3
+    # measured on seed 0 (a brace from the tail to the fin, blind study at fccf93c and the load
+    # path rule of 20d7570): ambiguous, the best fit a taper of the tail boom PID 51 (BIC 383.4)
+    # and a spring between grids 4004 and 4202 (382.1) within the margin of each other
     result, _ = _run(tmp_path, "outside")
     assert result.verdict in ("ambiguous", "unexplained")
     assert result.verdict != "ambiguous" or result.separating_measurement
