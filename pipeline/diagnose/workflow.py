@@ -454,14 +454,12 @@ def diagnose(configurations, settings: DiagnoseSettings = DiagnoseSettings(), *,
             if path is not None and verdict in ("unexplained", "ambiguous"):
                 cand = fits[best].candidate
                 a, b = path[0].grids
+                how, end = (("better", ": the effect is outside the library.")
+                            if verdict == "unexplained" else ("as well, within the margin", "."))
                 notes.append(f"round {k + 1}: {cand.kind} {cand.label} is not named: a load "
                              f"path the library does not hold, a spring between grids {a} and "
-                             f"{b} (k = {path[0].stiffness:.4g}), fits the training data "
-                             + ("better (score " if verdict == "unexplained" else
-                                "as well, within the margin (score ")
-                             + f"{path[1]:.1f} against {path[2]:.1f})"
-                             + (": the effect is outside the library." if verdict ==
-                                "unexplained" else "."))
+                             f"{b} (k = {path[0].stiffness:.4g}), fits the training data {how} "
+                             f"(score {path[1]:.1f} against {path[2]:.1f}){end}")
             if reason == "held_out":
                 cand, vetoed = fits[best].candidate, rounds[-1]["best"]
                 kept = np.asarray(vetoed["held_out_modes_kept"])

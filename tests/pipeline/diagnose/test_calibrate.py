@@ -22,7 +22,7 @@ def test_calibration_jacobian_holds_the_pairing():
     modes: here the pairing is the parity of theta / 1e-7 and the paired mode's entry is 5
     larger) is continuous for a held pairing, r = (theta - 0.03 + 5 p) / 0.01. The calibration's
     Jacobian (reused by every refit) is its derivative 1 / 0.01 = 100, not the jump over the
-    step (5 / 2e-6 = 2.5e6, what differences that re-pair give)."""
+    step (5 / 0.01 / 2e-6 = 2.5e8, what differences that re-pair give)."""
     ref = SimpleNamespace(train=np.array([True]), name="c")
 
     def evaluate(theta, effects=(), paired=None):
