@@ -170,6 +170,38 @@ def serep_coordinates(phi_m, phi_gm, *, max_condition: float = 1e8) -> np.ndarra
     return serep_pseudo_inverse(phi_m, max_condition=max_condition, what="Phi_M") @ np.asarray(phi_gm, float)
 
 
+def significant_coordinates(phi_m, phi_gm, noise, sigmas: float, *,
+                            max_condition: float = 1e8) -> np.ndarray:
+    """SEREP modal coordinates (eq. 14) with those the measurement noise could make set to 0.
+
+    With white noise of standard deviation sigma_j on every measured DOF of test shape j, the
+    coordinate q_kj = (Phi_M^+ Phi~_GM)_kj has the standard deviation sigma_j |row k of Phi_M^+|
+    (cov q_j = sigma_j^2 Phi_M^+ Phi_M^+^T). A mode the measured DOFs see little, relative to its
+    generalised mass (a local mode of a mass hung on a joint), has a long row: noise alone gives
+    it a coordinate that dominates every test shape's, and the cross-orthogonality (eq. 20) then
+    reports the noise. Coordinates within ``sigmas`` standard deviations of 0 are set to 0.
+
+    Parameters
+    ----------
+    phi_m : array_like, shape (n_MD, m)
+        Analysis modes at the measured DOFs.
+    phi_gm : array_like, shape (n_MD, n)
+        Measured shapes.
+    noise : array_like, shape (n,)
+        Noise standard deviation per measured DOF of each test shape (in its units).
+    sigmas : float
+        Significance threshold in standard deviations.
+
+    Returns
+    -------
+    ndarray, shape (m, n)
+    """
+    pinv = serep_pseudo_inverse(phi_m, max_condition=max_condition, what="Phi_M")
+    q = pinv @ np.asarray(phi_gm, float)
+    std = np.linalg.norm(pinv, axis=1)[:, None] * np.asarray(noise, float)[None, :]
+    return np.where(np.abs(q) > sigmas * std, q, 0.0)
+
+
 def serep_expand(phi_aset, master, phi_gm, *, max_condition: float = 1e8) -> np.ndarray:
     """Expand measured shapes to the A-set, paper eq. 14.
 

@@ -34,7 +34,8 @@ FOLDER = "diagnose"
 #: system's velocity).
 GAP_UNITS = {"frequency_rms_held_out": "%", "frequency_rms": "%",
              "max_cross_orthogonality_offdiag": "-",
-             "max_cross_orthogonality_offdiag_held_out": "-", "mac_min": "-",
+             "max_cross_orthogonality_offdiag_held_out": "-",
+             "max_cross_orthogonality_offdiag_unfiltered": "-", "mac_min": "-",
              "mac_min_held_out": "-", "mac_mean": "-"}
 
 

@@ -18,7 +18,8 @@ from structures.common.errors import InputError
 VERDICTS = ("effect", "none", "ambiguous", "unexplained")
 #: Scalar gap metrics (keys of ``gap_before`` / ``gap_after``) put in the Dataset.
 GAP_METRICS = ("frequency_rms_held_out", "frequency_rms", "max_cross_orthogonality_offdiag",
-               "max_cross_orthogonality_offdiag_held_out", "mac_min", "mac_min_held_out",
+               "max_cross_orthogonality_offdiag_held_out",
+               "max_cross_orthogonality_offdiag_unfiltered", "mac_min", "mac_min_held_out",
                "mac_mean")
 
 #: Which model each gap is of (JSON ``gap_models``). The pipeline stage writes both decks.
@@ -105,7 +106,8 @@ class DiagnoseResult:
     candidates : tuple of CandidateScore, the first round's ranking (best first).
     gap_before, gap_after : mapping
         ``frequency_rms_held_out``, ``frequency_rms`` [%], ``max_cross_orthogonality_offdiag``
-        (``_held_out``: rows of the held-out modes), ``mac_min``, ``mac_min_held_out``,
+        (``_held_out``: rows of the held-out modes; on the significant SEREP coordinates,
+        ``_unfiltered`` on all, :mod:`pipeline.diagnose.gap`), ``mac_min``, ``mac_min_held_out``,
         ``mac_mean`` (None without shapes), ``mass`` {quantity: % error of the
         configuration with the largest |error|}, ``mass_by_configuration``, ``flutter_speed``
         (None: filled by the pipeline stage). :data:`GAP_MODELS` says which model each is.
@@ -133,7 +135,10 @@ class DiagnoseResult:
         ``score`` and the named effect's ``named_score``), else null; ``gap`` (when the round
         named an effect: the gap of the model with it and every earlier one, keys as
         ``gap_after``; the last such round's is ``gap_after``) and ``nominal`` (its model's nominal
-        parameters, as the top-level ``nominal``), else null.
+        parameters, as the top-level ``nominal``), else null; ``detailed`` (when the named
+        effect was added in its detailed form, :mod:`pipeline.diagnose.detail`: its
+        ``parameters``, ``chi2`` and ``bic`` and the named form's ``named_chi2`` and
+        ``named_bic``; the effect's parameters are then the detailed ones).
     """
 
     verdict: str

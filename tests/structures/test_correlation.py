@@ -469,3 +469,32 @@ def test_figures_show_the_dataset_values(base, tmp_path):
     np.testing.assert_allclose(heights, np.r_[corr["test_frequency"].values, corr["paired_fe_frequency"].values])
     paths = save_correlation_figures(corr, tmp_path)
     assert all(p.stat().st_size > 10_000 for p in paths)
+
+
+def test_significant_coordinates_by_hand():
+    """Phi_M = [e1, eps e2] at three DOFs: Phi_M^+ has rows e1 and e2 / eps, so a coordinate's
+    noise standard deviation is sigma and sigma / eps. A test shape e1 + d e2 has q = (1, d / eps):
+    its second coordinate is d / sigma standard deviations from 0, dropped at 3 < 4, kept at 5."""
+    from structures.correlation import significant_coordinates
+
+    eps, sigma = 0.01, 0.02
+    phi_m = np.array([[1.0, 0.0], [0.0, eps], [0.0, 0.0]])
+    shapes = np.array([[1.0, 3.0 * sigma, 0.0], [1.0, 5.0 * sigma, 0.0]]).T
+    q = significant_coordinates(phi_m, shapes, [sigma, sigma], 4.0)
+    np.testing.assert_allclose(q, [[1.0, 1.0], [0.0, 5.0 * sigma / eps]], rtol=1e-12)
+
+
+def test_significant_coordinates_pass_noise_at_the_normal_rate():
+    """Pure noise (sigma 0.05 per DOF, 40 DOFs, 5 random modes of very different sizes at the
+    DOFs): the share of coordinates beyond 2 standard deviations is the normal distribution's,
+    4.55 %, whatever the mode's size (the standard deviation sigma |row of Phi_M^+| is right);
+    40,000 coordinates: binomial standard deviation 0.10 %."""
+    from structures.correlation import significant_coordinates
+
+    rng = np.random.default_rng(7)
+    phi_m = rng.standard_normal((40, 5)) * np.array([1.0, 0.3, 0.05, 0.01, 2.0])
+    noise = 0.05 * rng.standard_normal((40, 8000))
+    kept = significant_coordinates(phi_m, noise, np.full(8000, 0.05), 2.0) != 0.0
+    assert kept.mean() == pytest.approx(0.0455, abs=0.004)
+    for k in range(5):
+        assert kept[k].mean() == pytest.approx(0.0455, abs=0.008)
