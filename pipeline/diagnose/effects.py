@@ -45,7 +45,12 @@ scale of the model (so that bounds do not depend on units):
     stay rigid (a joint that is flexible on one side only, e.g. one control surface on its
     hinge line). The response is far from linear in the compliance, so the screening samples it
     on a ladder of sizes at rotation 0 (:data:`pipeline.diagnose.screen.LADDER`) and the refit
-    frees the rotation. Skipped: rigid elements whose partial dependent
+    frees the rotation. Once named, a joint may be added in its *directional* form
+    (:func:`directional`, :mod:`pipeline.diagnose.detail`): parameters ``compliance_x``,
+    ``compliance_y``, ``compliance_z``, ``compliance_rx``, ``compliance_ry``, ``compliance_rz``,
+    one per CBUSH component (stiffness K_p = k_ref,t / c_p for the translations, k_ref,r / c_p for
+    the rotations), bounds [0, 1e6] (the range of c_t and c_r above), all zero the rigid joint,
+    every one > 0 otherwise. Skipped: rigid elements whose partial dependent
     components are not in basic axes. Very small compliances make K ill-conditioned: at 1e-6 on
     the X-56 wing ribs the rigid-body eigenvalues carry round-off of 2e-6 of the first elastic
     one, which :mod:`structures.modal` rejects; 1e-5 is fine there.
@@ -124,6 +129,11 @@ PARAMETER_RANGES = {
     "member_curvature": {"bow_1": (-0.15, 0.15, 0.05), "bow_2": (-0.15, 0.15, 0.05)},
     "boundary_stiffness": {f"k_{d}": (0.0, 1.0, 0.1) for d in DIRECTIONS},
 }
+#: Parameters of a joint with one compliance per CBUSH component (:func:`directional`), and
+#: their (lower, upper, reference): the range of c_t and c_r over the bounds of compliance and
+#: rotation.
+JOINT_DIRECTIONS = tuple(f"compliance_{c}" for c in ("x", "y", "z", "rx", "ry", "rz"))
+DIRECTIONAL_RANGE = (0.0, 1.0e6, 100.0)
 #: Exponent n of the section fields scaled by s^n in ``member_taper``.
 TAPER_EXPONENTS = {"A": 2, "I1": 4, "I2": 4, "I12": 4, "J": 4}
 
@@ -366,10 +376,52 @@ def _boundary(model, candidate, x):
 
 
 def _joint(model, candidate, x):
-    split = 10.0 ** (0.5 * x[1])                         # c_t = c / split, c_r = c split
-    return flexible_joint(model, candidate.location.elements[0],
-                          candidate.get("k_translation") * split / x[0],
-                          candidate.get("k_rotation") / (split * x[0]), candidate.get("dependent"))
+    if x.size == len(JOINT_DIRECTIONS):                  # c_1..c_6, one per CBUSH component
+        if not np.all(x > 0.0):
+            raise InputError(f"candidate {candidate.label!r}: directional compliances {x.tolist()}"
+                             " mix zero (a rigid CBUSH component) with nonzero ones. Fix: give "
+                             "every component a compliance > 0, or all 0 for the rigid joint.")
+        c = x
+    else:
+        split = 10.0 ** (0.5 * x[1])                     # c_t = c / split, c_r = c split
+        c = np.repeat([x[0] / split, x[0] * split], 3)
+    k_ref = np.repeat([candidate.get("k_translation"), candidate.get("k_rotation")], 3)
+    return flexible_joint(model, candidate.location.elements[0], k_ref / c,
+                          candidate.get("dependent"))
+
+
+def directional(candidate: Candidate, values) -> tuple[Candidate, np.ndarray]:
+    """A ``joint_flexibility`` candidate at (compliance, rotation) as the same joint with one
+    compliance per CBUSH component (module docstring).
+
+    Parameters
+    ----------
+    candidate : Candidate, ``joint_flexibility`` with parameters ``compliance``, ``rotation``.
+    values : (2,) its values, compliance > 0.
+
+    Returns
+    -------
+    Candidate with parameters :data:`JOINT_DIRECTIONS`, and its (6,) values, which give the
+    same model as ``values`` give ``candidate``.
+    """
+    x = _check_values(candidate, values)
+    if candidate.kind != "joint_flexibility" or candidate.parameters != ("compliance", "rotation"):
+        raise InputError(f"candidate {candidate.label!r} ({candidate.kind}, parameters "
+                         f"{candidate.parameters}) has no directional form. Fix: pass a "
+                         "joint_flexibility candidate with parameters compliance, rotation.")
+    if x[0] <= 0.0:
+        raise InputError(f"candidate {candidate.label!r}: compliance {x[0]:g} is the rigid "
+                         "joint, which has no directional form. Fix: pass a compliance > 0.")
+    split = 10.0 ** (0.5 * x[1])
+    c = np.repeat([x[0] / split, x[0] * split], 3)
+    lo, hi, ref = DIRECTIONAL_RANGE
+    n = len(JOINT_DIRECTIONS)
+    detail = dict(candidate.detail)
+    if "signs" in detail:                                  # a mirror pair: images alike
+        detail["signs"] = tuple(((1.0,) * n,) * len(detail["signs"]))
+    out = replace(candidate, parameters=JOINT_DIRECTIONS, lower=(lo,) * n, upper=(hi,) * n,
+                  reference=(ref,) * n, detail=tuple(detail.items()))
+    return out, np.clip(c, lo, hi)
 
 
 def _taper(model, candidate, x):

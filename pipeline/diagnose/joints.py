@@ -140,14 +140,14 @@ def _k_rotation(model: FEModel, indep: int, hung, kt: float, kr: float) -> float
     return kr + kt * float(d2.max())
 
 
-def flexible_joint(model: FEModel, eid: int, kt: float, kr: float, only=None) -> FEModel:
+def flexible_joint(model: FEModel, eid: int, stiffness, only=None) -> FEModel:
     """The model with rigid joint ``eid`` on springs.
 
     Parameters
     ----------
     model : FEModel
     eid : int, the RBE2 / RBAR.
-    kt, kr : float, translational and rotational CBUSH stiffness.
+    stiffness : (6,) CBUSH stiffness K1..K6 (basic axes: three translations, three rotations).
     only : int, optional, the one dependent grid put on its spring (the others stay rigid).
 
     Returns
@@ -166,27 +166,27 @@ def flexible_joint(model: FEModel, eid: int, kt: float, kr: float, only=None) ->
                                       filename=model.filename,
                                       fix="build the candidate with candidates() on this model."))
     indep, deps = joint
+    k = np.asarray(stiffness, float)
     kept = tuple(d for d in deps if d[0] != only) if only is not None else ()
     if only is not None and len(kept) == len(deps):
         raise InputError(card_message(f"grid {only} is not a dependent grid of this RBE2.",
                                       card=rigid.card, card_id=eid, filename=model.filename,
                                       fix="build the candidate with candidates() on this model."))
     if only is None:
-        return _hang_whole(model, rigid, indep, kt, kr)
+        return _hang_whole(model, rigid, indep, k)
     hung = [d for d in deps if d not in kept]
-    stiffness = [[(kt if c < 3 else kr) if str(c + 1) in comps else 0.0 for c in range(6)]
-                 for _, comps in hung]
+    stiffness = [[k[c] if str(c + 1) in comps else 0.0 for c in range(6)] for _, comps in hung]
     rigid_new = tuple(replace(r, dependent=kept) if r.eid == eid else r for r in model.rigid
                       if r.eid != eid or kept)
     model = replace(model, rigid=rigid_new)
     return add_bushes(model, [(indep, g) for g, _ in hung], stiffness)
 
 
-def _hang_whole(model: FEModel, rigid, indep: int, kt: float, kr: float) -> FEModel:
+def _hang_whole(model: FEModel, rigid, indep: int, k) -> FEModel:
     """The rigid element kept rigid but moved onto a new grid at its independent grid, which
     hangs on a zero-length CBUSH (all six components) to the independent grid (written back as
     an RBE2: an RBAR independent on one grid is one)."""
     model, (new,) = add_grids(model, model.grids.xyz[model.grids.index([indep])])
     moved = tuple(replace(r, independent=((int(new), "123456"),)) if r.eid == rigid.eid else r
                   for r in model.rigid)
-    return add_bushes(replace(model, rigid=moved), [(indep, int(new))], [[kt] * 3 + [kr] * 3])
+    return add_bushes(replace(model, rigid=moved), [(indep, int(new))], [list(k)])

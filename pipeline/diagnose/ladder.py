@@ -9,12 +9,15 @@ M do not depend on c, and its stiffness is linear in 1 / c:
 
 B the springs at k_ref (from two assemblies, c = 1 and 2: B = 2 (K(1) - K(2)), K_0 = K(1) - B),
 nonzero only on the nb DOFs of the springs' grids (the boundary b; the rest is the interior i).
+A joint with one compliance c_p per CBUSH component (:func:`pipeline.diagnose.effects.directional`)
+is K(c) = K_0 + sum_p B_p / c_p alike, B_p from the assembly at every c_p = 1 and one per
+component with its c_p = 2 (seven in all).
 K_ii, K_ib and M do not depend on c, so one Craig-Bampton basis (Craig & Bampton 1968, AIAA J.
 6(7), the fixed-interface modes and the constraint modes)
 
     Psi = [[Phi_i, -K_ii^-1 K_ib], [0, I_bb]]         (rows i, b)
 
-serves every rung: K_r(c) = Psi^T K_0 Psi + Psi^T B Psi / c, M_r = Psi^T M Psi, and the modes of
+serves every rung: K_r(c) = Psi^T K_0 Psi + sum_p Psi^T B_p Psi / c_p, M_r = Psi^T M Psi, and the modes of
 the rung are those of (K_r(c), M_r), of size nf + nb. The constraint modes hold the static
 response of the boundary exactly, so the rigid-body motions, the rigid joint (c -> 0) and the
 free hung part (c -> infinity) are in the basis; the truncation to the nf lowest fixed-interface
@@ -56,7 +59,9 @@ class ReducedJoint:
 
     Attributes
     ----------
-    k0, b, m : (nr, nr) Psi^T K_0 Psi, Psi^T B Psi, Psi^T M Psi.
+    k0, m : (nr, nr) Psi^T K_0 Psi, Psi^T M Psi.
+    b : (n_parts, nr, nr) Psi^T B_p Psi, one per compliance parameter (1, or 6 for a
+        directional joint).
     sensor : (n_dof, nr) basic-frame displacement of the measured DOFs per basis vector.
     rigid : list of str, the rigid-body motions of the changed model (they come first).
     props : MassProperties of the changed model (M does not depend on c).
@@ -75,8 +80,8 @@ class ReducedJoint:
         """Mass properties (the same at every compliance)."""
         return self.props
 
-    def modes(self, compliance: float) -> tuple[xr.Dataset, np.ndarray]:
-        """Modes of the rung at ``compliance`` (> 0).
+    def modes(self, compliance) -> tuple[xr.Dataset, np.ndarray]:
+        """Modes of the rung at ``compliance`` (> 0; a float, or (n_parts,) one per part).
 
         Returns
         -------
@@ -84,7 +89,8 @@ class ReducedJoint:
             coordinate ("" for elastic modes), the rigid-body modes first at 0 Hz.
         sensor_shapes : (nmodes, n_dof) mass-normalised shapes at the measured DOFs.
         """
-        k = self.k0 + self.b / compliance                                  # K_r(c)
+        c = np.broadcast_to(np.asarray(compliance, float), len(self.b))
+        k = self.k0 + np.tensordot(1.0 / c, self.b, axes=1)                 # K_r(c)
         lam, y = solve_eigen(sp.csc_matrix(k), sp.csc_matrix(self.m), self.nmodes,
                              shift=DEFAULT_SHIFT)
         nr = len(self.rigid)
@@ -102,7 +108,8 @@ def reduce_joint(model: FEModel, candidate, sensor_index, nmodes: int) -> Reduce
     Parameters
     ----------
     model : FEModel, the configuration's current model.
-    candidate : Candidate, ``joint_flexibility``.
+    candidate : Candidate, ``joint_flexibility`` (compliance and rotation, the rotation held
+        at 0; or directional, :data:`pipeline.diagnose.effects.JOINT_DIRECTIONS`).
     sensor_index : (n_dof,) measured DOFs along the modes' ``dof`` (6 per grid, basic frame).
     nmodes : int, analysis modes per rung.
 
@@ -113,18 +120,26 @@ def reduce_joint(model: FEModel, candidate, sensor_index, nmodes: int) -> Reduce
     SPCs), an interior that is not stiff once the boundary is clamped (a mechanism inside), or
     no fixed-interface mode to keep (``nmodes`` 0, or every DOF on the springs).
     """
-    from pipeline.diagnose.effects import apply_effect
+    from pipeline.diagnose.effects import JOINT_DIRECTIONS, apply_effect
 
-    rest = [0.0] * (len(candidate.parameters) - 1)                        # rotation 0
-    changed = apply_effect(model, candidate, [_C1, *rest])
+    if candidate.parameters == JOINT_DIRECTIONS:
+        base = np.full(len(JOINT_DIRECTIONS), _C1)
+        raised = [np.where(np.arange(base.size) == p, _C2, _C1) for p in range(base.size)]
+    else:
+        base = np.r_[_C1, np.zeros(len(candidate.parameters) - 1)]       # rotation 0
+        raised = [np.r_[_C2, base[1:]]]
+    changed = apply_effect(model, candidate, base)
     s1 = assemble(changed, warn=False)
     if s1.K.shape[0] > DENSE_LIMIT:
         return None
-    s2 = assemble(apply_effect(model, candidate, [_C2, *rest]), warn=False)
-    if not np.array_equal(s1.a_dofs, s2.a_dofs):
-        return None
     k1 = s1.K.toarray()
-    springs = (k1 - s2.K.toarray()) / (1.0 / _C1 - 1.0 / _C2)           # B
+    parts = []
+    for x in raised:
+        s2 = assemble(apply_effect(model, candidate, x), warn=False)
+        if not np.array_equal(s1.a_dofs, s2.a_dofs):
+            return None
+        parts.append((k1 - s2.K.toarray()) / (1.0 / _C1 - 1.0 / _C2))    # B_p
+    springs = np.sum(parts, axis=0)                                        # B
     k0 = k1 - springs / _C1                                                # K_0
     # Off the springs' DOFs K(1) and K(2) are the same sums of the same numbers, so B is exactly
     # 0 there; on them its rows are k_ref-sized (smallest row 1.6e-3 of max|B| over the X-56A-
@@ -152,6 +167,7 @@ def reduce_joint(model: FEModel, candidate, sensor_index, nmodes: int) -> Reduce
     psi[bound, nf:] = np.eye(nb)
     rotate = (s1.rotation @ (s1.T @ psi))                                   # (n_g, nr) basic
     _, rigid = rigid_body_modes(changed, s1)
-    return ReducedJoint(k0=psi.T @ k0 @ psi, b=psi.T @ springs @ psi, m=psi.T @ m @ psi,
+    return ReducedJoint(k0=psi.T @ k0 @ psi, b=np.stack([psi.T @ b @ psi for b in parts]),
+                        m=psi.T @ m @ psi,
                         sensor=np.asarray(rotate)[np.asarray(sensor_index)], rigid=list(rigid),
                         props=mass_properties(changed, m_basic=s1.m_basic), nmodes=nmodes)

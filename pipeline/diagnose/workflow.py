@@ -42,6 +42,7 @@ import xarray as xr
 from threadpoolctl import threadpool_limits
 
 from pipeline.diagnose.calibrate import Problem, calibrate
+from pipeline.diagnose.detail import detailed
 from pipeline.diagnose.effects import KINDS, candidates, neighbours
 from pipeline.diagnose.evidence import SELF_ORTHOGONALITY_LIMIT, build_reference, chi_square
 from pipeline.diagnose.gap import (EQUIVALENT_SIGMAS, gap_metrics, indistinguishable,
@@ -479,6 +480,18 @@ def diagnose(configurations, settings: DiagnoseSettings = DiagnoseSettings(), *,
             if verdict != "effect":
                 break
             chosen = fits[best]
+            rich = detailed(problem, effects, chosen, n_data=n_data, jacobian_theta=cal.jacobian)
+            if rich is not None:
+                notes.append(f"round {k + 1}: {chosen.candidate.kind} {chosen.candidate.label} "
+                             f"added with one compliance per CBUSH component: chi^2 "
+                             f"{chosen.chi2:.1f} -> {rich.chi2:.1f}, BIC {chosen.bic:.1f} -> "
+                             f"{rich.bic:.1f}.")
+                rounds[-1]["detailed"] = {"parameters": dict(zip(rich.candidate.parameters,
+                                                                 map(float, rich.values))),
+                                          "chi2": float(rich.chi2), "bic": float(rich.bic),
+                                          "named_chi2": float(chosen.chi2),
+                                          "named_bic": float(chosen.bic)}
+                chosen = rich
             gap_after = rounds[-1]["gap"] = gap_metrics(problem, chosen.evaluations)
             rounds[-1]["nominal"] = {n: float(t) for n, t in zip(problem.names, chosen.theta)}
             records.append(EffectRecord(chosen.candidate, chosen.values, lead))
@@ -553,7 +566,8 @@ def _round_record(k: int, verdict: str, fits, best, runner, none, held_out, n_da
             "none_n_params": none.n_params,
             "none_held_out_chi2": float(modes_none.sum()),
             "none_held_out_modes_chi2": modes_none.tolist(),
-            "gap": None, "nominal": None, "best": entry(best), "runner_up": entry(runner),
+            "gap": None, "nominal": None, "detailed": None, "best": entry(best),
+            "runner_up": entry(runner),
             "alike": list(alike),
             "fits": [entry(i) for i in range(len(fits))],
             "load_path": None if path is None else {

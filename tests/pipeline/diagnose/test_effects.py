@@ -695,3 +695,39 @@ def test_bad_kinds_and_values_raise(x56, x56_candidates):
     for bad in ([0.5], [-0.01], [np.nan], [0.01, 0.02]):
         with pytest.raises(InputError, match="grid 3005"):
             apply_effect(x56, cand, bad)
+
+
+def test_directional_joint_by_hand(tmp_path):
+    """The one-dependent hinge of test_one_dependent_grid_on_its_spring (grid 3, mass m3 and
+    inertia i3, coincident with grid 1) in its directional form: :func:`directional` of (c, rho)
+    gives c_t c_t c_t c_r c_r c_r and the same K; then one compliance per component, the modes
+    are by hand sqrt(k_t / (c_p m3)) for the translations and sqrt(k_r / (c_p i3)) for the
+    rotations, each component's own; a mix of zero and nonzero compliances is refused."""
+    from pipeline.diagnose.effects import JOINT_DIRECTIONS, directional
+
+    m3, i3 = 2.0, 0.01
+    deck = _deck(tmp_path, "hinge.bdf", [
+        ("GRID", 1, None, 0.0, 0.0, 0.0, None, 123456), ("GRID", 2, None, 0.3, 0.0, 0.0),
+        ("GRID", 3, None, 0.0, 0.0, 0.0), ("GRID", 4, None, 0.0, 1.0, 0.0, None, 123456),
+        ("RBE2", 10, 1, 123456, 2, 3), ("CONM2", 21, 2, None, 5.0),
+        ("CONM2", 22, 3, None, m3, 0.0, 0.0, 0.0, None, i3, 0.0, i3, 0.0, 0.0, i3),
+        ("CBAR", 31, 41, 1, 4, 0.0, 0.0, 1.0), ("PBAR", 41, 51, 1e-3, 2e-7, 4e-7, 3e-7),
+        ("MAT1", 51, 7.0e10, None, 0.33)])
+    model = read_model(deck)
+    cand = _pick(candidates(model, ["joint_flexibility"]), "joint_flexibility", "(1-3 only)")
+    kt, kr = cand.get("k_translation"), cand.get("k_rotation")
+    rich, values = directional(cand, [300.0, 0.8])
+    assert rich.parameters == JOINT_DIRECTIONS
+    np.testing.assert_allclose(values, [300.0 / 10 ** 0.4] * 3 + [300.0 * 10 ** 0.4] * 3,
+                               rtol=1e-12)
+    for got, want in zip(assemble_g(apply_effect(model, rich, values)),
+                         assemble_g(apply_effect(model, cand, [300.0, 0.8]))):
+        assert abs(got - want).max() <= 1e-12 * abs(want).max()
+    c = np.array([100.0, 400.0, 1600.0, 50.0, 200.0, 3200.0])
+    f = np.sort(compute_modes(apply_effect(model, rich, c), 6)["frequency"].values)
+    expected = np.sort(np.sqrt(np.r_[kt / (c[:3] * m3), kr / (c[3:] * i3)]) / (2 * np.pi))
+    np.testing.assert_allclose(f, expected, rtol=1e-8)
+    with pytest.raises(InputError, match="mix zero"):
+        apply_effect(model, rich, [0.0, 1.0, 1.0, 1.0, 1.0, 1.0])
+    with pytest.raises(InputError, match="no directional form"):
+        directional(rich, c)

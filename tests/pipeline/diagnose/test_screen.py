@@ -122,6 +122,31 @@ def test_reduced_joint_modes_match_exact_reanalysis(frame_reference):
             assert mac.min() > 1.0 - 1e-6, (cand.label, size)
 
 
+def test_reduced_directional_joint_matches_exact_reanalysis(frame_reference):
+    """A whole and a one-sided frame joint in their directional form (one compliance per CBUSH
+    component, :func:`pipeline.diagnose.effects.directional`): the basis's six stiffness parts at
+    anisotropic compliances (spread over three decades) against exact reanalysis, to the same
+    tolerances as the two-parameter joint."""
+    from pipeline.diagnose.effects import directional
+
+    model, _, ref = frame_reference
+    joints = candidates(model, ("joint_flexibility",))
+    for cand in (next(c for c in joints if c.get("dependent") is None),
+                 next(c for c in joints if c.get("dependent") is not None)):
+        rich, _ = directional(cand, [100.0, 0.0])
+        basis = reduce_joint(model, rich, ref.sensor_index, ref.nmodes)
+        assert basis is not None and basis.b.shape[0] == 6, cand.label
+        for c in ([3.0, 30.0, 300.0, 1.0, 10.0, 1000.0], [1.0e4, 10.0, 100.0, 300.0, 3.0, 30.0]):
+            exact = compute_modes(apply_effect(model, rich, c), ref.nmodes)
+            reduced, shapes = basis.modes(np.array(c))
+            f_e, f_r = exact["frequency"].values[6:26], reduced["frequency"].values[6:26]
+            assert f_r == pytest.approx(f_e, rel=1e-5), (cand.label, c)
+            s_e = exact["shape"].values[6:26][:, ref.sensor_index]
+            mac = np.einsum("ij,ij->i", s_e, shapes[6:26]) ** 2 / (
+                np.einsum("ij,ij->i", s_e, s_e) * np.einsum("ij,ij->i", shapes[6:26], shapes[6:26]))
+            assert mac.min() > 1.0 - 1e-6, (cand.label, c)
+
+
 @pytest.mark.slow
 def test_joint_ladder_on_basis_picks_the_exact_ladders_size(frame_reference, monkeypatch):
     """A test made by the frame with one joint at compliance 300 (between two rungs): the ladder
