@@ -416,12 +416,13 @@ def directional(candidate: Candidate, values) -> tuple[Candidate, np.ndarray]:
     c = np.repeat([x[0] / split, x[0] * split], 3)
     lo, hi, ref = DIRECTIONAL_RANGE
     n = len(JOINT_DIRECTIONS)
+    fields = {"parameters": JOINT_DIRECTIONS, "lower": (lo,) * n, "upper": (hi,) * n,
+              "reference": (ref,) * n}
     detail = dict(candidate.detail)
-    if "signs" in detail:                                  # a mirror pair: images alike
+    if "sites" in detail:                                  # a mirror pair: images alike
+        detail["sites"] = tuple(replace(site, **fields) for site in detail["sites"])
         detail["signs"] = tuple(((1.0,) * n,) * len(detail["signs"]))
-    out = replace(candidate, parameters=JOINT_DIRECTIONS, lower=(lo,) * n, upper=(hi,) * n,
-                  reference=(ref,) * n, detail=tuple(detail.items()))
-    return out, np.clip(c, lo, hi)
+    return replace(candidate, detail=tuple(detail.items()), **fields), np.clip(c, lo, hi)
 
 
 def _taper(model, candidate, x):

@@ -731,3 +731,23 @@ def test_directional_joint_by_hand(tmp_path):
         apply_effect(model, rich, [0.0, 1.0, 1.0, 1.0, 1.0, 1.0])
     with pytest.raises(InputError, match="no directional form"):
         directional(rich, c)
+
+
+def test_directional_mirror_pair_of_engine_mounts(x56, x56_candidates):
+    """The engine mounts' mirror pair (RBE2 7501 and its image) in directional form: both sites
+    take the pair's six compliances (the images' signs all +1: a CBUSH's diagonal stiffness in
+    basic axes mirrors onto itself about the XZ plane), the model is the two-parameter pair's at
+    the matching values, and the JSON names six parameters per site."""
+    from pipeline.diagnose.effects import JOINT_DIRECTIONS, directional
+    from pipeline.diagnose.result import EffectRecord, effect_json
+
+    pair = next(c for c in x56_candidates if c.kind == "joint_flexibility"
+                and c.get("sites") is not None and 7501 in c.location.elements)
+    rich, values = directional(pair, [300.0, -0.6])
+    for got, want in zip(assemble_g(apply_effect(x56, rich, values)),
+                         assemble_g(apply_effect(x56, pair, [300.0, -0.6]))):
+        assert abs(got - want).max() <= 1e-12 * abs(want).max()
+    record = effect_json(EffectRecord(rich, values * np.arange(1, 7), 0.0))
+    assert [list(s["parameters"]) for s in record["sites"]] == [list(JOINT_DIRECTIONS)] * 2
+    assert [list(s["parameters"].values()) for s in record["sites"]] == \
+        [list(values * np.arange(1, 7))] * 2
