@@ -106,13 +106,16 @@ def test_rescore_merges_split_runs_and_reruns(tmp_path):
                 _verdict("none", verdict="none"), seconds=40.0)
     _write_case(second, "frame", "member_taper", 0, taper,
                 _verdict("member_taper", elements=[2004]), seconds=70.0)
+    (first / "frame" / "member_taper" / "1" / "truth_gap.json").write_text(json.dumps(
+        {"frequency_rms_held_out": 0.9, "max_cross_orthogonality_offdiag": 0.02}))
     ds = rescore([first, second])
     assert ds.sizes["case"] == 3
     assert ds.attrs["top1_kind_accuracy"] == 1.0 and ds.attrs["none_kept"] == 1.0
     assert sorted(ds["seconds"].values.tolist()) == [40.0, 61.5, 70.0]
     assert ds.attrs["gap_shrinks"] == 0.5                 # seed 1's held-out error rose
     text = gap_text(ds)
-    assert "2.00 ->   2.50  0.300 -> 0.100  RMS up" in text
+    assert "2.00 ->   2.50 ( 0.90)  0.300 -> 0.100 (0.020)  RMS up" in text
+    assert "5.00 ->   1.00 (  nan)  0.300 -> 0.100 (nan)" in text      # no truth_gap.json
     assert text.endswith("drops: RMS 1, off-diagonal 2, both 1 of 2")
     with pytest.raises(FileNotFoundError):
         rescore([tmp_path / "empty"])
@@ -160,8 +163,14 @@ def test_quick_gap_shrinks_on_the_named_mass(quick_run):
     round: 1.62 % named at grid 3209 (inertia 1.0e-4, a radius of gyration of L / 100);
     measured held-out RMS frequency error 10.24 -> 1.88 %, largest cross-orthogonality
     off-diagonal 0.613 -> 0.207."""
-    _, result = quick_run("lumped_mass")
+    ds, result = quick_run("lumped_mass")
     before, after = result["gap_before"], result["gap_after"]
+    # the truth's own gap (its models against the data drawn from them): the noise's, 1 %
+    # frequency and 5 % shape noise leave a held-out error near 1 % and no significant
+    # cross-orthogonality off-diagonal
+    truth = ds.sel(when="truth")
+    assert float(truth["frequency_rms_held_out"][0]) < 2.0
+    assert float(truth["max_cross_orthogonality_offdiag"][0]) < 0.1
     assert after["max_cross_orthogonality_offdiag"] < before["max_cross_orthogonality_offdiag"]
     assert after["frequency_rms_held_out"] < before["frequency_rms_held_out"]
 

@@ -48,6 +48,8 @@ ATTEMPTS = 30
 FREQUENCY_NOISE, SHAPE_NOISE, DAMPING = 0.01, 0.05, (0.01, 0.02)
 #: The sixth (suspension) mode must stay below this fraction of the first elastic one.
 SUSPENSION_RATIO = 0.8
+#: With ``decks``: the JSON file there naming each configuration's truth deck.
+TRUTH_DECKS = "truth_decks.json"
 
 
 def _structure(structure: str, folder: Path, work: Path):
@@ -136,7 +138,8 @@ def make_case(structure: str, kind: str, seed: int, out, *, decks=None,
     seed : int, every random draw (deterministic)
     out : folder (created)
     decks : folder, optional
-        Keep the truth decks there (``truth_<start deck>.bdf``, one per configuration).
+        Keep the truth decks there (``truth_<start deck>.bdf``, one per configuration, named
+        per configuration in :data:`TRUTH_DECKS`).
     diagnose : dict, optional
         A ``[diagnose]`` table for the case file (e.g. ``{"max_effects": 1}``); none by default.
 
@@ -191,6 +194,9 @@ def make_case(structure: str, kind: str, seed: int, out, *, decks=None,
             write_uff(gvt, out / f"gvt_{c}.unv", title=f"{structure} {c} GVT")
             write_json(x56.measured_mass(props), out / f"mass_{c}.json")
             written[c] = analysis_decks[c]
+        if decks is not None:
+            write_json({c: f"truth_{start.stem}.bdf" for c, start in starts.items()},
+                       work / TRUTH_DECKS)
     grids, els = effects.neighbours(topo, chosen.grids, chosen.elements)
     record = {"kind": kind, "structure": structure, "seed": int(seed),
               "grids": list(chosen.grids), "elements": list(chosen.elements),

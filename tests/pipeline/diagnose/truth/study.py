@@ -14,7 +14,10 @@ Scores (issue 14, "Must show"):
 * no effect named on "none" data: verdict != "effect";
 * an effect outside the library: "ambiguous" or "unexplained" rather than a name;
 * the gap: held-out RMS frequency error and largest cross-orthogonality off-diagonal before and
-  after, per case.
+  after, per case, beside the truth's own (:func:`truth_gap`: the truth models, the ones the
+  test data were drawn from, against those data; their gap is the noise's, the least any model
+  can reach). A case's ``truth_gap.json`` holds it; ``--truth-gap DIR ...`` computes it for
+  cases run without it.
 
 Run ``python -m tests.pipeline.diagnose.truth.study [--structures frame x56] [--kinds ...]
 [--seeds 10] [--first-seed 0] [--out DIR]`` from the repository root: prints the confusion
@@ -26,6 +29,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import tempfile
 import time
 from pathlib import Path
 
@@ -34,7 +38,7 @@ import xarray as xr
 
 from structures.common.files import write_dataset, write_text
 
-from .generate import KINDS, STRUCTURES, TRUTH_KINDS, make_case
+from .generate import KINDS, STRUCTURES, TRUTH_DECKS, TRUTH_KINDS, make_case
 
 #: Columns of the confusion matrix: every kind the workflow can name and its other verdicts.
 NAMED = KINDS + ("none", "ambiguous", "unexplained", "error")
@@ -50,7 +54,62 @@ def diagnose_case(case_toml: Path) -> dict:
     return diagnose(configurations_from_case(case), settings_from_case(case)).to_json()
 
 
-def score(truth: dict, result: dict) -> dict:
+def truth_gap(case_toml: Path, decks: Path) -> dict:
+    """The gap (``gap_after``'s keys) of a case's truth models against its test data.
+
+    Each configuration's truth deck (``decks``: a ``make_case(..., decks=)`` folder) is
+    analysed and set against the reference the workflow builds from the case (its
+    ``preflight``): the same pairing, held-out modes and noise as the workflow's gap.
+    """
+    from types import SimpleNamespace
+
+    from pipeline.case import read_case
+    from pipeline.diagnose.evidence import evaluate
+    from pipeline.diagnose.gap import gap_metrics
+    from pipeline.diagnose.inputs import configurations_from_case, settings_from_case
+    from pipeline.diagnose.workflow import preflight
+    from structures.bdf import read_model
+
+    case = read_case(case_toml)
+    configurations = tuple(configurations_from_case(case))
+    refs, _ = preflight(configurations, settings_from_case(case))
+    names = json.loads((Path(decks) / TRUTH_DECKS).read_text())
+    evaluations = []
+    for ref, conf in zip(refs, configurations):
+        ev = evaluate(ref, read_model(Path(decks) / names[conf.name]))
+        if ref.has_shapes:
+            got = (ev.modes["grid"].values[ref.sensor_index],
+                   ev.modes["component"].values[ref.sensor_index])
+            if not (np.array_equal(got[0], ref.sensor_grid)
+                    and np.array_equal(got[1], ref.sensor_component)):
+                raise ValueError(f"{case_toml}: the truth deck of {conf.name} orders its DOFs "
+                                 "unlike the analysis deck; the sensors would not line up.")
+        evaluations.append(ev)
+    return gap_metrics(SimpleNamespace(refs=refs), evaluations)
+
+
+def add_truth_gap(folder: Path) -> dict:
+    """Write ``folder / truth_gap.json`` for a case run without it: the case made again from its
+    ``truth.json`` (structure, kind, seed) with its truth decks kept, its GVT files checked
+    byte for byte against the folder's, then :func:`truth_gap` on the folder's case."""
+    import filecmp
+
+    folder = Path(folder)
+    truth = json.loads((folder / "truth.json").read_text())
+    with tempfile.TemporaryDirectory() as tmp:
+        again = Path(tmp) / "case"
+        make_case(truth["structure"], truth["kind"], truth["seed"], again,
+                  decks=Path(tmp) / "decks")
+        for gvt in sorted(folder.glob("gvt_*.unv")):
+            if not filecmp.cmp(gvt, again / gvt.name, shallow=False):
+                raise ValueError(f"{folder}: {gvt.name} differs from the one made again: the "
+                                 "generator has changed since the case was made.")
+        gap = truth_gap(folder / "case.toml", Path(tmp) / "decks")
+    write_text(json.dumps(gap, indent=1) + "\n", folder / "truth_gap.json")
+    return gap
+
+
+def score(truth: dict, result: dict, floor: dict | None = None) -> dict:
     """Score one verdict against its truth (module docstring)."""
     effect = result.get("effect") if result.get("verdict") == "effect" else None
     named = effect["kind"] if effect else result.get("verdict", "error")
@@ -64,11 +123,22 @@ def score(truth: dict, result: dict) -> dict:
         value = (result.get(when) or {}).get(metric)
         return np.nan if value is None else float(value)
 
+    def least(metric):
+        value = (floor or {}).get(metric)
+        return np.nan if value is None else float(value)
+
     return {"named": named, "kind_correct": named == truth["kind"], "location_hit": hit,
             "rms_before": gap("gap_before", "frequency_rms_held_out"),
             "rms_after": gap("gap_after", "frequency_rms_held_out"),
+            "rms_truth": least("frequency_rms_held_out"),
             "xo_before": gap("gap_before", "max_cross_orthogonality_offdiag"),
-            "xo_after": gap("gap_after", "max_cross_orthogonality_offdiag")}
+            "xo_after": gap("gap_after", "max_cross_orthogonality_offdiag"),
+            "xo_truth": least("max_cross_orthogonality_offdiag")}
+
+
+def _floor(folder: Path) -> dict | None:
+    found = Path(folder) / "truth_gap.json"
+    return json.loads(found.read_text()) if found.is_file() else None
 
 
 def run_study(structures=STRUCTURES, kinds=TRUTH_KINDS, seeds=range(10), out=None, *,
@@ -89,7 +159,8 @@ def run_study(structures=STRUCTURES, kinds=TRUTH_KINDS, seeds=range(10), out=Non
     xarray.Dataset
         Per ``case``: ``structure``, ``truth_kind``, ``seed``, ``named_kind``, ``kind_correct``,
         ``location_hit``, ``seconds`` (diagnose only), ``frequency_rms_held_out`` and
-        ``max_cross_orthogonality_offdiag`` on ``when`` (before, after), ``error``;
+        ``max_cross_orthogonality_offdiag`` on ``when`` (before, after, truth: the truth's own,
+        NaN without ``truth_gap.json``), ``error``;
         ``confusion(truth_kind_row, named_kind_column)`` counts; attrs: the scores
         ``top1_kind_accuracy``, ``location_accuracy``, ``none_kept``, ``outside_not_named``,
         ``gap_shrinks`` (fractions, NaN when no case counts) and the numbers of cases.
@@ -100,7 +171,11 @@ def run_study(structures=STRUCTURES, kinds=TRUTH_KINDS, seeds=range(10), out=Non
         for kind in kinds:
             for seed in seeds:
                 folder = out / structure / kind / str(seed)
-                case = make_case(structure, kind, seed, folder, diagnose=diagnose)
+                with tempfile.TemporaryDirectory() as decks:
+                    case = make_case(structure, kind, seed, folder, diagnose=diagnose,
+                                     decks=decks)
+                    floor = truth_gap(case, Path(decks))
+                write_text(json.dumps(floor, indent=1) + "\n", folder / "truth_gap.json")
                 truth = json.loads((folder / "truth.json").read_text())
                 start, error = time.perf_counter(), ""
                 try:
@@ -110,7 +185,7 @@ def run_study(structures=STRUCTURES, kinds=TRUTH_KINDS, seeds=range(10), out=Non
                 seconds = time.perf_counter() - start
                 write_text(json.dumps(result, indent=1) + "\n", folder / "diagnose.json")
                 row = {"structure": structure, "truth_kind": kind, "seed": int(seed),
-                       "seconds": seconds, "error": error, **score(truth, result)}
+                       "seconds": seconds, "error": error, **score(truth, result, floor)}
                 write_text(json.dumps(row, indent=1) + "\n", folder / "score.json")
                 rows.append(row)
                 if progress:
@@ -153,7 +228,8 @@ def rescore(folders) -> xr.Dataset:
                              if n.startswith("diagnose took")), np.nan), "error": ""}
         rows.append({"structure": structure, "truth_kind": kind, "seed": seed,
                      "seconds": row["seconds"], "error": row["error"],
-                     **score(json.loads((case / "truth.json").read_text()), result)})
+                     **score(json.loads((case / "truth.json").read_text()), result,
+                             _floor(case))})
     return study_dataset(rows)
 
 
@@ -173,11 +249,11 @@ def study_dataset(rows: list[dict]) -> xr.Dataset:
          "seconds": ("case", np.array(col["seconds"], float), {"units": "s"}),
          "error": ("case", np.array(col["error"], dtype=str)),
          "frequency_rms_held_out": (("case", "when"), np.array(
-             [col["rms_before"], col["rms_after"]], float).T, {"units": "%"}),
+             [col["rms_before"], col["rms_after"], col["rms_truth"]], float).T, {"units": "%"}),
          "max_cross_orthogonality_offdiag": (("case", "when"), np.array(
-             [col["xo_before"], col["xo_after"]], float).T),
+             [col["xo_before"], col["xo_after"], col["xo_truth"]], float).T),
          "confusion": (("truth_kind_row", "named_kind_column"), confusion)},
-        coords={"case": np.arange(len(rows)), "when": ["before", "after"],
+        coords={"case": np.arange(len(rows)), "when": ["before", "after", "truth"],
                 "truth_kind_row": list(TRUTH_KINDS), "named_kind_column": list(NAMED)})
     ds.attrs.update(scores(ds))
     return ds
@@ -230,13 +306,14 @@ def gap_text(ds: xr.Dataset) -> str:
     rms, xo = ds["frequency_rms_held_out"].values, ds["max_cross_orthogonality_offdiag"].values
     rms_drops, xo_drops = rms[:, 1] < rms[:, 0], (xo[:, 1] < xo[:, 0]) | np.isnan(xo[:, 0])
     lines = [f"gap of the {int(right.sum())} correctly named cases (held-out RMS frequency error "
-             "%, largest cross-orthogonality off-diagonal):"]
+             "%, largest cross-orthogonality off-diagonal; before -> after (the truth's own)):"]
     for i in np.flatnonzero(right):
         marks = [m for m, ok in (("RMS up", rms_drops[i]), ("off-diagonal up", xo_drops[i]))
                  if not ok]
         lines.append(f"  {ds['structure'].values[i]:6s} {ds['truth_kind'].values[i]:18s} seed "
-                     f"{int(ds['seed'].values[i]):3d}: {rms[i, 0]:6.2f} -> {rms[i, 1]:6.2f}  "
-                     f"{xo[i, 0]:.3f} -> {xo[i, 1]:.3f}  {', '.join(marks)}".rstrip())
+                     f"{int(ds['seed'].values[i]):3d}: {rms[i, 0]:6.2f} -> {rms[i, 1]:6.2f} "
+                     f"({rms[i, 2]:5.2f})  {xo[i, 0]:.3f} -> {xo[i, 1]:.3f} ({xo[i, 2]:.3f})  "
+                     f"{', '.join(marks)}".rstrip())
     both = int(np.sum(right & rms_drops & xo_drops))
     lines.append(f"drops: RMS {int(np.sum(right & rms_drops))}, off-diagonal "
                  f"{int(np.sum(right & xo_drops))}, both {both} of {int(right.sum())}")
@@ -253,7 +330,17 @@ def main(argv=None) -> None:
     parser.add_argument("--score", type=Path, nargs="+", metavar="DIR",
                         help="score the cases already run under these folders (a later folder's "
                              "case replaces an earlier one's) instead of running any")
+    parser.add_argument("--truth-gap", type=Path, nargs="+", metavar="DIR",
+                        help="write truth_gap.json for the cases under these folders that lack "
+                             "it, then score them")
     args = parser.parse_args(argv)
+    for folder in args.truth_gap or ():
+        for found in sorted(folder.glob("*/*/*/truth.json")):
+            if not (found.parent / "truth_gap.json").is_file():
+                add_truth_gap(found.parent)
+                print(f"truth gap: {found.parent}")
+    if args.truth_gap:
+        args.score = list(args.score or ()) + list(args.truth_gap)
     if args.score:
         ds = rescore(args.score)
     else:
