@@ -23,6 +23,11 @@ Once a joint is named, it is fitted again with one compliance per CBUSH componen
 2. *Refit.* The bounded least squares of :func:`pipeline.diagnose.screen.refit` (exact
    reanalysis, the nominal parameters free) from the search's best point.
 
+The data need not prefer the truth's valley: on the frame's joint seed 3 the search ends at
+chi^2 484 (named 616), the truth's compliances give 548 and a refit from them 495; the held-out
+frequency error falls from 19.0 to 6.2 % but the largest cross-orthogonality off-diagonal rises
+from 0.81 to 0.91.
+
 The six-component joint replaces the named one when it lowers BIC = chi^2 + p ln n (Schwarz
 1978) over the training data: four more parameters must gain more than 4 ln n in chi^2. The
 verdict is the two-parameter fit's; the detail changes what is added to the model (the bulk data
