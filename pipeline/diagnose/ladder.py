@@ -17,8 +17,8 @@ K_ii, K_ib and M do not depend on c, so one Craig-Bampton basis (Craig & Bampton
 
     Psi = [[Phi_i, -K_ii^-1 K_ib], [0, I_bb]]         (rows i, b)
 
-serves every rung: K_r(c) = Psi^T K_0 Psi + sum_p Psi^T B_p Psi / c_p, M_r = Psi^T M Psi, and the modes of
-the rung are those of (K_r(c), M_r), of size nf + nb. The constraint modes hold the static
+serves every rung: K_r(c) = Psi^T K_0 Psi + sum_p Psi^T B_p Psi / c_p, M_r = Psi^T M Psi, and
+the modes of the rung are those of (K_r(c), M_r), of size nf + nb. The constraint modes hold the static
 response of the boundary exactly, so the rigid-body motions, the rigid joint (c -> 0) and the
 free hung part (c -> infinity) are in the basis; the truncation to the nf lowest fixed-interface
 modes (:data:`FIXED_INTERFACE_FACTOR` x the modes asked for) is the only approximation. The

@@ -372,6 +372,18 @@ def test_joint_compliance_tends_to_the_rigid_joint(x56, x56_candidates, label, c
         assert np.max(1 - soft / rigid) > 0.05      # the engine mount is clearly visible
 
 
+def _hinge_deck(tmp_path, m2, m3, i3):
+    """Clamped grid 1 carrying grids 2 (x = 0.3, mass m2) and 3 (coincident with 1, mass m3,
+    inertia i3) on RBE2 10; a bar 1-4 (clamped at 4) gives k_ref."""
+    return _deck(tmp_path, "hinge.bdf", [
+        ("GRID", 1, None, 0.0, 0.0, 0.0, None, 123456), ("GRID", 2, None, 0.3, 0.0, 0.0),
+        ("GRID", 3, None, 0.0, 0.0, 0.0), ("GRID", 4, None, 0.0, 1.0, 0.0, None, 123456),
+        ("RBE2", 10, 1, 123456, 2, 3), ("CONM2", 21, 2, None, m2),
+        ("CONM2", 22, 3, None, m3, 0.0, 0.0, 0.0, None, i3, 0.0, i3, 0.0, 0.0, i3),
+        ("CBAR", 31, 41, 1, 4, 0.0, 0.0, 1.0), ("PBAR", 41, 51, 1e-3, 2e-7, 4e-7, 3e-7),
+        ("MAT1", 51, 7.0e10, None, 0.33)])
+
+
 @pytest.mark.parametrize("rho", [0.0, 0.8, -1.5])
 def test_one_dependent_grid_on_its_spring(tmp_path, rho):
     """A clamped grid 1 carries grids 2 and 3 (coincident with 1, so its CBUSH has no length to
@@ -382,13 +394,7 @@ def test_one_dependent_grid_on_its_spring(tmp_path, rho):
     sqrt(k_r / (c_r i3)) (x3); the written deck reads back to the same K and M."""
     m2, m3, i3, c = 5.0, 2.0, 0.01, 300.0
     c_t, c_r = c * 10.0 ** (-rho / 2), c * 10.0 ** (rho / 2)
-    deck = _deck(tmp_path, "hinge.bdf", [
-        ("GRID", 1, None, 0.0, 0.0, 0.0, None, 123456), ("GRID", 2, None, 0.3, 0.0, 0.0),
-        ("GRID", 3, None, 0.0, 0.0, 0.0), ("GRID", 4, None, 0.0, 1.0, 0.0, None, 123456),
-        ("RBE2", 10, 1, 123456, 2, 3), ("CONM2", 21, 2, None, m2),
-        ("CONM2", 22, 3, None, m3, 0.0, 0.0, 0.0, None, i3, 0.0, i3, 0.0, 0.0, i3),
-        ("CBAR", 31, 41, 1, 4, 0.0, 0.0, 1.0), ("PBAR", 41, 51, 1e-3, 2e-7, 4e-7, 3e-7),
-        ("MAT1", 51, 7.0e10, None, 0.33)])
+    deck = _hinge_deck(tmp_path, m2, m3, i3)
     model = read_model(deck)
     joints = candidates(model, ["joint_flexibility"])
     assert sorted(j.label for j in joints) == ["RBE2 10 (1-2 only)", "RBE2 10 (1-2/3)",
@@ -706,14 +712,7 @@ def test_directional_joint_by_hand(tmp_path):
     from pipeline.diagnose.effects import JOINT_DIRECTIONS, directional
 
     m3, i3 = 2.0, 0.01
-    deck = _deck(tmp_path, "hinge.bdf", [
-        ("GRID", 1, None, 0.0, 0.0, 0.0, None, 123456), ("GRID", 2, None, 0.3, 0.0, 0.0),
-        ("GRID", 3, None, 0.0, 0.0, 0.0), ("GRID", 4, None, 0.0, 1.0, 0.0, None, 123456),
-        ("RBE2", 10, 1, 123456, 2, 3), ("CONM2", 21, 2, None, 5.0),
-        ("CONM2", 22, 3, None, m3, 0.0, 0.0, 0.0, None, i3, 0.0, i3, 0.0, 0.0, i3),
-        ("CBAR", 31, 41, 1, 4, 0.0, 0.0, 1.0), ("PBAR", 41, 51, 1e-3, 2e-7, 4e-7, 3e-7),
-        ("MAT1", 51, 7.0e10, None, 0.33)])
-    model = read_model(deck)
+    model = read_model(_hinge_deck(tmp_path, 5.0, m3, i3))
     cand = _pick(candidates(model, ["joint_flexibility"]), "joint_flexibility", "(1-3 only)")
     kt, kr = cand.get("k_translation"), cand.get("k_rotation")
     rich, values = directional(cand, [300.0, 0.8])

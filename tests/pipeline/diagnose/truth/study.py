@@ -42,6 +42,8 @@ from .generate import KINDS, STRUCTURES, TRUTH_DECKS, TRUTH_KINDS, make_case
 
 #: Columns of the confusion matrix: every kind the workflow can name and its other verdicts.
 NAMED = KINDS + ("none", "ambiguous", "unexplained", "error")
+#: A case's file of the truth's own gap (:func:`truth_gap`).
+TRUTH_GAP = "truth_gap.json"
 
 
 def diagnose_case(case_toml: Path) -> dict:
@@ -105,7 +107,7 @@ def add_truth_gap(folder: Path) -> dict:
                 raise ValueError(f"{folder}: {gvt.name} differs from the one made again: the "
                                  "generator has changed since the case was made.")
         gap = truth_gap(folder / "case.toml", Path(tmp) / "decks")
-    write_text(json.dumps(gap, indent=1) + "\n", folder / "truth_gap.json")
+    write_text(json.dumps(gap, indent=1) + "\n", folder / TRUTH_GAP)
     return gap
 
 
@@ -137,7 +139,7 @@ def score(truth: dict, result: dict, floor: dict | None = None) -> dict:
 
 
 def _floor(folder: Path) -> dict | None:
-    found = Path(folder) / "truth_gap.json"
+    found = Path(folder) / TRUTH_GAP
     return json.loads(found.read_text()) if found.is_file() else None
 
 
@@ -175,7 +177,7 @@ def run_study(structures=STRUCTURES, kinds=TRUTH_KINDS, seeds=range(10), out=Non
                     case = make_case(structure, kind, seed, folder, diagnose=diagnose,
                                      decks=decks)
                     floor = truth_gap(case, Path(decks))
-                write_text(json.dumps(floor, indent=1) + "\n", folder / "truth_gap.json")
+                write_text(json.dumps(floor, indent=1) + "\n", folder / TRUTH_GAP)
                 truth = json.loads((folder / "truth.json").read_text())
                 start, error = time.perf_counter(), ""
                 try:
@@ -336,7 +338,7 @@ def main(argv=None) -> None:
     args = parser.parse_args(argv)
     for folder in args.truth_gap or ():
         for found in sorted(folder.glob("*/*/*/truth.json")):
-            if not (found.parent / "truth_gap.json").is_file():
+            if not (found.parent / TRUTH_GAP).is_file():
                 add_truth_gap(found.parent)
                 print(f"truth gap: {found.parent}")
     if args.truth_gap:
