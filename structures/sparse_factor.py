@@ -41,9 +41,13 @@ PARDISO_SPD = 2                                # PARDISO mtype: real symmetric p
 PARDISO_ZERO_PIVOT = -4                        # PARDISO error: zero pivot (not positive definite)
 
 
-def massless_mechanism(filename: str) -> SolverError:
+class MasslessMechanism(SolverError):
+    """K - sigma M failed the singularity test (:func:`massless_mechanism`)."""
+
+
+def massless_mechanism(filename: str) -> MasslessMechanism:
     """The error for a singular shifted stiffness K - sigma M (a massless mechanism)."""
-    return SolverError(card_message(
+    return MasslessMechanism(card_message(
         "the shifted stiffness K - sigma M is singular: some motion has neither stiffness nor "
         "mass (a massless mechanism, e.g. a free rotation of grids without rotary inertia).",
         filename=filename,

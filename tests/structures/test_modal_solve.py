@@ -1,12 +1,15 @@
 """structures.modal.solve_eigen: the sparse shift-invert solve with a lumped mass that leaves DOFs
-massless (the Lanczos run on the DOFs with mass alone)."""
+massless (the Lanczos run on the DOFs with mass alone); a stiff free-free model against a
+massless mechanism (the singularity test and its repeat at a larger shift)."""
 from __future__ import annotations
 
 import numpy as np
+import pytest
 import scipy.linalg as sla
 import scipy.sparse as sp
 
 from structures import modal
+from structures.sparse_factor import PIVOT_RATIO, MasslessMechanism, factorize
 
 
 def _pencil(seed: int = 7):
@@ -61,3 +64,46 @@ def test_repeated_solves_are_identical_and_leave_the_global_random_state_alone()
         np.testing.assert_array_equal(again[1], first[1])
     np.testing.assert_array_equal(np.random.get_state()[1], state)
     assert modal.eigen_residuals(k, m, *first).max() < 0.1 * modal.RESIDUAL_TOL
+
+
+def _stiff_chain(n: int, k: float = 1.0e14):
+    """A free-free chain of ``n`` unit masses on ``n - 1`` springs of stiffness ``k``, and its
+    exact eigenvalues lambda_j = 4 k sin^2(j pi / (2 n)), j = 0 .. n - 1 (the discrete wave
+    equation's standing waves)."""
+    line = sp.diags([-np.ones(n - 1), np.r_[1.0, 2.0 * np.ones(n - 2), 1.0], -np.ones(n - 1)],
+                    [-1, 0, 1])
+    exact = 4.0 * k * np.sin(np.arange(n) * np.pi / (2.0 * n)) ** 2
+    return (k * line).tocsr(), sp.identity(n, format="csr"), exact
+
+
+@pytest.mark.parametrize("n", [40, 700], ids=["dense", "sparse"])
+def test_a_stiff_free_free_model_is_not_a_mechanism(n):
+    """Its rigid-body pivot is about -sigma n m against diagonal entries 2 k: at the default shift
+    below PIVOT_RATIO (the singularity test fails), at SHIFT_RETRY sigma above it. The solve
+    repeats at the larger shift and gives the exact eigenvalues (the residual check moves the
+    shift once more, to -lambda_1 / 10: the dense solve at -39 alone erred by 3e-6)."""
+    k, m, exact = _stiff_chain(n)
+    shifted = (k - modal.DEFAULT_SHIFT * m).toarray()
+    pivots = np.diag(sla.cholesky(shifted, lower=True)) ** 2 / np.diag(shifted)
+    assert pivots.min() < PIVOT_RATIO < modal.SHIFT_RETRY * pivots.min()
+    if n > modal.DENSE_LIMIT:
+        with pytest.raises(MasslessMechanism):
+            factorize(k - modal.DEFAULT_SHIFT * m)
+    lam, phi = modal.solve_eigen(k, m, 8)
+    np.testing.assert_allclose(lam[1:], exact[1:8], rtol=1e-9)
+    assert abs(lam[0]) < 1e-8 * exact[1]
+    gram = phi.T @ (m @ phi)
+    np.testing.assert_allclose(np.diag(gram), 1.0, rtol=1e-12)
+    np.testing.assert_allclose(gram[1:, 1:], np.eye(7), atol=1e-10)      # the elastic modes
+
+
+@pytest.mark.parametrize("n", [40, 700], ids=["dense", "sparse"])
+def test_a_massless_mechanism_still_raises(n):
+    """The same chain with one end DOF cut loose and massless: no shift gives it a pivot."""
+    k, m, _ = _stiff_chain(n, 1.0)
+    k, m = k.tolil(), m.tolil()
+    k[0, :] = 0.0
+    k[:, 0] = 0.0
+    m[0, 0] = 0.0
+    with pytest.raises(MasslessMechanism, match="massless mechanism"):
+        modal.solve_eigen(k.tocsr(), m.tocsr(), 4)
