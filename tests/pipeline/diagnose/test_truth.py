@@ -78,6 +78,26 @@ def test_deterministic(frame_cases, tmp_path):
         assert (again / name).read_bytes() == (first / name).read_bytes(), name
 
 
+def test_noise_scales_the_same_draws(frame_cases, tmp_path):
+    """At (2 %, 10 %) noise the case is the same but for its noise, which is twice the default's
+    draw by draw, and at (0, 0) it is the truth's modes (reference: the truth deck's own modes).
+    Tolerances: the UFF's numbers carry 6 digits (2e-6 relative, measured)."""
+    first, deck = frame_cases["member_taper"]
+    loud, exact = (make_case("frame", "member_taper", SEED, tmp_path / name, noise=noise).parent
+                   for name, noise in (("loud", (0.02, 0.10)), ("exact", (0.0, 0.0))))
+    for name in ("case.toml", "frame.bdf", "mass_frame.json"):
+        assert (loud / name).read_bytes() == (first / name).read_bytes(), name
+    assert _truth(loud)["noise"] == {"frequency": 0.02, "shape": 0.10}
+    quiet, noisy, zero = (load_gvt(folder / "gvt_frame.unv") for folder in (first, loud, exact))
+    truth = compute_modes(read_model(deck), N_RIGID + N_TEST)["frequency"].values[N_RIGID:]
+    np.testing.assert_allclose(zero["frequency"].values, truth, rtol=1e-5)
+    f0, s0 = zero["frequency"].values, zero["shape"].values
+    np.testing.assert_allclose(noisy["frequency"].values / f0 - 1,
+                               2.0 * (quiet["frequency"].values / f0 - 1), atol=1e-5)
+    np.testing.assert_allclose(noisy["shape"].values - s0, 2.0 * (quiet["shape"].values - s0),
+                               atol=1e-5 * np.abs(s0).max())
+
+
 def test_case_read_by_the_pipeline(frame_cases):
     folder, _ = frame_cases["none"]
     case = read_case(folder / "case.toml")

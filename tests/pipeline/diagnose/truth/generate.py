@@ -10,7 +10,8 @@ aircraft); the draw closest to the range is kept when none falls in it.
 The GVT follows ``data/x56_like/truth/make_truth.py``: the truth's elastic modes 7 .. 6 + N_TEST
 (our solver) at the 120 sensors (analysis grid ids and positions), each shape's sign fixed
 (largest entry positive), then frequencies x (1 + 1 % N(0, 1)), shapes + N(0, (5 % of the mode's
-RMS)^2) per DOF, damping zeta uniform 1-2 %; UFF 15 + 55. The weighing is the truth's exact
+RMS)^2) per DOF (``noise``: other levels scale the same draws), damping zeta uniform 1-2 %;
+UFF 15 + 55. The weighing is the truth's exact
 weight, CG and inertia about the CG (``make_truth.measured_mass``).
 
 Random streams: the scatter ``numpy.random.default_rng((seed, structure))`` (the same aircraft for
@@ -87,17 +88,18 @@ def _suspended(modes: xr.Dataset) -> bool:
 
 
 def _gvt(modes: xr.Dataset, sensors, analysis_xyz: dict, n_test: int, rng, units: str,
-         title: str) -> xr.Dataset:
-    """Noisy GVT of the truth's elastic modes at the sensors (module docstring)."""
+         title: str, noise: tuple) -> xr.Dataset:
+    """Noisy GVT of the truth's elastic modes at the sensors (module docstring); ``noise`` is
+    (frequency, shape) noise."""
     key = {(int(g), int(c)): j for j, (g, c) in
            enumerate(zip(modes["grid"].values, modes["component"].values))}
     elastic = modes.isel(mode=slice(N_RIGID, N_RIGID + n_test))
     shape = elastic["shape"].values[:, [key[s] for s in sensors]]
     peak = np.take_along_axis(shape, np.abs(shape).argmax(axis=1)[:, None], axis=1)
     shape = shape * np.sign(peak)
-    f = elastic["frequency"].values * (1.0 + FREQUENCY_NOISE * rng.standard_normal(n_test))
+    f = elastic["frequency"].values * (1.0 + noise[0] * rng.standard_normal(n_test))
     rms = np.sqrt(np.mean(shape ** 2, axis=1, keepdims=True))
-    shape = shape + SHAPE_NOISE * rms * rng.standard_normal(shape.shape)
+    shape = shape + noise[1] * rms * rng.standard_normal(shape.shape)
     zeta = rng.uniform(*DAMPING, n_test)
     return make_gvt_dataset(f, shape, [g for g, _ in sensors], [c for _, c in sensors],
                             mode=np.arange(N_RIGID + 1, N_RIGID + 1 + n_test), damping=zeta,
@@ -128,7 +130,8 @@ def _case_toml(name: str, units: str, configurations, diagnose: dict) -> str:
 
 
 def make_case(structure: str, kind: str, seed: int, out, *, decks=None,
-              diagnose: dict | None = None) -> Path:
+              diagnose: dict | None = None,
+              noise: tuple = (FREQUENCY_NOISE, SHAPE_NOISE)) -> Path:
     """Write a blind-study case into ``out``; returns the path of its ``case.toml``.
 
     Parameters
@@ -142,6 +145,9 @@ def make_case(structure: str, kind: str, seed: int, out, *, decks=None,
         per configuration in :data:`TRUTH_DECKS`).
     diagnose : dict, optional
         A ``[diagnose]`` table for the case file (e.g. ``{"max_effects": 1}``); none by default.
+    noise : (frequency, shape), the standard deviations of the test's noise (fractions: of each
+        frequency, of each shape's RMS per DOF); the same draws scaled (a case at other noise is
+        the same case otherwise).
 
     Returns
     -------
@@ -149,12 +155,16 @@ def make_case(structure: str, kind: str, seed: int, out, *, decks=None,
         ``out / "case.toml"``; beside it the analysis decks, ``gvt_<configuration>.unv``,
         ``mass_<configuration>.json`` and ``truth.json`` (``kind``, ``grids``, ``elements``,
         ``properties``, ``size`` in the analysis deck's ids, ``neighbours``, ``structure``,
-        ``seed``, ``parameters``, ``max_frequency_shift``).
+        ``seed``, ``parameters``, ``max_frequency_shift``, ``noise``).
     """
     if structure not in STRUCTURES:
         raise InputError(f"structure {structure!r}; valid: {', '.join(STRUCTURES)}.")
     if kind not in TRUTH_KINDS:
         raise InputError(f"kind {kind!r}; valid: {', '.join(TRUTH_KINDS)}.")
+    noise = tuple(float(v) for v in noise)
+    if len(noise) != 2 or not all(0.0 <= v < 1.0 for v in noise):
+        raise InputError(f"noise {noise}: give (frequency, shape) standard deviations as "
+                         "fractions in [0, 1).")
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     streams = (int(seed), STRUCTURES.index(structure), TRUTH_KINDS.index(kind))
@@ -190,7 +200,7 @@ def make_case(structure: str, kind: str, seed: int, out, *, decks=None,
             xyz = effects.topology(read_pynastran(start)).xyz if c != first else topo.xyz
             gvt = _gvt(modes, sensors, {g: tuple(float(v) for v in p) for g, p in xyz.items()},
                        n_test, np.random.default_rng((*streams, 2 + i)), units,
-                       f"blind-study truth {structure} {kind} seed {seed}, {c}")
+                       f"blind-study truth {structure} {kind} seed {seed}, {c}", noise)
             write_uff(gvt, out / f"gvt_{c}.unv", title=f"{structure} {c} GVT")
             write_json(x56.measured_mass(props), out / f"mass_{c}.json")
             written[c] = analysis_decks[c]
@@ -204,7 +214,8 @@ def make_case(structure: str, kind: str, seed: int, out, *, decks=None,
               "size_meaning": effects.SIZE[kind],
               "neighbours": {"grids": grids, "elements": els} if kind != "none" else
               {"grids": [], "elements": []},
-              "max_frequency_shift": shift, "parameters": _jsonable(chosen.params)}
+              "max_frequency_shift": shift, "parameters": _jsonable(chosen.params),
+              "noise": {"frequency": noise[0], "shape": noise[1]}}
     write_text(json.dumps(record, indent=1) + "\n", out / "truth.json")
     return write_text(_case_toml(f"{structure}_{kind}_{seed}", units, written.items(),
                                  diagnose or {}), out / "case.toml")

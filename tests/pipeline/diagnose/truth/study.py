@@ -20,9 +20,10 @@ Scores (issue 14, "Must show"):
   cases run without it.
 
 Run ``python -m tests.pipeline.diagnose.truth.study [--structures frame x56] [--kinds ...]
-[--seeds 10] [--first-seed 0] [--out DIR]`` from the repository root: prints the confusion
-matrix, the scores and the gap of every correctly named case, writes ``DIR/study.nc`` and every
-case's ``diagnose.json`` and ``score.json``. A study split over processes (kinds or seeds per
+[--seeds 10] [--first-seed 0] [--noise 0.01 0.05] [--out DIR]`` from the repository root
+(``--noise``: the test's frequency and shape noise, :func:`make_case`; the workflow is not told
+it): prints the confusion matrix, the scores and the gap of every correctly named case, writes
+``DIR/study.nc`` and every case's ``diagnose.json`` and ``score.json``. A study split over processes (kinds or seeds per
 core) is scored as one with ``--score DIR [DIR ...]`` (:func:`rescore`; no case is run).
 """
 from __future__ import annotations
@@ -38,7 +39,8 @@ import xarray as xr
 
 from structures.common.files import write_dataset, write_text
 
-from .generate import KINDS, STRUCTURES, TRUTH_DECKS, TRUTH_KINDS, make_case
+from .generate import (FREQUENCY_NOISE, KINDS, SHAPE_NOISE, STRUCTURES, TRUTH_DECKS, TRUTH_KINDS,
+                       make_case)
 
 #: Columns of the confusion matrix: every kind the workflow can name and its other verdicts.
 NAMED = KINDS + ("none", "ambiguous", "unexplained", "error")
@@ -100,8 +102,9 @@ def add_truth_gap(folder: Path) -> dict:
     truth = json.loads((folder / "truth.json").read_text())
     with tempfile.TemporaryDirectory() as tmp:
         again = Path(tmp) / "case"
+        noise = truth.get("noise", {"frequency": FREQUENCY_NOISE, "shape": SHAPE_NOISE})
         make_case(truth["structure"], truth["kind"], truth["seed"], again,
-                  decks=Path(tmp) / "decks")
+                  decks=Path(tmp) / "decks", noise=(noise["frequency"], noise["shape"]))
         for gvt in sorted(folder.glob("gvt_*.unv")):
             if not filecmp.cmp(gvt, again / gvt.name, shallow=False):
                 raise ValueError(f"{folder}: {gvt.name} differs from the one made again: the "
@@ -144,7 +147,8 @@ def _floor(folder: Path) -> dict | None:
 
 
 def run_study(structures=STRUCTURES, kinds=TRUTH_KINDS, seeds=range(10), out=None, *,
-              diagnose: dict | None = None, progress=print) -> xr.Dataset:
+              diagnose: dict | None = None, noise=(FREQUENCY_NOISE, SHAPE_NOISE),
+              progress=print) -> xr.Dataset:
     """Generate and diagnose every (structure, kind, seed) case; the scored study.
 
     Parameters
@@ -154,6 +158,7 @@ def run_study(structures=STRUCTURES, kinds=TRUTH_KINDS, seeds=range(10), out=Non
     seeds : sequence of int
     out : folder of the cases (``out/<structure>/<kind>/<seed>/``) and ``study.nc``
     diagnose : dict, optional, the cases' ``[diagnose]`` table (default: none, the defaults)
+    noise : (frequency, shape) noise of the test data (:func:`make_case`)
     progress : callable(str) or None, one line per case
 
     Returns
@@ -175,7 +180,7 @@ def run_study(structures=STRUCTURES, kinds=TRUTH_KINDS, seeds=range(10), out=Non
                 folder = out / structure / kind / str(seed)
                 with tempfile.TemporaryDirectory() as decks:
                     case = make_case(structure, kind, seed, folder, diagnose=diagnose,
-                                     decks=decks)
+                                     decks=decks, noise=noise)
                     floor = truth_gap(case, Path(decks))
                 write_text(json.dumps(floor, indent=1) + "\n", folder / TRUTH_GAP)
                 truth = json.loads((folder / "truth.json").read_text())
@@ -328,6 +333,10 @@ def main(argv=None) -> None:
     parser.add_argument("--kinds", nargs="+", default=list(TRUTH_KINDS), choices=TRUTH_KINDS)
     parser.add_argument("--seeds", type=int, default=10, help="seeds 0 .. N-1")
     parser.add_argument("--first-seed", type=int, default=0)
+    parser.add_argument("--noise", type=float, nargs=2, metavar=("FREQUENCY", "SHAPE"),
+                        default=[FREQUENCY_NOISE, SHAPE_NOISE],
+                        help="the test data's noise: standard deviations of each frequency and of "
+                             "each shape DOF (fractions of the frequency, of the shape's RMS)")
     parser.add_argument("--out", type=Path, default=Path("runs/diagnose_blind_study"))
     parser.add_argument("--score", type=Path, nargs="+", metavar="DIR",
                         help="score the cases already run under these folders (a later folder's "
@@ -347,7 +356,8 @@ def main(argv=None) -> None:
         ds = rescore(args.score)
     else:
         ds = run_study(args.structures, args.kinds,
-                       range(args.first_seed, args.first_seed + args.seeds), args.out)
+                       range(args.first_seed, args.first_seed + args.seeds), args.out,
+                       noise=tuple(args.noise))
     print(confusion_text(ds))
     print(gap_text(ds))
 
