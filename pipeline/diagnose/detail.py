@@ -18,8 +18,8 @@ Once a joint is named, it is fitted again with one compliance per CBUSH componen
    directional values give 446). So log10 c_p is searched globally, within
    :data:`SEARCH_DECADES` of the named values, by differential evolution (Storn & Price 1997,
    :func:`scipy.optimize.differential_evolution`, fixed seed) on the joint's Craig-Bampton basis
-   with one stiffness matrix per component (:mod:`pipeline.diagnose.ladder`), the nominal
-   parameters held at the named fit's; models too large for that basis skip the search.
+   with one stiffness matrix per component (:mod:`pipeline.diagnose.ladder`; sparse above
+   :data:`structures.modal.DENSE_LIMIT` DOFs), the nominal parameters held at the named fit's.
 2. *Refit.* The bounded least squares of :func:`pipeline.diagnose.screen.refit` (exact
    reanalysis, the nominal parameters free) from the search's best point.
 
@@ -104,7 +104,8 @@ def search(problem, effects, theta, candidate, values) -> tuple:
     for i, ref in enumerate(refs):
         sensors = ref.sensor_index if ref.has_shapes else np.zeros(0, int)
         try:
-            basis = reduce_joint(problem.model(i, theta, effects), candidate, sensors, ref.nmodes)
+            basis = reduce_joint(problem.model(i, theta, effects), candidate, sensors, ref.nmodes,
+                                 any_size=True)
         except (InputError, SolverError):
             basis = None
         if basis is None:

@@ -40,9 +40,11 @@ import scipy.sparse as sp
 import xarray as xr
 
 from structures.assembly import assemble
+from structures.common.errors import SolverError
 from structures.massprops import mass_properties
 from structures.modal import DEFAULT_SHIFT, DENSE_LIMIT, rigid_body_modes, solve_eigen
 from structures.model import FEModel
+from structures.sparse_factor import factorize
 
 #: Fixed-interface modes kept, per analysis mode asked for. Measured on the X-56A-class model
 #: (8 joints, compliances 1 to 1e5, both configurations, the 24 lowest elastic modes): largest
@@ -102,7 +104,8 @@ class ReducedJoint:
         return ds, (self.sensor @ y).T
 
 
-def reduce_joint(model: FEModel, candidate, sensor_index, nmodes: int) -> ReducedJoint | None:
+def reduce_joint(model: FEModel, candidate, sensor_index, nmodes: int, *,
+                 any_size: bool = False, dense_limit: int = DENSE_LIMIT) -> ReducedJoint | None:
     """The joint candidate's changed model on its Craig-Bampton basis.
 
     Parameters
@@ -112,13 +115,17 @@ def reduce_joint(model: FEModel, candidate, sensor_index, nmodes: int) -> Reduce
         at 0; or directional, :data:`pipeline.diagnose.effects.JOINT_DIRECTIONS`).
     sensor_index : (n_dof,) measured DOFs along the modes' ``dof`` (6 per grid, basic frame).
     nmodes : int, analysis modes per rung.
+    any_size : bool, reduce an a-set above ``dense_limit`` too, through sparse matrices
+        (:func:`structures.sparse_factor.factorize` for K_ii, :func:`structures.modal.solve_eigen`
+        for the fixed-interface modes); else None there.
+    dense_limit : int, the largest a-set reduced with dense matrices.
 
     Returns
     -------
-    ReducedJoint, or None where the basis does not apply: an a-set above
-    :data:`structures.modal.DENSE_LIMIT`, an a-set that changes with the compliance (automatic
-    SPCs), an interior that is not stiff once the boundary is clamped (a mechanism inside), or
-    no fixed-interface mode to keep (``nmodes`` 0, or every DOF on the springs).
+    ReducedJoint, or None where the basis does not apply: an a-set above ``dense_limit``
+    without ``any_size``, an a-set that changes with the compliance (automatic SPCs), an
+    interior that is not stiff once the boundary is clamped (a mechanism inside), or no
+    fixed-interface mode to keep (``nmodes`` 0, or every DOF on the springs).
     """
     from pipeline.diagnose.effects import JOINT_DIRECTIONS, apply_effect
 
@@ -130,44 +137,58 @@ def reduce_joint(model: FEModel, candidate, sensor_index, nmodes: int) -> Reduce
         raised = [np.r_[_C2, base[1:]]]
     changed = apply_effect(model, candidate, base)
     s1 = assemble(changed, warn=False)
-    if s1.K.shape[0] > DENSE_LIMIT:
+    dense = s1.K.shape[0] <= dense_limit
+    if not dense and not any_size:
         return None
-    k1 = s1.K.toarray()
+
+    def matrix(a):
+        return a.toarray() if dense else sp.csr_matrix(a)
+
+    k1 = matrix(s1.K)
     parts = []
     for x in raised:
         s2 = assemble(apply_effect(model, candidate, x), warn=False)
         if not np.array_equal(s1.a_dofs, s2.a_dofs):
             return None
-        parts.append((k1 - s2.K.toarray()) / (1.0 / _C1 - 1.0 / _C2))    # B_p
-    springs = np.sum(parts, axis=0)                                        # B
+        parts.append((k1 - matrix(s2.K)) / (1.0 / _C1 - 1.0 / _C2))       # B_p
+    springs = sum(parts[1:], parts[0])                                     # B
     k0 = k1 - springs / _C1                                                # K_0
     # Off the springs' DOFs K(1) and K(2) are the same sums of the same numbers, so B is exactly
     # 0 there; on them its rows are k_ref-sized (smallest row 1.6e-3 of max|B| over the X-56A-
     # class and frame joints). The cut lies far below that and far above the round-off an entry
     # of B = 2 (K(1) - K(2)) can carry, eps max|K(1)| (6e-15 of max|B| on the X-56A-class
     # model); a round-off row taken into b would only enlarge the exact part of the basis.
-    bound = np.flatnonzero(np.abs(springs).max(axis=1) > 1e-12 * np.abs(springs).max())
+    rows = np.asarray(abs(springs).max(axis=1).todense() if not dense else
+                      np.abs(springs).max(axis=1)).ravel()
+    bound = np.flatnonzero(rows > 1e-12 * rows.max())
     inner = np.setdiff1d(np.arange(k0.shape[0]), bound)
     n_i, nb = inner.size, bound.size
     nf = min(n_i, FIXED_INTERFACE_FACTOR * nmodes)
     if nf < 1:
         return None
-    m = s1.M.toarray()
-    try:
-        factor = sla.cho_factor(k0[np.ix_(inner, inner)])
-    except np.linalg.LinAlgError:
-        return None
-    # fixed-interface modes as the largest 1 / lambda of (M_ii, K_ii): K_ii is positive definite
-    # once the boundary is clamped, M_ii may be singular (massless rotations)
-    _, phi_i = sla.eigh(m[np.ix_(inner, inner)], k0[np.ix_(inner, inner)],
-                        subset_by_index=[n_i - nf, n_i - 1])
+    m = matrix(s1.M)
     psi = np.zeros((k0.shape[0], nf + nb))
-    psi[inner, :nf] = phi_i
-    psi[inner, nf:] = -sla.cho_solve(factor, k0[np.ix_(inner, bound)])   # constraint modes
     psi[bound, nf:] = np.eye(nb)
+    k_ii, k_ib, m_ii = k0[inner][:, inner], k0[inner][:, bound], m[inner][:, inner]
+    if dense:
+        try:
+            factor = sla.cho_factor(k_ii)
+        except np.linalg.LinAlgError:
+            return None
+        # fixed-interface modes as the largest 1 / lambda of (M_ii, K_ii): K_ii is positive
+        # definite once the boundary is clamped, M_ii may be singular (massless rotations)
+        _, psi[inner, :nf] = sla.eigh(m_ii, k_ii, subset_by_index=[n_i - nf, n_i - 1])
+        psi[inner, nf:] = -sla.cho_solve(factor, k_ib)                    # constraint modes
+    else:
+        try:
+            factor = factorize(k_ii, groups=s1.a_dofs[inner] // 6)
+            _, psi[inner, :nf] = solve_eigen(k_ii, m_ii, nf, groups=s1.a_dofs[inner] // 6)
+        except SolverError:
+            return None
+        psi[inner, nf:] = -factor.solve(k_ib.toarray())
     rotate = (s1.rotation @ (s1.T @ psi))                                   # (n_g, nr) basic
     _, rigid = rigid_body_modes(changed, s1)
-    return ReducedJoint(k0=psi.T @ k0 @ psi, b=np.stack([psi.T @ b @ psi for b in parts]),
-                        m=psi.T @ m @ psi,
+    return ReducedJoint(k0=psi.T @ (k0 @ psi), b=np.stack([psi.T @ (b @ psi) for b in parts]),
+                        m=psi.T @ (m @ psi),
                         sensor=np.asarray(rotate)[np.asarray(sensor_index)], rigid=list(rigid),
                         props=mass_properties(changed, m_basic=s1.m_basic), nmodes=nmodes)

@@ -446,9 +446,27 @@ def diagnose(configurations, settings: DiagnoseSettings = DiagnoseSettings(), *,
                                     f"dispersion, below the margin {settings.margin:g})."
                                     if outward else "moves it inward)."))
             if verdict == "effect":
-                verdict, path = _load_path_check(problem, theta, effects, none_evs, r0, scored,
-                                                 best, c, n_data, len(cands),
-                                                 settings.margin)
+                found = best_load_path(problem, theta, effects, none_evs, r0)
+                verdict, path = _against_path(found, problem, scored, best, n_data, len(cands),
+                                              settings.margin)
+                rich = (detailed(problem, effects, fits[best], n_data=n_data,
+                                 jacobian_theta=cal.jacobian) if verdict == "ambiguous" else None)
+                if rich is not None:
+                    row = _score_rows(problem, [rich])
+                    again = _against_path(found, problem, (scored[0], scored[1][:best] + row +
+                                                           scored[1][best + 1:], scored[2]),
+                                          best, n_data, len(cands), settings.margin)
+                    notes.append(f"round {k + 1}: {fits[best].candidate.kind} "
+                                 f"{fits[best].candidate.label} against the load path between "
+                                 f"grids {path[0].grids[0]} and {path[0].grids[1]} within the "
+                                 "margin: with one compliance per CBUSH component (chi^2 "
+                                 f"{fits[best].chi2:.1f} -> {rich.chi2:.1f}) it scores "
+                                 f"{again[1][2]:.1f} against the path's {again[1][1]:.1f}"
+                                 + (", named." if again[0] == "effect" else "."))
+                    if again[0] == "effect":
+                        verdict, path = again
+                        fits[best] = rich
+                        modes[best] = held_out_modes(problem, rich.evaluations)[0]
             rounds.append(_round_record(k, verdict, fits, best, runner, none,
                                         (modes_none, modes, entries), n_data, scored + (c,),
                                         path, same))
@@ -516,15 +534,16 @@ def _none_fit(problem: Problem, cal, n_data: int):
                     len(cal.theta), cal.evaluations)
 
 
-def _load_path_check(problem: Problem, theta, effects, evaluations, r0, scored, best: int,
-                     c: float, n_data: int, n_candidates: int, margin: float) -> tuple:
+def _against_path(found, problem: Problem, scored, best: int, n_data: int, n_candidates: int,
+                  margin: float) -> tuple:
     """(verdict, (LoadPath, its score, the named effect's score) or None): "unexplained" when the
-    best load path (:mod:`pipeline.diagnose.loadpath`) beats the named effect by the margin,
-    "ambiguous" when neither beats the other by it, else "effect"."""
-    found = best_load_path(problem, theta, effects, evaluations, r0)
+    best load path ``found`` (:func:`pipeline.diagnose.loadpath.best_load_path`, None: no path)
+    beats the named effect (fit ``best`` of the round's ``scored`` rows) by the margin,
+    "ambiguous" when neither beats the other by it, else "effect"; both scored at the modal
+    dispersion of those rows (:func:`pipeline.diagnose.verdict.round_scores`)."""
     if found is None:
         return "effect", None
-    scores, _, _ = round_scores(scored[0], scored[1], n_data, n_candidates, n_modal=scored[2])
+    scores, _, c = round_scores(scored[0], scored[1], n_data, n_candidates, n_modal=scored[2])
     beats, score = outscores(found, float(scores[best]), problem.modal_rows(), c,
                              problem.n_theta, n_data, n_candidates, margin)
     named = float(scores[best])
@@ -540,7 +559,7 @@ def _round_record(k: int, verdict: str, fits, best, runner, none, held_out, n_da
     :func:`pipeline.diagnose.predictive.held_out_modes`; ``scored`` is (the "none" row, the fits'
     rows, n_modal, c) that :func:`pipeline.diagnose.verdict.decide` took and returned (rows
     (..., chi2_modal, chi2_stated, n_params), c the modal dispersion); ``path`` is
-    (LoadPath, its score, the named effect's score) of :func:`_load_path_check`, or None when
+    (LoadPath, its score, the named effect's score) of :func:`_against_path`, or None when
     the round named nothing; ``alike`` the labels of the fits that predict the same data as the
     best (:func:`pipeline.diagnose.gap.indistinguishable`).
     """

@@ -122,6 +122,27 @@ def test_reduced_joint_modes_match_exact_reanalysis(frame_reference):
             assert mac.min() > 1.0 - 1e-6, (cand.label, size)
 
 
+def test_sparse_reduction_is_the_dense_one(frame_reference):
+    """The sparse route of reduce_joint (any_size, forced here with dense_limit 0: sparse K_ii
+    factorisation and shift-invert fixed-interface modes) against the dense one on a frame
+    joint: the same rung frequencies to 1e-9 and sensor shapes to MAC 1 - 1e-9 (the same basis
+    up to the fixed-interface modes' order and sign, so the same reduced modes)."""
+    model, _, ref = frame_reference
+    cand = next(c for c in candidates(model, ("joint_flexibility",))
+                if c.get("dependent") is None)
+    dense = reduce_joint(model, cand, ref.sensor_index, ref.nmodes)
+    sparse = reduce_joint(model, cand, ref.sensor_index, ref.nmodes, any_size=True,
+                          dense_limit=0)
+    assert reduce_joint(model, cand, ref.sensor_index, ref.nmodes, dense_limit=0) is None
+    for size in (1.0, 100.0, 1.0e5):
+        (f_d, s_d), (f_s, s_s) = dense.modes(size), sparse.modes(size)
+        np.testing.assert_allclose(f_s["frequency"].values[6:], f_d["frequency"].values[6:],
+                                   rtol=1e-9)
+        mac = np.einsum("ij,ij->i", s_d[6:], s_s[6:]) ** 2 / (
+            np.einsum("ij,ij->i", s_d[6:], s_d[6:]) * np.einsum("ij,ij->i", s_s[6:], s_s[6:]))
+        assert mac.min() > 1.0 - 1e-9, size
+
+
 def test_reduced_directional_joint_matches_exact_reanalysis(frame_reference):
     """A whole and a one-sided frame joint in their directional form (one compliance per CBUSH
     component, :func:`pipeline.diagnose.effects.directional`): the basis's six stiffness parts at
