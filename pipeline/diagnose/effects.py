@@ -53,7 +53,7 @@ scale of the model (so that bounds do not depend on units):
     every one > 0 otherwise. Skipped: rigid elements whose partial dependent
     components are not in basic axes. Very small compliances make K ill-conditioned: at 1e-6 on
     the X-56 wing ribs the rigid-body eigenvalues carry round-off of 2e-6 of the first elastic
-    one, which :mod:`structures.modal` rejects; 1e-5 is fine there.
+    one (:data:`structures.modal.RIGID_ZERO` accepts up to 1e-4).
 ``member_taper`` of a member (:mod:`pipeline.diagnose.members`), parameters ``scale``, ``taper``
     Each element's section scaled in size by s = (1 + scale) (1 + taper (xi - 1/2)) at its
     mid-length xi, as a solid section is: A times s^2 and I1, I2, I12, J times s^4. ``scale``
