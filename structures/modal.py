@@ -110,7 +110,7 @@ def _solve_at(k, m, nmodes: int, shift: float, groups, filename: str) -> tuple:
     nmodes = min(nmodes, k.shape[0])
     shifted = (k - shift * m).tocsc()
     if k.shape[0] <= DENSE_LIMIT:
-        lam, vec = _dense(k, m, nmodes, shifted, shift, groups, filename)
+        lam, vec = _dense(m, nmodes, shifted, shift, filename)
     else:
         lam, vec = _shift_invert(k, m, nmodes, shifted, shift, groups, filename)
         inaccurate = _inaccurate(k, m, lam, vec)
@@ -133,10 +133,9 @@ def _solve_at(k, m, nmodes: int, shift: float, groups, filename: str) -> tuple:
     return lam, vec / np.sqrt(gm)
 
 
-def _dense(k, m, nmodes: int, shifted: sp.csc_matrix, shift: float, groups,
+def _dense(m, nmodes: int, shifted: sp.csc_matrix, shift: float,
            filename: str) -> tuple[np.ndarray, np.ndarray]:
-    """Dense generalised eigen-solution of (M, K - sigma M) (``groups`` unused); eigenpairs
-    ascending."""
+    """Dense generalised eigen-solution of (M, K - sigma M); eigenpairs ascending."""
     dense = shifted.toarray()
     try:
         chol = sla.cholesky(dense, lower=True)

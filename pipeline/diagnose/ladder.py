@@ -18,8 +18,8 @@ K_ii, K_ib and M do not depend on c, so one Craig-Bampton basis (Craig & Bampton
     Psi = [[Phi_i, -K_ii^-1 K_ib], [0, I_bb]]         (rows i, b)
 
 serves every rung: K_r(c) = Psi^T K_0 Psi + sum_p Psi^T B_p Psi / c_p, M_r = Psi^T M Psi, and
-the modes of the rung are those of (K_r(c), M_r), of size nf + nb. The constraint modes hold the static
-response of the boundary exactly, so the rigid-body motions, the rigid joint (c -> 0) and the
+the modes of the rung are those of (K_r(c), M_r), of size nf + nb. The constraint modes hold the
+static response of the boundary exactly, so the rigid-body motions, the rigid joint (c -> 0) and the
 free hung part (c -> infinity) are in the basis; the truncation to the nf lowest fixed-interface
 modes (:data:`FIXED_INTERFACE_FACTOR` x the modes asked for) is the only approximation. The
 screening takes the best rung from this basis and analyses that size again exactly
@@ -158,8 +158,8 @@ def reduce_joint(model: FEModel, candidate, sensor_index, nmodes: int, *,
     # class and frame joints). The cut lies far below that and far above the round-off an entry
     # of B = 2 (K(1) - K(2)) can carry, eps max|K(1)| (6e-15 of max|B| on the X-56A-class
     # model); a round-off row taken into b would only enlarge the exact part of the basis.
-    rows = np.asarray(abs(springs).max(axis=1).todense() if not dense else
-                      np.abs(springs).max(axis=1)).ravel()
+    rows = abs(springs).max(axis=1)
+    rows = np.asarray(rows.todense() if sp.issparse(rows) else rows).ravel()
     bound = np.flatnonzero(rows > 1e-12 * rows.max())
     inner = np.setdiff1d(np.arange(k0.shape[0]), bound)
     n_i, nb = inner.size, bound.size
