@@ -7,6 +7,12 @@ the subspace they span):
 
 - ``frequency_rms_held_out`` / ``frequency_rms``: RMS of 100 (f_FE - f_GVT) / f_GVT (paper eq. 18)
   over the held-out paired modes / all paired modes [%];
+- ``frequency_rms_held_out_expected``: 100 sqrt(mean sigma_fj^2) over the held-out modes [%], the
+  RMS that the test's frequency noise and the nominal scatter alone give (sigma_fj of
+  :func:`pipeline.diagnose.evidence.build_reference`): what a model differing from the structure
+  only by them is expected to show on modes no fit saw; the same before and after (it depends on
+  the test and the nominal model only). An RMS over n modes spreads about it by a relative
+  standard deviation of about 1 / sqrt(2 n) (:func:`held_out_note`);
 - ``max_cross_orthogonality_offdiag``: largest |S_ij|, i != j, of the cross-orthogonality of the
   test modes with their paired analysis modes (paper eq. 20; SEREP on the rigid and paired modes
   and the close modes beside them, eqs. 11-14, :mod:`structures.correlation`), on the
@@ -196,6 +202,7 @@ def gap_metrics(problem, evaluations) -> dict:
             mass_by[ref.name] = {q: 100.0 * (values[q] - m) / size[q]
                                  for q, m in ref.measured_mass.items()}
     allerr, held = np.concatenate(errors), np.concatenate(held)
+    sigma_held = np.concatenate([ref.frequency_sigma[~ref.train] for ref in problem.refs])
     worst = {}
     for values in mass_by.values():
         for q, v in values.items():
@@ -205,6 +212,9 @@ def gap_metrics(problem, evaluations) -> dict:
     macs_held = np.concatenate(macs_held) if macs_held else np.zeros(0)
     return {"frequency_rms_held_out": float(np.sqrt(np.mean(held ** 2))) if held.size else None,
             "frequency_rms": float(np.sqrt(np.mean(allerr ** 2))),
+            "frequency_rms_held_out_expected": float(100.0 * np.sqrt(np.mean(sigma_held ** 2)))
+            if sigma_held.size else None,
+            "n_held_out": int(held.size),
             "max_cross_orthogonality_offdiag": max(cross) if cross else None,
             "max_cross_orthogonality_offdiag_held_out": max(cross_held) if cross_held and
             macs_held.size else None,
@@ -213,6 +223,34 @@ def gap_metrics(problem, evaluations) -> dict:
             "mac_mean": float(macs.mean()) if macs is not None else None,
             "mac_min_held_out": float(macs_held.min()) if macs_held.size else None,
             "mass": worst, "mass_by_configuration": mass_by, "flutter_speed": None}
+
+
+#: Standard deviations of its spread (module docstring) within which a held-out RMS is what the
+#: noise and the nominal scatter alone give (:func:`held_out_note`).
+HELD_OUT_SIGMAS = 2.0
+
+
+def held_out_note(gap_before: dict, gap_after: dict) -> str | None:
+    """A note when the held-out modes cannot judge the named effects: their frequency error
+    before is already within what the noise and the nominal scatter alone give,
+    ``frequency_rms_held_out_expected`` e times (1 + ``HELD_OUT_SIGMAS`` / sqrt(2 n)) over n
+    held-out modes (an RMS of n errors of standard deviation sigma_j has the relative standard
+    deviation sqrt(2 sum sigma_j^4) / (2 sum sigma_j^2), 1 / sqrt(2 n) at equal sigma_j). None
+    otherwise, or without held-out modes."""
+    before, after = gap_before.get("frequency_rms_held_out"), gap_after.get(
+        "frequency_rms_held_out")
+    expected, n = gap_before.get("frequency_rms_held_out_expected"), gap_before.get("n_held_out")
+    if before is None or after is None or expected is None or not n:
+        return None
+    upper = expected * (1.0 + HELD_OUT_SIGMAS / np.sqrt(2.0 * n))
+    if before > upper:
+        return None
+    return (f"gap: the {n} held-out modes' frequency error before, {before:.2f} %, is already "
+            f"within what the test noise and the nominal scatter alone give (about "
+            f"{expected:.2f} %, up to {upper:.2f} % over {n} modes at {HELD_OUT_SIGMAS:g} "
+            f"standard deviations): these modes do not see the missing effect, and their change "
+            f"({before:.2f} -> {after:.2f} %) does not judge it. All paired modes: "
+            f"{gap_before['frequency_rms']:.2f} -> {gap_after['frequency_rms']:.2f} %.")
 
 
 #: Two fitted models whose predictions differ by less than this many noise standard deviations

@@ -33,6 +33,7 @@ FOLDER = "diagnose"
 #: Unit of each scalar gap metric (mass-property errors are in %; ``flutter_speed`` in the unit
 #: system's velocity).
 GAP_UNITS = {"frequency_rms_held_out": "%", "frequency_rms": "%",
+             "frequency_rms_held_out_expected": "%", "n_held_out": "-",
              "max_cross_orthogonality_offdiag": "-",
              "max_cross_orthogonality_offdiag_held_out": "-",
              "max_cross_orthogonality_offdiag_unfiltered": "-", "mac_min": "-",

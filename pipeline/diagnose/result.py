@@ -17,7 +17,8 @@ from structures.common.errors import InputError
 
 VERDICTS = ("effect", "none", "ambiguous", "unexplained")
 #: Scalar gap metrics (keys of ``gap_before`` / ``gap_after``) put in the Dataset.
-GAP_METRICS = ("frequency_rms_held_out", "frequency_rms", "max_cross_orthogonality_offdiag",
+GAP_METRICS = ("frequency_rms_held_out", "frequency_rms", "frequency_rms_held_out_expected",
+               "max_cross_orthogonality_offdiag",
                "max_cross_orthogonality_offdiag_held_out",
                "max_cross_orthogonality_offdiag_unfiltered", "mac_min", "mac_min_held_out",
                "mac_mean")

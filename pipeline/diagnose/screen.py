@@ -108,6 +108,10 @@ LADDER_REFINE = (10.0 ** -0.125, 10.0 ** 0.125)
 LADDER_ROUNDOFF = 1e-9
 #: Most iterations of one refit (started at the screening's best size, a few suffice).
 REFIT_NFEV = 12
+#: Most iterations of the named effect's final fit (:func:`polish`).
+POLISH_NFEV = 60
+#: The polish stops when an iteration lowers chi^2 by less than this fraction of it.
+POLISH_FTOL = 1e-4
 #: Forward-difference step of an effect parameter, relative to its scale in the refit (the larger
 #: of its reference size and its starting value).
 FD_STEP = 1e-3
@@ -371,7 +375,8 @@ def pick_for_refit(rows, count: int) -> list:
 
 
 def refit(problem: Problem, theta0, effects, row: Screened | None, *, n_data: int,
-          jacobian_theta) -> Refitted | None:
+          jacobian_theta, max_nfev: int = REFIT_NFEV, starts=REFIT_START,
+          ftol: float = 1e-8) -> Refitted | None:
     """Bounded nonlinear least squares of a candidate's parameters and the nominal parameters.
 
     The effect parameters' Jacobian columns are forward differences with reanalysis, the pairing
@@ -379,9 +384,11 @@ def refit(problem: Problem, theta0, effects, row: Screened | None, *, n_data: in
     parameters' columns are ``jacobian_theta`` (n_data, n_theta), d r / d theta of the
     calibration (they change little with a small effect; this saves a reanalysis of every
     configuration per nominal parameter and iteration). ``row`` None refits the nominal
-    parameters alone ("none"). The start is the screening's best size scaled by
-    :data:`REFIT_START`, analysed exactly. A model that cannot be analysed at some trial point (a
-    mechanism) costs ``PENALTY`` times the starting residual there; None when every start fails.
+    parameters alone ("none"). The start is the screening's best size scaled by each of
+    ``starts`` (default :data:`REFIT_START`), analysed exactly. At most ``max_nfev`` iterations
+    (``scipy.optimize.least_squares``, trf, ``ftol``). A model that cannot be analysed at some
+    trial point (a mechanism) costs ``PENALTY`` times the starting residual there; None when
+    every start fails.
     """
     cand = None if row is None else row.candidate
     npar = 0 if cand is None else len(cand.parameters)
@@ -407,7 +414,7 @@ def refit(problem: Problem, theta0, effects, row: Screened | None, *, n_data: in
         return problem.residual(theta, evs), pairings(evs)
 
     start_fit = None
-    for t in REFIT_START if cand else (1.0,):
+    for t in starts if cand else (1.0,):
         z_t = np.concatenate([z0[:npar] * t, z0[npar:]])
         try:
             fit_t = residual(z_t)
@@ -436,7 +443,7 @@ def refit(problem: Problem, theta0, effects, row: Screened | None, *, n_data: in
     z = z0
     if z0.size:
         z = least_squares(fun, z0, jac=jac, bounds=(lo, hi), method="trf",
-                          max_nfev=REFIT_NFEV).x
+                          max_nfev=max_nfev, ftol=ftol).x
     theta, eff = split(z)
     try:
         evs = problem.evaluate(theta, eff)
@@ -445,6 +452,37 @@ def refit(problem: Problem, theta0, effects, row: Screened | None, *, n_data: in
     chi2 = chi_square(problem.residual(theta, evs))
     p = npar + len(theta0)
     return Refitted(cand, (z * scale)[:npar], theta, chi2, bic(chi2, p, n_data), p, evs)
+
+
+def polish(problem: Problem, effects, fit: Refitted, *, n_data: int,
+           jacobian_theta) -> Refitted:
+    """The named effect's fit continued to convergence (:func:`refit` from ``fit``, at most
+    :data:`POLISH_NFEV` iterations, stopping when an iteration lowers chi^2 by less than
+    :data:`POLISH_FTOL` of it); ``fit`` itself when that does not lower chi^2.
+
+    The refits that rank the candidates stop at :data:`REFIT_NFEV` iterations, enough to rank
+    them; the effect added to the model, written out and judged by the gap is its best fit. On
+    noise-free data (a hidden mass on a chain of masses, tests/pipeline/test_cmd_diagnose.py) 12
+    iterations leave an RMS frequency error of 0.06 %, one that differs by 0.1 % between
+    machines (their floating-point round-off takes the trust region elsewhere), and 40 reach
+    1e-4 %.
+
+    Parameters
+    ----------
+    problem : Problem
+    effects : sequence of (Candidate, values) already in the model.
+    fit : Refitted, with a candidate: the named effect's refit.
+    n_data : int, training data (the BIC's n).
+    jacobian_theta : (n_data, n_theta) d r / d theta, as in :func:`refit`.
+
+    Returns
+    -------
+    Refitted
+    """
+    row = Screened(fit.candidate, np.asarray(fit.values, float), fit.chi2, 0.0, None)
+    out = refit(problem, fit.theta, effects, row, n_data=n_data, jacobian_theta=jacobian_theta,
+                max_nfev=POLISH_NFEV, starts=(1.0,), ftol=POLISH_FTOL)
+    return out if out is not None and out.chi2 < fit.chi2 else fit
 
 
 def bound_release(problem: Problem, effects, fit: Refitted, *, jacobian_theta) -> tuple:

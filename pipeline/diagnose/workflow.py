@@ -13,7 +13,8 @@
 3. Nominal calibration and model-form flags (:mod:`pipeline.diagnose.calibrate`).
 4. Screening of every candidate at several sizes, 5. refit of the best
    (:mod:`pipeline.diagnose.screen`) and the verdict (:func:`decide`).
-6. Look again: the named effect is added and steps 4-5 repeat, up to ``settings.max_effects`` (a
+6. Look again: the named effect, its fit continued to convergence
+   (:func:`pipeline.diagnose.screen.polish`), is added and steps 4-5 repeat, up to ``settings.max_effects`` (a
    site already named is not offered again, alone or in a mirror pair).
 
 The verdict of each round is :func:`pipeline.diagnose.verdict.decide`; an effect it names must
@@ -45,13 +46,14 @@ from pipeline.diagnose.calibrate import Problem, calibrate
 from pipeline.diagnose.detail import detailed
 from pipeline.diagnose.effects import KINDS, candidates, neighbours
 from pipeline.diagnose.evidence import SELF_ORTHOGONALITY_LIMIT, build_reference, chi_square
-from pipeline.diagnose.gap import (EQUIVALENT_SIGMAS, gap_metrics, indistinguishable,
-                                   separating_measurement)
+from pipeline.diagnose.gap import (EQUIVALENT_SIGMAS, gap_metrics, held_out_note,
+                                   indistinguishable, separating_measurement)
 from pipeline.diagnose.loadpath import best_load_path, load_path_measurement, outscores
 from pipeline.diagnose.mirror import sites
 from pipeline.diagnose.predictive import held_out_evidence, held_out_modes, kept_modes
 from pipeline.diagnose.result import CandidateScore, DiagnoseResult, EffectRecord
-from pipeline.diagnose.screen import bound_release, pick_for_refit, refit, screen, signatures
+from pipeline.diagnose.screen import (bound_release, pick_for_refit, polish, refit, screen,
+                                      signatures)
 from pipeline.diagnose.verdict import (SCATTER_SIGMAS, at_bound, decide, round_scores,
                                         within_scatter)
 from structures.common.errors import InputError
@@ -510,12 +512,24 @@ def diagnose(configurations, settings: DiagnoseSettings = DiagnoseSettings(), *,
                                           "named_chi2": float(chosen.chi2),
                                           "named_bic": float(chosen.bic)}
                 chosen = rich
+            polished = polish(problem, effects, chosen, n_data=n_data, jacobian_theta=cal.jacobian)
+            if polished is not chosen:
+                notes.append(f"round {k + 1}: {chosen.candidate.kind} {chosen.candidate.label} "
+                             f"fitted to convergence: chi^2 {chosen.chi2:.4g} -> "
+                             f"{polished.chi2:.4g}.")
+                rounds[-1]["polished"] = {
+                    "parameters": dict(zip(polished.candidate.parameters,
+                                           map(float, polished.values))),
+                    "chi2": float(polished.chi2), "fitted_chi2": float(chosen.chi2)}
+                chosen = polished
             gap_after = rounds[-1]["gap"] = gap_metrics(problem, chosen.evaluations)
             rounds[-1]["nominal"] = {n: float(t) for n, t in zip(problem.names, chosen.theta)}
             records.append(EffectRecord(chosen.candidate, chosen.values, lead))
             effects.append((chosen.candidate, chosen.values))
             theta, none_evs = chosen.theta, chosen.evaluations
     verdict = "effect" if records else first
+    if records and (note := held_out_note(gap_before, gap_after)):
+        notes.append(note)
     notes.append(f"diagnose took {time.perf_counter() - t0:.1f} s "
                  f"({len(rounds)} round{'s' if len(rounds) > 1 else ''}).")
     return DiagnoseResult(verdict=verdict, effects=tuple(records), candidates=table,

@@ -140,12 +140,14 @@ def test_hidden_mass_is_named_and_the_gap_shrinks(folder, capsys):
                                                           HIDDEN_GRID + 100}
     assert (record["gap_after"]["frequency_rms_held_out"]
             < record["gap_before"]["frequency_rms_held_out"])
-    # the diagnosed deck carries the truth's mass and gives the truth's (the GVT's) frequencies
+    # the diagnosed deck carries the truth's mass and gives the truth's (the GVT's) frequencies:
+    # the named fit is converged (screen.polish), so to the UFF file's six significant digits
+    # (round-off up to 5e-6; 1.4e-6 measured), not to where the ranking refits stop (0.12 %)
     diagnosed = read_model(run / "base_diagnosed.bdf")
-    assert mass_properties(diagnosed).mass == pytest.approx(sum(MASSES) + HIDDEN_MASS, rel=1e-3)
+    assert mass_properties(diagnosed).mass == pytest.approx(sum(MASSES) + HIDDEN_MASS, rel=1e-5)
     test = load_gvt(folder / "gvt.unv")["frequency"].values
     fe = compute_modes(diagnosed, 18)["frequency"].values[6:]
-    np.testing.assert_allclose(fe, test, rtol=1e-3)
+    np.testing.assert_allclose(fe, test, rtol=1e-5)
 
 
 def _frequency_rms(deck: Path, gvt: Path) -> float:

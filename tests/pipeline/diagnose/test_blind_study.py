@@ -107,16 +107,21 @@ def test_rescore_merges_split_runs_and_reruns(tmp_path):
     _write_case(second, "frame", "member_taper", 0, taper,
                 _verdict("member_taper", elements=[2004]), seconds=70.0)
     (first / "frame" / "member_taper" / "1" / "truth_gap.json").write_text(json.dumps(
-        {"frequency_rms_held_out": 0.9, "max_cross_orthogonality_offdiag": 0.02}))
+        {"frequency_rms_held_out": 0.9, "max_cross_orthogonality_offdiag": 0.02,
+         "frequency_rms_held_out_expected": 1.5, "n_held_out": 8}))
     ds = rescore([first, second])
     assert ds.sizes["case"] == 3
     assert ds.attrs["top1_kind_accuracy"] == 1.0 and ds.attrs["none_kept"] == 1.0
     assert sorted(ds["seconds"].values.tolist()) == [40.0, 61.5, 70.0]
     assert ds.attrs["gap_shrinks"] == 0.5                 # seed 1's held-out error rose
     text = gap_text(ds)
-    assert "2.00 ->   2.50 ( 0.90)  0.300 -> 0.100 (0.020)  RMS up" in text
-    assert "5.00 ->   1.00 (  nan)  0.300 -> 0.100 (nan)" in text      # no truth_gap.json
-    assert text.endswith("drops: RMS 1, off-diagonal 2, both 1 of 2")
+    # seed 1 starts at 2.0 %, within 1.5 (1 + 2 / sqrt(16)) = 2.25 %: noise and scatter alone
+    assert ("2.00 ->   2.50 ( 0.90;  1.50)  0.300 -> 0.100 (0.020)  RMS up, held-out within "
+            "noise before") in text
+    assert "5.00 ->   1.00 (  nan;   nan)  0.300 -> 0.100 (nan)\n" in text  # no truth_gap.json
+    assert text.endswith("drops: RMS 1, off-diagonal 2, both 1 of 2; of the 1 others, 1 start "
+                         "with a held-out error within what noise and scatter alone give (2 "
+                         "standard deviations)")
     with pytest.raises(FileNotFoundError):
         rescore([tmp_path / "empty"])
 

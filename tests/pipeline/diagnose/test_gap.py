@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from pipeline.diagnose.gap import close_groups, close_mode_pairing, gap_metrics
+from pipeline.diagnose.gap import close_groups, close_mode_pairing, gap_metrics, held_out_note
 from structures.common.errors import InputError
 
 
@@ -37,6 +37,25 @@ def test_held_out_cross_orthogonality_and_mac_by_hand():
     # frequency errors 1, -2, 0.5 % -> held-out RMS 2 %, all sqrt(5.25 / 3) %
     assert gap["frequency_rms_held_out"] == pytest.approx(2.0, rel=1e-12)
     assert gap["frequency_rms"] == pytest.approx(np.sqrt(5.25 / 3.0), rel=1e-10)
+    # one held-out mode of sigma 1 %: the noise and scatter alone give an RMS of 1 %
+    assert gap["frequency_rms_held_out_expected"] == pytest.approx(1.0, rel=1e-12)
+    assert gap["n_held_out"] == 1
+
+
+def test_held_out_note_by_hand():
+    """Eight held-out modes expected at 1.5 %: their RMS spreads by 1 / sqrt(16) = 25 %, so up
+    to 1.5 (1 + 2 / 4) = 2.25 % is what the noise and scatter alone give. A held-out error of
+    2.2 % before is within it (the note says the held-out change does not judge the effect);
+    2.3 % is not (no note); without held-out modes no note."""
+    before = {"frequency_rms_held_out": 2.2, "frequency_rms": 9.0,
+              "frequency_rms_held_out_expected": 1.5, "n_held_out": 8}
+    after = {"frequency_rms_held_out": 2.4, "frequency_rms": 1.2}
+    note = held_out_note(before, after)
+    assert "up to 2.25 % over 8 modes" in note and "2.20 -> 2.40 %" in note
+    assert "9.00 -> 1.20 %" in note
+    assert held_out_note({**before, "frequency_rms_held_out": 2.3}, after) is None
+    assert held_out_note({**before, "frequency_rms_held_out": None, "n_held_out": 0},
+                         after) is None
 
 
 def test_close_groups_by_hand():

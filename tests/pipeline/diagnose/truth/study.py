@@ -138,7 +138,9 @@ def score(truth: dict, result: dict, floor: dict | None = None) -> dict:
             "rms_truth": least("frequency_rms_held_out"),
             "xo_before": gap("gap_before", "max_cross_orthogonality_offdiag"),
             "xo_after": gap("gap_after", "max_cross_orthogonality_offdiag"),
-            "xo_truth": least("max_cross_orthogonality_offdiag")}
+            "xo_truth": least("max_cross_orthogonality_offdiag"),
+            "rms_expected": least("frequency_rms_held_out_expected"),
+            "n_held_out": least("n_held_out")}
 
 
 def _floor(folder: Path) -> dict | None:
@@ -257,6 +259,9 @@ def study_dataset(rows: list[dict]) -> xr.Dataset:
          "error": ("case", np.array(col["error"], dtype=str)),
          "frequency_rms_held_out": (("case", "when"), np.array(
              [col["rms_before"], col["rms_after"], col["rms_truth"]], float).T, {"units": "%"}),
+         "frequency_rms_held_out_expected": ("case", np.array(col["rms_expected"], float),
+                                             {"units": "%"}),
+         "n_held_out": ("case", np.array(col["n_held_out"], float)),
          "max_cross_orthogonality_offdiag": (("case", "when"), np.array(
              [col["xo_before"], col["xo_after"], col["xo_truth"]], float).T),
          "confusion": (("truth_kind_row", "named_kind_column"), confusion)},
@@ -309,22 +314,43 @@ def gap_text(ds: xr.Dataset) -> str:
     """The gap of every correctly named case (a library kind named right): held-out RMS
     frequency error [%] and largest cross-orthogonality off-diagonal before -> after, marked
     where one of them does not drop, and how many cases each drops in."""
+    from pipeline.diagnose.gap import HELD_OUT_SIGMAS
+
     right = ds["kind_correct"].values & np.isin(ds["truth_kind"].values, KINDS)
     rms, xo = ds["frequency_rms_held_out"].values, ds["max_cross_orthogonality_offdiag"].values
     rms_drops, xo_drops = rms[:, 1] < rms[:, 0], (xo[:, 1] < xo[:, 0]) | np.isnan(xo[:, 0])
+    quiet = rms[:, 0] <= held_out_upper(ds)
     lines = [f"gap of the {int(right.sum())} correctly named cases (held-out RMS frequency error "
-             "%, largest cross-orthogonality off-diagonal; before -> after (the truth's own)):"]
+             "%, largest cross-orthogonality off-diagonal; before -> after (the truth's own; "
+             "what noise and scatter alone give)):"]
     for i in np.flatnonzero(right):
-        marks = [m for m, ok in (("RMS up", rms_drops[i]), ("off-diagonal up", xo_drops[i]))
-                 if not ok]
+        marks = [m for m, ok in (("RMS up", rms_drops[i]), ("off-diagonal up", xo_drops[i]),
+                                 ("held-out within noise before", not quiet[i])) if not ok]
         lines.append(f"  {ds['structure'].values[i]:6s} {ds['truth_kind'].values[i]:18s} seed "
                      f"{int(ds['seed'].values[i]):3d}: {rms[i, 0]:6.2f} -> {rms[i, 1]:6.2f} "
-                     f"({rms[i, 2]:5.2f})  {xo[i, 0]:.3f} -> {xo[i, 1]:.3f} ({xo[i, 2]:.3f})  "
+                     f"({rms[i, 2]:5.2f}; "
+                     f"{float(ds['frequency_rms_held_out_expected'].values[i]):5.2f})  "
+                     f"{xo[i, 0]:.3f} -> {xo[i, 1]:.3f} ({xo[i, 2]:.3f})  "
                      f"{', '.join(marks)}".rstrip())
-    both = int(np.sum(right & rms_drops & xo_drops))
+    both = right & rms_drops & xo_drops
     lines.append(f"drops: RMS {int(np.sum(right & rms_drops))}, off-diagonal "
-                 f"{int(np.sum(right & xo_drops))}, both {both} of {int(right.sum())}")
+                 f"{int(np.sum(right & xo_drops))}, both {int(both.sum())} of {int(right.sum())}; "
+                 f"of the {int(np.sum(right & ~both))} others, {int(np.sum(right & ~both & quiet))} "
+                 "start with a held-out error within what noise and scatter alone give "
+                 f"({HELD_OUT_SIGMAS:g} standard deviations)")
     return "\n".join(lines)
+
+
+def held_out_upper(ds: xr.Dataset) -> np.ndarray:
+    """(n_case,) the held-out RMS frequency error [%] that the noise and the nominal scatter alone
+    reach at ``HELD_OUT_SIGMAS`` standard deviations of an RMS over the case's held-out modes
+    (:func:`pipeline.diagnose.gap.held_out_note`); NaN without ``truth_gap.json``."""
+    from pipeline.diagnose.gap import HELD_OUT_SIGMAS
+
+    n = ds["n_held_out"].values
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return ds["frequency_rms_held_out_expected"].values * (
+            1.0 + HELD_OUT_SIGMAS / np.sqrt(2.0 * n))
 
 
 def main(argv=None) -> None:
