@@ -279,13 +279,25 @@ def gvt_dataset(modes: xr.Dataset, params: mm.X56Parameters, configuration: str,
                                    " (data/x56_like/truth/make_truth.py)", units=UNITS)
 
 
+#: Decimal places of the written mass properties (lb, in, lb-in^2): far below any weighing's
+#: accuracy, and above the last-digit round-off that differs between machines (the sums of the
+#: mass properties gave 246.08178599999994 on one, 246.081786 on another), so that the shipped
+#: files are made again byte for byte.
+MASS_DECIMALS = 6
+
+
 def measured_mass(props) -> dict:
-    """The JSON of structures.massprops.read_measured_mass from the truth's mass properties."""
+    """The JSON of structures.massprops.read_measured_mass from the truth's mass properties,
+    rounded to :data:`MASS_DECIMALS`."""
     p = props.product_of_inertia
     i = props.inertia
-    return {"weight": float(props.weight), "cg": [float(v) for v in props.cg],
-            "inertia_cg": [float(i[0, 0]), float(i[1, 1]), float(i[2, 2]), float(p["Ixy"]),
-                           float(p["Izx"]), float(p["Iyz"])]}
+
+    def r(value) -> float:
+        return round(float(value), MASS_DECIMALS) + 0.0          # + 0.0: no -0.0
+
+    return {"weight": r(props.weight), "cg": [r(v) for v in props.cg],
+            "inertia_cg": [r(i[0, 0]), r(i[1, 1]), r(i[2, 2]), r(p["Ixy"]), r(p["Izx"]),
+                           r(p["Iyz"])]}
 
 
 def write_truth(out: Path = MODEL_DIR, seed: int = SEED, decks: Path | None = None) -> dict:
