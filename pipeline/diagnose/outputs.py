@@ -142,7 +142,8 @@ def write_diagnosis(case, folder, run_dir, aero: dict | None = None, progress=No
     write_dataset(dataset, folder / FOLDER / "diagnose.nc")
     plot_candidates(record).savefig(folder / FOLDER / "candidates.png", dpi=90,
                                     metadata={"Software": None})
-    plot_gap(record, unit_labels(case.units).velocity).savefig(folder / FOLDER / "gap.png", dpi=90, metadata={"Software": None})
+    plot_gap(record, unit_labels(case.units).velocity).savefig(
+        folder / FOLDER / "gap.png", dpi=90, metadata={"Software": None})
     return result
 
 

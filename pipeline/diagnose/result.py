@@ -1,8 +1,8 @@
 """The result of :func:`pipeline.diagnose.diagnose`: verdict, named effects, ranking, gap.
 
 ``to_json()`` gives the issue's schema (plus ``effects`` for every look-again round, ``nominal``,
-``calibrated``, ``gap_models`` and ``rounds``); ``to_dataset()`` a netCDF-able Dataset: the first round's candidate table on dim
-``rank`` and the gap metrics on (``metric``, ``when``).
+``calibrated``, ``gap_models`` and ``rounds``); ``to_dataset()`` a netCDF-able Dataset: the
+first round's candidate table on dim ``rank`` and the gap metrics on (``metric``, ``when``).
 """
 from __future__ import annotations
 

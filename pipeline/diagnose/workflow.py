@@ -14,8 +14,9 @@
 4. Screening of every candidate at several sizes, 5. refit of the best
    (:mod:`pipeline.diagnose.screen`) and the verdict (:func:`decide`).
 6. Look again: the named effect, its fit continued to convergence
-   (:func:`pipeline.diagnose.screen.polish`), is added and steps 4-5 repeat, up to ``settings.max_effects`` (a
-   site already named is not offered again, alone or in a mirror pair).
+   (:func:`pipeline.diagnose.screen.polish`), is added and steps 4-5 repeat, up to
+   ``settings.max_effects`` (a site already named is not offered again, alone or in a mirror
+   pair).
 
 The verdict of each round is :func:`pipeline.diagnose.verdict.decide`; an effect it names must
 also fit inside its bounds (a parameter on a non-zero bound,
@@ -288,7 +289,8 @@ def _preflight(configurations, settings: DiagnoseSettings, notes: list):
                              f"{elastic_index(modes).size} elastic analysis modes. Fix: raise "
                              "[diagnose] nmodes.")
         ref, facts = build_reference(
-            data.name, data.model, data.gvt, data.measured_mass, modes, frequency_noise=settings.frequency_noise,
+            data.name, data.model, data.gvt, data.measured_mass, modes,
+            frequency_noise=settings.frequency_noise,
             shape_noise_value=settings.shape_noise, model_scatter=settings.model_scatter,
             holdout=settings.holdout, nmodes=nmodes, rotation=rotation)
         refs.append(ref)
@@ -296,7 +298,7 @@ def _preflight(configurations, settings: DiagnoseSettings, notes: list):
             notes.append(f"{data.name}: {n_test} test modes, {ref.sensor_index.size} sensor DOFs, "
                          f"shape noise {100 * facts['shape_noise']:.1f} % of the RMS (median), "
                          f"test self-orthogonality largest off-diagonal "
-                         f"{facts['self_orthogonality'] if facts['self_orthogonality'] is None else round(facts['self_orthogonality'], 3)}, "
+                         f"{_rounded(facts['self_orthogonality'])}, "
                          f"paired MAC min {min(facts['mac']):.2f}.")
             if facts["unmatched"]:
                 notes.append(f"{data.name}: test modes {facts['unmatched']} have no counterpart "
@@ -315,6 +317,11 @@ def _preflight(configurations, settings: DiagnoseSettings, notes: list):
             notes.append(f"{data.name}: no measured mass properties: a missing mass is seen only "
                          "through the frequencies.")
     return refs
+
+
+def _rounded(value):
+    """``value`` to 3 decimals, None as it is."""
+    return None if value is None else round(value, 3)
 
 
 def _table(problem: Problem, r0, rows, refits, none, n_data: int, n_candidates: int) -> tuple:
@@ -369,7 +376,8 @@ def diagnose(configurations, settings: DiagnoseSettings = DiagnoseSettings(), *,
         _say(progress, "calibrating the nominal parameters")
         cal = calibrate(problem)
         n_data = cal.n_data
-        notes += [f"calibration: {name} {100 * t:+.1f} %" for name, t in zip(problem.names, cal.theta)]
+        notes += [f"calibration: {name} {100 * t:+.1f} %"
+                  for name, t in zip(problem.names, cal.theta)]
         notes += list(cal.flags)
         gap_before = gap_metrics(problem, cal.evaluations)
         effects, records, rounds = [], [], []

@@ -23,8 +23,9 @@ Run ``python -m tests.pipeline.diagnose.truth.study [--structures frame x56] [--
 [--seeds 10] [--first-seed 0] [--noise 0.01 0.05] [--out DIR]`` from the repository root
 (``--noise``: the test's frequency and shape noise, :func:`make_case`; the workflow is not told
 it): prints the confusion matrix, the scores and the gap of every correctly named case, writes
-``DIR/study.nc`` and every case's ``diagnose.json`` and ``score.json``. A study split over processes (kinds or seeds per
-core) is scored as one with ``--score DIR [DIR ...]`` (:func:`rescore`; no case is run).
+``DIR/study.nc`` and every case's ``diagnose.json`` and ``score.json``. A study split over
+processes (kinds or seeds per core) is scored as one with ``--score DIR [DIR ...]``
+(:func:`rescore`; no case is run).
 """
 from __future__ import annotations
 
