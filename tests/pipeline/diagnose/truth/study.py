@@ -325,7 +325,10 @@ def gap_text(ds: xr.Dataset) -> str:
              "%, largest cross-orthogonality off-diagonal; before -> after (the truth's own; "
              "what noise and scatter alone give)):"]
     for i in np.flatnonzero(right):
-        marks = [m for m, ok in (("RMS up", rms_drops[i]), ("off-diagonal up", xo_drops[i]),
+        same = abs(xo[i, 1] - xo[i, 0]) < 0.5e-3                   # equal as printed
+        marks = [m for m, ok in (("RMS up", rms_drops[i]),
+                                 ("off-diagonal the same" if same else "off-diagonal up",
+                                  xo_drops[i]),
                                  ("held-out within noise before", not quiet[i])) if not ok]
         lines.append(f"  {ds['structure'].values[i]:6s} {ds['truth_kind'].values[i]:18s} seed "
                      f"{int(ds['seed'].values[i]):3d}: {rms[i, 0]:6.2f} -> {rms[i, 1]:6.2f} "
