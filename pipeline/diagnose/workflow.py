@@ -523,8 +523,8 @@ def diagnose(configurations, settings: DiagnoseSettings = DiagnoseSettings(), *,
             polished = polish(problem, effects, chosen, n_data=n_data, jacobian_theta=cal.jacobian)
             if polished is not chosen:
                 notes.append(f"round {k + 1}: {chosen.candidate.kind} {chosen.candidate.label} "
-                             f"fitted to convergence: chi^2 {chosen.chi2:.4g} -> "
-                             f"{polished.chi2:.4g}.")
+                             f"fitted to convergence: chi^2 {chosen.chi2:.6g} -> "
+                             f"{polished.chi2:.6g}.")
                 rounds[-1]["polished"] = {
                     "parameters": dict(zip(polished.candidate.parameters,
                                            map(float, polished.values))),
