@@ -230,19 +230,37 @@ def gap_metrics(problem, evaluations) -> dict:
 HELD_OUT_SIGMAS = 2.0
 
 
+def held_out_upper(expected, n):
+    """The held-out RMS frequency error [%] that the noise and the nominal scatter alone reach at
+    ``HELD_OUT_SIGMAS`` standard deviations of an RMS over n modes: e (1 + ``HELD_OUT_SIGMAS`` /
+    sqrt(2 n)), e = ``frequency_rms_held_out_expected`` (an RMS of n errors of standard deviation
+    sigma_j has the relative standard deviation sqrt(2 sum sigma_j^4) / (2 sum sigma_j^2),
+    1 / sqrt(2 n) at equal sigma_j).
+
+    Parameters
+    ----------
+    expected : float or (n_case,) array [%].
+    n : int or (n_case,) array, held-out modes (NaN gives NaN).
+
+    Returns
+    -------
+    float or (n_case,) array [%].
+    """
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.asarray(expected, float) * (1.0 + HELD_OUT_SIGMAS
+                                              / np.sqrt(2.0 * np.asarray(n, float)))
+
+
 def held_out_note(gap_before: dict, gap_after: dict) -> str | None:
     """A note when the held-out modes cannot judge the named effects: their frequency error
-    before is already within what the noise and the nominal scatter alone give,
-    ``frequency_rms_held_out_expected`` e times (1 + ``HELD_OUT_SIGMAS`` / sqrt(2 n)) over n
-    held-out modes (an RMS of n errors of standard deviation sigma_j has the relative standard
-    deviation sqrt(2 sum sigma_j^4) / (2 sum sigma_j^2), 1 / sqrt(2 n) at equal sigma_j). None
-    otherwise, or without held-out modes."""
+    before is already within what the noise and the nominal scatter alone give
+    (:func:`held_out_upper`). None otherwise, or without held-out modes."""
     before, after = gap_before.get("frequency_rms_held_out"), gap_after.get(
         "frequency_rms_held_out")
     expected, n = gap_before.get("frequency_rms_held_out_expected"), gap_before.get("n_held_out")
     if before is None or after is None or expected is None or not n:
         return None
-    upper = expected * (1.0 + HELD_OUT_SIGMAS / np.sqrt(2.0 * n))
+    upper = float(held_out_upper(expected, n))
     if before > upper:
         return None
     return (f"gap: the {n} held-out modes' frequency error before, {before:.2f} %, is already "

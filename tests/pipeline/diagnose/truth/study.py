@@ -315,12 +315,13 @@ def gap_text(ds: xr.Dataset) -> str:
     """The gap of every correctly named case (a library kind named right): held-out RMS
     frequency error [%] and largest cross-orthogonality off-diagonal before -> after, marked
     where one of them does not drop, and how many cases each drops in."""
-    from pipeline.diagnose.gap import HELD_OUT_SIGMAS
+    from pipeline.diagnose.gap import HELD_OUT_SIGMAS, held_out_upper
 
     right = ds["kind_correct"].values & np.isin(ds["truth_kind"].values, KINDS)
     rms, xo = ds["frequency_rms_held_out"].values, ds["max_cross_orthogonality_offdiag"].values
     rms_drops, xo_drops = rms[:, 1] < rms[:, 0], (xo[:, 1] < xo[:, 0]) | np.isnan(xo[:, 0])
-    quiet = rms[:, 0] <= held_out_upper(ds)
+    quiet = rms[:, 0] <= held_out_upper(ds["frequency_rms_held_out_expected"].values,
+                                         ds["n_held_out"].values)
     lines = [f"gap of the {int(right.sum())} correctly named cases (held-out RMS frequency error "
              "%, largest cross-orthogonality off-diagonal; before -> after (the truth's own; "
              "what noise and scatter alone give)):"]
@@ -343,18 +344,6 @@ def gap_text(ds: xr.Dataset) -> str:
                  "start with a held-out error within what noise and scatter alone give "
                  f"({HELD_OUT_SIGMAS:g} standard deviations)")
     return "\n".join(lines)
-
-
-def held_out_upper(ds: xr.Dataset) -> np.ndarray:
-    """(n_case,) the held-out RMS frequency error [%] that the noise and the nominal scatter alone
-    reach at ``HELD_OUT_SIGMAS`` standard deviations of an RMS over the case's held-out modes
-    (:func:`pipeline.diagnose.gap.held_out_note`); NaN without ``truth_gap.json``."""
-    from pipeline.diagnose.gap import HELD_OUT_SIGMAS
-
-    n = ds["n_held_out"].values
-    with np.errstate(divide="ignore", invalid="ignore"):
-        return ds["frequency_rms_held_out_expected"].values * (
-            1.0 + HELD_OUT_SIGMAS / np.sqrt(2.0 * n))
 
 
 def main(argv=None) -> None:
