@@ -110,7 +110,7 @@ from pipeline.diagnose.effect_deck import (change_matrices, model_changes, small
                                            write_patched_deck)
 from pipeline.diagnose.edits import append_elements, next_eid, next_pid
 from pipeline.diagnose.joints import flexible_joint, joint_sites
-from pipeline.diagnose.members import connectivity, find_members, grow, remesh
+from pipeline.diagnose.members import connectivity, find_members, fixed_masks, grow, remesh
 from pipeline.diagnose.mirror import mirror_pairs, site_values
 from structures.common.errors import InputError, card_message
 from structures.massprops import mass_properties
@@ -227,16 +227,6 @@ def _element_grids(model: FEModel) -> np.ndarray:
     return ids[ids > 0]
 
 
-def _fixed_masks(model: FEModel) -> np.ndarray:
-    """(ng,) constrained-component bit masks (SPC and GRID PS) per grid row."""
-    masks = np.array(model.grids.ps, np.int64)
-    if model.spc:
-        gids, bits = zip(*model.spc)
-        np.bitwise_or.at(masks, model.grids.index(list(gids), card="SPC",
-                                                   filename=model.filename), list(bits))
-    return masks
-
-
 def _lowest_elastic_frequency(model: FEModel) -> float:
     from structures.modal import compute_modes
     ds = compute_modes(model, 8)
@@ -269,7 +259,7 @@ def candidates(model: FEModel, kinds=KINDS, *, frequency: float | None = None
     kinds = _check_kinds(kinds)
     out = []
     grids = _element_grids(model)
-    fixed = _fixed_masks(model)[model.grids.index(grids)] if grids.size else np.zeros(0, int)
+    fixed = fixed_masks(model)[model.grids.index(grids)] if grids.size else np.zeros(0, int)
     free_grids = grids[(fixed & 7) != 7]
     props = mass_properties(model) if {"lumped_mass", "boundary_stiffness"} & set(kinds) else None
     members = find_members(model) if {"member_taper", "member_curvature"} & set(kinds) else ()

@@ -45,7 +45,7 @@ from scipy.sparse.csgraph import dijkstra
 
 from pipeline.diagnose.evidence import chi_square, evaluate_modes
 from pipeline.diagnose.grounded import ladder_sizes, reduce_load, spring_basis
-from pipeline.diagnose.members import connectivity
+from pipeline.diagnose.members import connectivity, fixed_masks
 from structures.model import FEModel
 
 #: Fewest elements between the two grids of a load path (two grids one or two elements apart are
@@ -88,7 +88,11 @@ class LoadPath:
 
 def pairs(model: FEModel, hops: int = HOPS, nearest: int = NEAREST) -> np.ndarray:
     """Pairs of grids joined through at least ``hops`` elements, each grid with its ``nearest``
-    nearest such grids (rigid elements count as elements).
+    nearest such grids (rigid elements count as elements). A grid whose three translations are
+    constrained (SPC, GRID PS) is no end: a spring to it is a support, the library's
+    ``boundary_stiffness``, not a path between two parts of the structure (on the clamped Goland
+    wing box of the blind study, a spring from a root grid along the upper skin, a grounded
+    spring in y, matched a support spring in z within the margin and made it ``ambiguous``).
 
     Returns
     -------
@@ -108,7 +112,8 @@ def pairs(model: FEModel, hops: int = HOPS, nearest: int = NEAREST) -> np.ndarra
     a = model.grids.index(np.concatenate(rows))
     b = model.grids.index(np.concatenate(cols))
     graph = sp.csr_matrix((np.ones(a.size), (a, b)), shape=(ng, ng))
-    joined = np.flatnonzero(np.asarray(graph.sum(axis=1)).ravel() > 0)
+    joined = np.flatnonzero((np.asarray(graph.sum(axis=1)).ravel() > 0)
+                            & ((fixed_masks(model) & 7) != 7))
     xyz = model.grids.xyz
     out = []
     for start in range(0, joined.size, CHUNK):

@@ -158,6 +158,17 @@ def find_members(model: FEModel) -> tuple[Member, ...]:
     return tuple(sorted(members, key=lambda m: (m.card, m.pid, min(m.eids))))
 
 
+def fixed_masks(model: FEModel) -> np.ndarray:
+    """(ng,) constrained-component bit masks (SPC and GRID PS) per grid row (bit c - 1 for
+    component c: ``mask & 7 == 7`` holds all three translations)."""
+    masks = np.array(model.grids.ps, np.int64)
+    if model.spc:
+        gids, bits = zip(*model.spc)
+        np.bitwise_or.at(masks, model.grids.index(list(gids), card="SPC",
+                                                   filename=model.filename), list(bits))
+    return masks
+
+
 def connectivity(model: FEModel) -> list:
     """(eids, nodes (ne, nn), 0-padded, pids) of every element family and the rigid elements."""
     conn = [(es.eids, es.nodes, es.pids) for es in model.elements.values()]

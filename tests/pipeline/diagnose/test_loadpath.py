@@ -49,6 +49,30 @@ def test_pairs_of_a_chain(tmp_path):
     assert model.grids.ids[pairs(model, hops=6, nearest=5)].tolist() == [[1, 7]]
 
 
+@pytest.mark.parametrize("ps, kept", [("123456", False), ("123", False), ("12", True)])
+def test_a_fixed_grid_is_no_end(tmp_path, ps, kept):
+    """Grid 1 of the chain held by GRID PS: a spring to it is a support (boundary_stiffness), so
+    with its three translations held it ends no path; with two held it still does. The hop
+    distances through it are the same either way."""
+    _chain(tmp_path, 7)
+    model = read_model(_write_with_ps(tmp_path, 1, ps))
+    got = model.grids.ids[pairs(model, hops=3, nearest=2)].tolist()
+    free = [[2, 5], [2, 6], [3, 6], [3, 7], [4, 7]]
+    assert got == ([[1, 4], [1, 5]] + free if kept else free)
+
+
+def _write_with_ps(tmp_path, grid: int, ps: str):
+    """The chain deck again with GRID ``grid``'s PS field set."""
+    path = tmp_path / "chain.bdf"
+    lines = path.read_text().splitlines()
+    i = next(k for k, line in enumerate(lines) if line.startswith("GRID") and
+             int(line[8:16]) == grid)
+    lines[i] = f"{lines[i][:48]:<48s}{'':8s}{ps:<8s}"
+    out = tmp_path / f"chain_ps{ps}.bdf"
+    out.write_text("\n".join(lines) + "\n")
+    return out
+
+
 @pytest.fixture(scope="module")
 def frame_model(tmp_path_factory):
     model = read_model(frame.write_frame(tmp_path_factory.mktemp("frame")))

@@ -5,9 +5,11 @@ runs the workflow, through its public names): the truth effects are built this p
 way (``effects.py``), richer than the workflow's library.
 
 ``make_case(structure, kind, seed, out) -> Path`` writes a case (``generate.py``) for
-``STRUCTURES`` = ("x56": the shipped example, "frame": a glider-like frame, ``frame.py``) and
-``TRUTH_KINDS`` = the library's kinds + ("none", "outside").
+``STRUCTURES`` = ("x56": the shipped example, "frame": a glider-like frame, ``frame.py``,
+"wingbox": the public Goland wing box whose truth MYSTRAN solves, ``wingbox.py``) and
+``TRUTH_KINDS`` = the library's kinds + ("none", "outside") (``STRUCTURE_KINDS``: those each
+structure can hold).
 """
-from .generate import KINDS, STRUCTURES, TRUTH_KINDS, make_case
+from .generate import KINDS, STRUCTURE_KINDS, STRUCTURES, TRUTH_KINDS, make_case
 
-__all__ = ["KINDS", "STRUCTURES", "TRUTH_KINDS", "make_case"]
+__all__ = ["KINDS", "STRUCTURE_KINDS", "STRUCTURES", "TRUTH_KINDS", "make_case"]

@@ -70,10 +70,11 @@ class Topology:
     size: float                  # largest extent of the grid cloud
     massive: frozenset           # grids carrying a CONM2
     grid_elements: dict          # grid -> set of the eids of ``element_grids`` holding it
+    fixed: frozenset = frozenset()  # grids whose translations are all constrained
 
     def structural_grids(self) -> list[int]:
-        """Grids referenced by a line or rigid element, sorted."""
-        return sorted(self.grid_elements)
+        """Grids referenced by a line or rigid element and free to move, sorted."""
+        return sorted(set(self.grid_elements) - self.fixed)
 
     def adjacent(self, grid: int) -> list[int]:
         """Grids sharing an element with ``grid``, sorted."""
@@ -107,7 +108,20 @@ def topology(bdf) -> Topology:
             ge[g].add(eid)
     return Topology(eg, bars, rigid, xyz, float(sum(m.mass for m in conm2)), wtmass,
                     float(np.ptp(pts, axis=0).max()), frozenset(int(m.nid) for m in conm2),
-                    dict(ge))
+                    dict(ge), _fixed(bdf))
+
+
+def _fixed(bdf) -> frozenset:
+    """Grids whose three translations GRID PS or an SPC1 constrains (every SPC1 of the deck)."""
+    held = defaultdict(set)
+    for nid, node in bdf.nodes.items():
+        held[int(nid)].update(str(node.ps or ""))
+    for cards in bdf.spcs.values():
+        for spc in cards:
+            if spc.type == "SPC1":
+                for nid in spc.node_ids:
+                    held[int(nid)].update(str(spc.components))
+    return frozenset(g for g, comps in held.items() if {"1", "2", "3"} <= comps)
 
 
 def neighbours(topo: Topology, grids, elements) -> tuple[list[int], list[int]]:

@@ -8,7 +8,9 @@ first configuration by ``SHIFT_RANGE`` (a few %: visible above 1 % noise, not a 
 aircraft); the draw closest to the range is kept when none falls in it.
 
 The GVT follows ``data/x56_like/truth/make_truth.py``: the truth's elastic modes 7 .. 6 + N_TEST
-(our solver) at the 120 sensors (analysis grid ids and positions), each shape's sign fixed
+(1 .. N_TEST on the clamped wing box; solved by our solver, on the wing box by MYSTRAN,
+``wingbox.mystran_modes``) at the 120 sensors (analysis grid ids and positions), each shape's
+sign fixed
 (largest entry positive), then frequencies x (1 + 1 % N(0, 1)), shapes + N(0, (5 % of the mode's
 RMS)^2) per DOF (``noise``: other levels scale the same draws), damping zeta uniform 1-2 %;
 UFF 15 + 55. The weighing is the truth's exact
@@ -22,7 +24,9 @@ from __future__ import annotations
 
 import json
 import tempfile
+from dataclasses import dataclass
 from pathlib import Path
+from typing import Callable
 
 import numpy as np
 import xarray as xr
@@ -35,14 +39,17 @@ from structures.gvt import make_gvt_dataset, write_uff
 from structures.massprops import mass_properties
 from structures.modal import compute_modes
 
-from . import effects, frame, x56
+from . import effects, frame, wingbox, x56
 
 #: The library's kinds (the contract's ``KINDS``, spelled out: the generator never imports the
 #: workflow).
 KINDS = ("lumped_mass", "joint_flexibility", "member_taper", "member_curvature",
          "boundary_stiffness")
 TRUTH_KINDS = KINDS + ("none", "outside")
-STRUCTURES = ("x56", "frame")
+STRUCTURES = ("x56", "frame", "wingbox")
+#: The truth kinds each structure can hold.
+STRUCTURE_KINDS = {"x56": TRUTH_KINDS, "frame": TRUTH_KINDS, "wingbox": wingbox.KINDS}
+#: Rigid-body modes of the free-free structures (the frame, the X-56).
 N_RIGID = 6
 SHIFT_RANGE = (0.03, 0.15)
 ATTEMPTS = 30
@@ -53,47 +60,74 @@ SUSPENSION_RATIO = 0.8
 TRUTH_DECKS = "truth_decks.json"
 
 
-def _structure(structure: str, folder: Path, work: Path):
-    """(units, n_test, sensors, {configuration: analysis deck}, {configuration: start deck})."""
+@dataclass(frozen=True)
+class Structure:
+    """A blind-study structure written for one case: its analysis and truth-start decks."""
+
+    units: str
+    n_test: int
+    n_rigid: int
+    sensors: list                # (grid, component) of the GVT
+    decks: dict                  # configuration -> analysis deck
+    starts: dict                 # configuration -> the truth's starting deck
+    solve: Callable              # (truth deck, number of modes) -> modes Dataset
+
+
+def _our_modes(path: Path, nmodes: int) -> xr.Dataset:
+    return compute_modes(read_model(path), nmodes)
+
+
+def _structure(structure: str, folder: Path, work: Path) -> Structure:
+    """The structure's decks written: analysis decks into ``folder``, truth starts into
+    ``work``."""
     if structure == "frame":
         deck = frame.write_frame(folder)
-        return frame.UNITS, frame.N_TEST, frame.sensors(), {"frame": deck}, {"frame": deck}
+        return Structure(frame.UNITS, frame.N_TEST, N_RIGID, frame.sensors(), {"frame": deck},
+                         {"frame": deck}, _our_modes)
+    if structure == "wingbox":
+        deck = wingbox.write_wingbox(folder)
+        return Structure(wingbox.UNITS, wingbox.N_TEST, wingbox.N_RIGID, wingbox.sensors(),
+                         {"wingbox": deck}, {"wingbox": deck}, wingbox.mystran_modes)
     decks = x56.write_analysis(folder)
     starts = {c: x56.write_structure(work, c) for c in x56.CONFIGURATIONS}
-    return x56.UNITS, x56.N_TEST, x56.sensors(), decks, starts
+    return Structure(x56.UNITS, x56.N_TEST, N_RIGID, x56.sensors(), decks, starts, _our_modes)
 
 
-def _truth_modes(start: Path, work: Path, effect, rng_seed, n_test: int):
-    """Scatter + effect on the start deck, written to ``work / truth_<start>``: (modes, mass
-    properties)."""
+def _truth_modes(start: Path, work: Path, effect, rng_seed, st: Structure):
+    """Scatter + effect on the start deck, written to ``work / truth_<start>`` and solved by the
+    structure's truth solver: (modes, mass properties)."""
     bdf = read_pynastran(start)
     effects.scatter(bdf, np.random.default_rng(rng_seed))
     if effect is not None:
         effects.apply(bdf, effect)
     path = work / f"truth_{start.stem}.bdf"
     bdf.write_bdf(str(path), enddata=True)
-    model = read_model(path)
-    return compute_modes(model, N_RIGID + n_test + 8), mass_properties(model)
+    return st.solve(path, st.n_rigid + st.n_test + 8), mass_properties(read_model(path))
 
 
-def _shift(base: np.ndarray, modes: xr.Dataset, n_test: int) -> float:
+def _shift(base: np.ndarray, modes: xr.Dataset, st: Structure) -> float:
     """Largest |f / f_base - 1| over the measured elastic modes (sorted frequencies)."""
-    f = modes["frequency"].values[N_RIGID:N_RIGID + n_test]
+    f = modes["frequency"].values[st.n_rigid:st.n_rigid + st.n_test]
     return float(np.max(np.abs(f / base - 1.0)))
 
 
-def _suspended(modes: xr.Dataset) -> bool:
+def _suspended(modes: xr.Dataset, st: Structure) -> bool:
+    """The highest rigid-body (suspension) mode well below the first elastic one (True when
+    the structure is clamped)."""
+    if st.n_rigid == 0:
+        return True
     f = modes["frequency"].values
-    return bool(f[N_RIGID - 1] < SUSPENSION_RATIO * f[N_RIGID])
+    return bool(f[st.n_rigid - 1] < SUSPENSION_RATIO * f[st.n_rigid])
 
 
-def _gvt(modes: xr.Dataset, sensors, analysis_xyz: dict, n_test: int, rng, units: str,
-         title: str, noise: tuple) -> xr.Dataset:
+def _gvt(modes: xr.Dataset, st: Structure, analysis_xyz: dict, rng, title: str,
+         noise: tuple) -> xr.Dataset:
     """Noisy GVT of the truth's elastic modes at the sensors (module docstring); ``noise`` is
     (frequency, shape) noise."""
     key = {(int(g), int(c)): j for j, (g, c) in
            enumerate(zip(modes["grid"].values, modes["component"].values))}
-    elastic = modes.isel(mode=slice(N_RIGID, N_RIGID + n_test))
+    sensors, n_test = st.sensors, st.n_test
+    elastic = modes.isel(mode=slice(st.n_rigid, st.n_rigid + n_test))
     shape = elastic["shape"].values[:, [key[s] for s in sensors]]
     peak = np.take_along_axis(shape, np.abs(shape).argmax(axis=1)[:, None], axis=1)
     shape = shape * np.sign(peak)
@@ -102,8 +136,9 @@ def _gvt(modes: xr.Dataset, sensors, analysis_xyz: dict, n_test: int, rng, units
     shape = shape + noise[1] * rms * rng.standard_normal(shape.shape)
     zeta = rng.uniform(*DAMPING, n_test)
     return make_gvt_dataset(f, shape, [g for g, _ in sensors], [c for _, c in sensors],
-                            mode=np.arange(N_RIGID + 1, N_RIGID + 1 + n_test), damping=zeta,
-                            xyz=[analysis_xyz[g] for g, _ in sensors], source=title, units=units)
+                            mode=np.arange(st.n_rigid + 1, st.n_rigid + 1 + n_test),
+                            damping=zeta, xyz=[analysis_xyz[g] for g, _ in sensors], source=title,
+                            units=st.units)
 
 
 def _jsonable(value):
@@ -161,6 +196,9 @@ def make_case(structure: str, kind: str, seed: int, out, *, decks=None,
         raise InputError(f"structure {structure!r}; valid: {', '.join(STRUCTURES)}.")
     if kind not in TRUTH_KINDS:
         raise InputError(f"kind {kind!r}; valid: {', '.join(TRUTH_KINDS)}.")
+    if kind not in STRUCTURE_KINDS[structure]:
+        raise InputError(f"kind {kind!r} on the {structure}: it has no element such an effect "
+                         f"acts on; valid there: {', '.join(STRUCTURE_KINDS[structure])}.")
     noise = tuple(float(v) for v in noise)
     if len(noise) != 2 or not all(0.0 <= v < 1.0 for v in noise):
         raise InputError(f"noise {noise}: give (frequency, shape) standard deviations as "
@@ -171,21 +209,22 @@ def make_case(structure: str, kind: str, seed: int, out, *, decks=None,
     with tempfile.TemporaryDirectory() as tmp:
         work = Path(tmp) if decks is None else Path(decks)
         work.mkdir(parents=True, exist_ok=True)
-        units, n_test, sensors, analysis_decks, starts = _structure(structure, out, work)
+        st = _structure(structure, out, work)
+        starts, n_test = st.starts, st.n_test
         first = next(iter(starts))
         analysis = read_pynastran(starts[first])
         topo = effects.topology(analysis)
         scatter = streams[:2]
-        base = _truth_modes(starts[first], work, None, scatter, n_test)
-        f_base = base[0]["frequency"].values[N_RIGID:N_RIGID + n_test]
+        base = _truth_modes(starts[first], work, None, scatter, st)
+        f_base = base[0]["frequency"].values[st.n_rigid:st.n_rigid + n_test]
         rng = np.random.default_rng((*streams, 1))
         chosen, shift, truth = effects.Effect("none"), 0.0, {first: base}
         if kind != "none":
             best = None
             for _ in range(ATTEMPTS):
                 effect = effects.draw(kind, analysis, topo, rng, float(f_base[0]))
-                modes = _truth_modes(starts[first], work, effect, scatter, n_test)
-                s = _shift(f_base, modes[0], n_test) if _suspended(modes[0]) else np.inf
+                modes = _truth_modes(starts[first], work, effect, scatter, st)
+                s = _shift(f_base, modes[0], st) if _suspended(modes[0], st) else np.inf
                 miss = max(SHIFT_RANGE[0] - s, s - SHIFT_RANGE[1], 0.0)
                 if best is None or miss < best[0]:
                     best = (miss, effect, s, modes)
@@ -196,14 +235,14 @@ def make_case(structure: str, kind: str, seed: int, out, *, decks=None,
                 truth = {}
         written = {}
         for i, (c, start) in enumerate(starts.items()):
-            modes, props = truth.get(c) or _truth_modes(start, work, chosen, scatter, n_test)
+            modes, props = truth.get(c) or _truth_modes(start, work, chosen, scatter, st)
             xyz = effects.topology(read_pynastran(start)).xyz if c != first else topo.xyz
-            gvt = _gvt(modes, sensors, {g: tuple(float(v) for v in p) for g, p in xyz.items()},
-                       n_test, np.random.default_rng((*streams, 2 + i)), units,
+            gvt = _gvt(modes, st, {g: tuple(float(v) for v in p) for g, p in xyz.items()},
+                       np.random.default_rng((*streams, 2 + i)),
                        f"blind-study truth {structure} {kind} seed {seed}, {c}", noise)
             write_uff(gvt, out / f"gvt_{c}.unv", title=f"{structure} {c} GVT")
             write_json(x56.measured_mass(props), out / f"mass_{c}.json")
-            written[c] = analysis_decks[c]
+            written[c] = st.decks[c]
         if decks is not None:
             write_json({c: f"truth_{start.stem}.bdf" for c, start in starts.items()},
                        work / TRUTH_DECKS)
@@ -217,5 +256,5 @@ def make_case(structure: str, kind: str, seed: int, out, *, decks=None,
               "max_frequency_shift": shift, "parameters": _jsonable(chosen.params),
               "noise": {"frequency": noise[0], "shape": noise[1]}}
     write_text(json.dumps(record, indent=1) + "\n", out / "truth.json")
-    return write_text(_case_toml(f"{structure}_{kind}_{seed}", units, written.items(),
+    return write_text(_case_toml(f"{structure}_{kind}_{seed}", st.units, written.items(),
                                  diagnose or {}), out / "case.toml")

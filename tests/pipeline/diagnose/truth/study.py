@@ -40,8 +40,8 @@ import xarray as xr
 
 from structures.common.files import write_dataset, write_text
 
-from .generate import (FREQUENCY_NOISE, KINDS, SHAPE_NOISE, STRUCTURES, TRUTH_DECKS, TRUTH_KINDS,
-                       make_case)
+from .generate import (FREQUENCY_NOISE, KINDS, SHAPE_NOISE, STRUCTURE_KINDS, STRUCTURES,
+                       TRUTH_DECKS, TRUTH_KINDS, make_case)
 
 #: Columns of the confusion matrix: every kind the workflow can name and its other verdicts.
 NAMED = KINDS + ("none", "ambiguous", "unexplained", "error")
@@ -157,7 +157,7 @@ def run_study(structures=STRUCTURES, kinds=TRUTH_KINDS, seeds=range(10), out=Non
     Parameters
     ----------
     structures : sequence of STRUCTURES
-    kinds : sequence of TRUTH_KINDS
+    kinds : sequence of TRUTH_KINDS (each structure runs those it can hold, ``STRUCTURE_KINDS``)
     seeds : sequence of int
     out : folder of the cases (``out/<structure>/<kind>/<seed>/``) and ``study.nc``
     diagnose : dict, optional, the cases' ``[diagnose]`` table (default: none, the defaults)
@@ -178,7 +178,7 @@ def run_study(structures=STRUCTURES, kinds=TRUTH_KINDS, seeds=range(10), out=Non
     out = Path(out)
     rows = []
     for structure in structures:
-        for kind in kinds:
+        for kind in (k for k in kinds if k in STRUCTURE_KINDS[structure]):
             for seed in seeds:
                 folder = out / structure / kind / str(seed)
                 with tempfile.TemporaryDirectory() as decks:
