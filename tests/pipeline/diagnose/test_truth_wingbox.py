@@ -5,7 +5,7 @@ References: MSC Nastran's own first frequency of the deck (the F06 excerpt of
 ``tests/data/goland_wingbox``, which our solver matches to 2.2e-6 in
 ``tests/structures/test_public_decks.py``); the public deck as it is, read by our reader; the
 truth decks the generator keeps, read card by card with pyNastran. Needs MYSTRAN (skipped
-without it); ~10 s.
+without it); ~10 s, and the workflow on two cases, ~30 s.
 """
 from __future__ import annotations
 
@@ -22,6 +22,7 @@ from structures.mystran import mystran_executable
 from structures.nastran_results import read_f06_eigenvalues
 from tests.pipeline.diagnose.truth import effects, make_case
 from tests.pipeline.diagnose.truth.generate import STRUCTURE_KINDS
+from tests.pipeline.diagnose.truth.study import run_study
 from tests.pipeline.diagnose.truth.wingbox import (DECK, KINDS, N_TEST, ROOT, mystran_modes,
                                                    sensors, write_wingbox)
 
@@ -103,3 +104,18 @@ def test_grounded_spring_reaches_mystran(tmp_path):
     ours = compute_modes(read_model(tmp_path / "decks" / "truth_wingbox.bdf"), N_TEST)
     np.testing.assert_allclose(theirs["frequency"].values, ours["frequency"].values, rtol=5e-3)
     assert 0.03 <= truth["max_frequency_shift"] <= 0.15
+
+
+@needs_mystran
+def test_wingbox_mass_named_and_none_kept(tmp_path):
+    """The workflow on two wing-box cases, seed 0 (about 30 s): the hidden mass named at its
+    grid and the gap shrinking; nothing named on the scatter-only truth, whose only model-form
+    error is MYSTRAN's element against ours."""
+    ds = run_study(["wingbox"], ["lumped_mass", "none"], [0], tmp_path, progress=None)
+    assert ds.attrs["errors"] == 0, ds["error"].values
+    mass = ds.isel(case=list(ds["truth_kind"].values).index("lumped_mass"))
+    assert str(mass["named_kind"].values) == "lumped_mass" and bool(mass["location_hit"])
+    rms, xo = (mass[k].sel(when=["before", "after"]).values
+               for k in ("frequency_rms_held_out", "max_cross_orthogonality_offdiag"))
+    assert rms[1] < rms[0] and xo[1] < xo[0], (rms, xo)
+    assert ds.attrs["none_kept"] == 1.0
