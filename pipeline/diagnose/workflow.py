@@ -62,6 +62,7 @@ from structures.massprops import check_measured_mass
 from structures.modal import compute_modes
 from structures.model import FEModel
 from structures.modes import elastic_index
+from structures.suspension import RIGID_SHARE, suspension_modes
 
 #: Rigid-body modes added to twice the test modes for the default analysis mode count.
 N_RIGID = 6
@@ -281,15 +282,16 @@ def preflight(configurations, settings: DiagnoseSettings = DiagnoseSettings()) -
 def _preflight(configurations, settings: DiagnoseSettings, notes: list):
     refs = []
     for rotation, data in enumerate(configurations):
-        n_test = data.gvt.sizes["mode"]
-        nmodes = settings.nmodes or 2 * n_test + N_RIGID
+        nmodes = settings.nmodes or 2 * data.gvt.sizes["mode"] + N_RIGID
         modes = compute_modes(data.model, nmodes)
+        gvt = _without_suspension(data, modes, notes)
+        n_test = gvt.sizes["mode"]
         if elastic_index(modes).size < n_test:
             raise InputError(f"diagnose: configuration {data.name}: {n_test} test modes but only "
                              f"{elastic_index(modes).size} elastic analysis modes. Fix: raise "
                              "[diagnose] nmodes.")
         ref, facts = build_reference(
-            data.name, data.model, data.gvt, data.measured_mass, modes,
+            data.name, data.model, gvt, data.measured_mass, modes,
             frequency_noise=settings.frequency_noise,
             shape_noise_value=settings.shape_noise, model_scatter=settings.model_scatter,
             holdout=settings.holdout, nmodes=nmodes, rotation=rotation)
@@ -317,6 +319,38 @@ def _preflight(configurations, settings: DiagnoseSettings, notes: list):
             notes.append(f"{data.name}: no measured mass properties: a missing mass is seen only "
                          "through the frequencies.")
     return refs
+
+
+def _without_suspension(data, modes: xr.Dataset, notes: list) -> xr.Dataset:
+    """The configuration's test modes without its suspension modes
+    (:func:`structures.suspension.suspension_modes`: shapes at the sensors, placed at the model's
+    grids, that are rigid-body motions; frequency-only, modes below half the lowest elastic
+    analysis frequency), each set aside with a note."""
+    gvt = data.gvt
+    position = None
+    if "shape" in gvt:
+        grids = data.model.grids
+        position = grids.xyz[grids.index(gvt["grid"].values, card="GVT sensor grid",
+                                         filename=gvt.attrs.get("source") or None)]
+    f_fe = modes["frequency"].values[elastic_index(modes)]
+    rigid = suspension_modes(gvt, position=position,
+                             first_elastic=float(f_fe.min()) if f_fe.size else None)
+    if not rigid.any():
+        return gvt
+    f = gvt["frequency"].values[rigid]
+    why = (f"their shapes are rigid-body motions at the sensors (at least {100 * RIGID_SHARE:.0f} "
+           "% of each shape)" if "shape" in gvt else
+           f"below half the lowest elastic analysis frequency, {f_fe.min():.3g} Hz")
+    kept = gvt.isel(mode=~rigid)
+    if not kept.sizes["mode"]:
+        raise InputError(f"configuration {data.name}: GVT file {gvt.attrs.get('source', '')}: "
+                         f"every test mode is a suspension mode ({why}). Fix: give the elastic "
+                         "modes of the test.")
+    notes.append(f"{data.name}: test modes {gvt['mode'].values[rigid].tolist()} "
+                 f"({f.min():.3g}-{f.max():.3g} Hz) are suspension modes, {why}: left out (no "
+                 "elastic mode of the model matches them; the suspension is the test's, not the "
+                 "structure's).")
+    return kept
 
 
 def _rounded(value):

@@ -22,6 +22,8 @@ from pipeline.diagnose.workflow import _chi2_split, _round_record, _table, unnam
 from structures.bdf import read_model
 from structures.common.errors import InputError
 from structures.common.files import read_dataset, write_dataset
+from structures.gvt import make_gvt_dataset
+from structures.suspension import rigid_body_readings
 from tests.pipeline.diagnose.truth import make_case
 
 def _never_near(a, b):
@@ -117,6 +119,32 @@ def test_frame_frequency_only_runs_and_says_what_it_cannot_tell(tmp_path):
     record = result.to_json()
     assert record["verdict"] == "none" and record["effect"] is None
     assert json.loads(json.dumps(record)) == record                       # JSON-clean
+
+
+def test_suspension_modes_in_the_test_data_are_left_out(tmp_path):
+    """The frame's GVT with six suspension modes put in front, as many GVT files list them
+    (rigid-body motions at the sensors, 0.2-0.5 Hz, 5 % shape noise): preflight sets them aside
+    with a note and builds the same reference as from the elastic modes alone; frequency-only,
+    the same by frequency (below half the first elastic analysis frequency, 2.8 Hz)."""
+    case = read_case(make_case("frame", "none", 0, tmp_path / "none_0"))
+    (conf,) = configurations_from_case(case)
+    gvt = conf.gvt
+    position = conf.model.grids.xyz[conf.model.grids.index(gvt["grid"].values)]
+    rng = np.random.default_rng(0)
+    rigid = rng.standard_normal((6, 6)) @ rigid_body_readings(position,
+                                                              gvt["component"].values).T
+    rigid += 0.05 * np.sqrt(np.mean(rigid ** 2, axis=1, keepdims=True)) * \
+        rng.standard_normal(rigid.shape)
+    hung = make_gvt_dataset(np.concatenate([np.linspace(0.2, 0.5, 6), gvt["frequency"].values]),
+                            np.vstack([rigid, gvt["shape"].values]), gvt["grid"].values,
+                            gvt["component"].values, mode=np.arange(1, 7 + gvt.sizes["mode"]),
+                            source="frame GVT with its suspension", units="si")
+    plain, _ = preflight([conf], DiagnoseSettings())
+    for data in (hung, hung.drop_vars("shape")):
+        refs, notes = preflight([replace(conf, gvt=data)], DiagnoseSettings())
+        np.testing.assert_array_equal(refs[0].test_frequency, plain[0].test_frequency)
+        assert any(n.startswith("frame: test modes [1, 2, 3, 4, 5, 6] (0.2-0.5 Hz) are "
+                                "suspension modes") for n in notes), notes
 
 
 def test_preflight_checks_the_data_without_screening(tmp_path):

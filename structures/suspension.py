@@ -1,0 +1,126 @@
+"""Suspension (rigid-body) modes among the test modes of a GVT.
+
+A free-free aircraft is tested on a soft suspension (bungees, air springs), and many GVT reports
+and files list its six suspension modes, numbered 1-6, before the elastic ones (the reference
+paper counts them so). They are rigid-body motions of the structure on the suspension: a free-free
+model has them at 0 Hz and no elastic mode that matches them, so a pairing that takes them for
+elastic modes pairs every mode wrongly. This module finds them so that a workflow can set them
+aside and say so.
+
+With shapes, a test mode is a suspension mode when its shape at the sensors lies almost wholly
+in the span of the six rigid-body motions at the sensors, share rho_j >= ``RIGID_SHARE``, and it
+is below every test mode that does not (suspension modes come first):
+
+    rho_j = || P_R t_j ||^2 / || t_j ||^2,   P_R the orthogonal projector onto span(R),
+
+R (n_dof, 6) the readings of the unit rigid-body motions u = t + theta x (x - x_0) at each
+sensor DOF (position x, component c in the basic frame; a translation reads e_c . u, a rotation
+e_c . theta), x_0 the sensors' centroid (span(R) does not depend on it). White shape noise of
+s (relative RMS per DOF) lowers a rigid mode's share to about 1 / (1 + s^2) (0.9975 at 5 %), and
+an elastic mode keeps a large part of its shape outside span(R) (the X-56-class example's elastic
+modes: 0.58 at most, its suspension modes 0.995-0.998). The rank of R is that of the sensor
+layout (all sensors on a line in one direction see fewer than six motions); with fewer than
+``MIN_DOFS`` DOFs, twice the motions seen, no mode is called a suspension mode.
+
+Without shapes, a test mode below ``FREQUENCY_RATIO`` times the lowest elastic analysis frequency
+is taken as a suspension mode: no model near enough to be tuned is that far off its first elastic
+mode, and a suspension is kept below it by design (a third or less, by the usual rule).
+"""
+from __future__ import annotations
+
+import numpy as np
+import xarray as xr
+
+from structures.common.errors import InputError
+
+#: Share of a test shape in the rigid-body span at or above which it is a suspension mode.
+RIGID_SHARE = 0.9
+#: Sensor DOFs needed per rigid-body motion the layout sees before any mode is judged by shape.
+MIN_DOFS = 2
+#: Frequency-only: a test mode below this share of the lowest elastic analysis frequency.
+FREQUENCY_RATIO = 0.5
+
+
+def rigid_body_readings(position, component) -> np.ndarray:
+    """R: the sensor readings of the six unit rigid-body motions (module docstring).
+
+    Parameters
+    ----------
+    position : (n_dof, 3) sensor positions, basic frame.
+    component : (n_dof,) int, 1-3 translations, 4-6 rotations, basic axes.
+
+    Returns
+    -------
+    (n_dof, 6) readings of the translations x, y, z and the rotations about x, y, z through the
+    sensors' centroid.
+    """
+    x = np.asarray(position, float)
+    comp = np.asarray(component, int)
+    if x.ndim != 2 or x.shape != (comp.size, 3) or np.any((comp < 1) | (comp > 6)):
+        raise InputError(f"sensor layout: positions {x.shape} and components {comp.shape} must be "
+                         "(n_dof, 3) and (n_dof,) with components 1-6.")
+    e = np.eye(3)[(comp - 1) % 3]                                         # (n_dof, 3)
+    r = x - x.mean(axis=0)
+    translation = comp <= 3
+    out = np.zeros((comp.size, 6))
+    out[translation, :3] = e[translation]
+    out[translation, 3:] = np.cross(r[translation], e[translation])      # e . (theta x r)
+    out[~translation, 3:] = e[~translation]
+    return out
+
+
+def rigid_body_share(shape, position, component) -> np.ndarray:
+    """rho_j: the share of each test shape's squared norm in the rigid-body span (module
+    docstring).
+
+    Parameters
+    ----------
+    shape : (n_mode, n_dof) test shapes.
+    position, component : the sensor layout (:func:`rigid_body_readings`).
+
+    Returns
+    -------
+    (n_mode,) shares in [0, 1]; NaN for every mode when the layout has fewer than ``MIN_DOFS``
+    DOFs per rigid-body motion it sees.
+    """
+    t = np.asarray(shape, float)
+    u, sv, _ = np.linalg.svd(rigid_body_readings(position, component), full_matrices=False)
+    rank = int(np.sum(sv > 1e-9 * sv[0])) if sv.size and sv[0] > 0 else 0
+    if rank == 0 or t.shape[1] < MIN_DOFS * rank:
+        return np.full(t.shape[0], np.nan)
+    q = t @ u[:, :rank]
+    norm = np.sum(t ** 2, axis=1)
+    return np.divide(np.sum(q ** 2, axis=1), norm, out=np.zeros_like(norm), where=norm > 0)
+
+
+def suspension_modes(gvt: xr.Dataset, *, position=None, first_elastic: float | None = None
+                     ) -> np.ndarray:
+    """Which test modes are suspension modes (module docstring).
+
+    Parameters
+    ----------
+    gvt : xarray.Dataset in the :mod:`structures.gvt` layout.
+    position : (n_dof, 3), optional, the sensor positions; default the Dataset's ``x``, ``y``,
+        ``z`` coordinates (UFF 15); without either, shapes cannot be judged and no mode is one.
+    first_elastic : float, optional, the lowest elastic analysis frequency [Hz], used only for
+        frequency-only data (without it, no mode of such data is one).
+
+    Returns
+    -------
+    (n_mode,) bool, in the Dataset's mode order.
+    """
+    f = np.asarray(gvt["frequency"].values, float)
+    if "shape" not in gvt:
+        if first_elastic is None:
+            return np.zeros(f.size, bool)
+        return f < FREQUENCY_RATIO * float(first_elastic)
+    if position is None:
+        if not all(k in gvt.coords for k in ("x", "y", "z")):
+            return np.zeros(f.size, bool)
+        position = np.stack([gvt[k].values for k in ("x", "y", "z")], axis=1)
+    share = rigid_body_share(gvt["shape"].values, position, gvt["component"].values)
+    rigid = share >= RIGID_SHARE                                         # NaN: False
+    if not rigid.any():
+        return rigid
+    elastic = f[~rigid]
+    return rigid & (f < (elastic.min() if elastic.size else np.inf))

@@ -1,0 +1,127 @@
+"""Suspension modes among test modes (structures/suspension.py).
+
+References: rigid-body motions written by hand (a translation reads its direction cosine, a
+rotation theta x r); the share of white noise outside a 6-dimensional span, (1 + 6 s^2 / n) /
+(1 + s^2) in expectation; the glider-like frame of the blind study hung on soft grounded springs
+(its six lowest modes are its suspension, solved by our solver).
+"""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from structures.bdf import read_model
+from structures.common.errors import InputError
+from structures.gvt import make_gvt_dataset
+from structures.modal import compute_modes
+from structures.modes import elastic_index
+from structures.suspension import (RIGID_SHARE, rigid_body_readings, rigid_body_share,
+                                   suspension_modes)
+from tests.pipeline.diagnose.truth import frame
+
+
+def _layout(n_grids: int = 40, seed: int = 0):
+    rng = np.random.default_rng(seed)
+    xyz = rng.uniform(-5.0, 5.0, (n_grids, 3))
+    position = np.repeat(xyz, 3, axis=0)
+    component = np.tile([1, 2, 3], n_grids)
+    return position, component
+
+
+def test_readings_by_hand():
+    """Sensors at (1, 0, 0) and (-1, 0, 0) along y and a rotation sensor about z at the origin
+    (the centroid): theta_z e_z x r moves the first by +theta along y, the second by -theta; the
+    rotation sensor reads theta_z itself."""
+    r = rigid_body_readings([[1.0, 0.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 0.0, 0.0]], [2, 2, 6])
+    np.testing.assert_array_equal(r, [[0, 1, 0, 0, 0, 1], [0, 1, 0, 0, 0, -1],
+                                      [0, 0, 0, 0, 0, 1]])
+    with pytest.raises(InputError, match="components 1-6"):
+        rigid_body_readings([[0.0, 0.0, 0.0]], [7])
+
+
+def test_rigid_motion_is_all_share_and_noise_lowers_it_as_expected():
+    position, component = _layout()
+    readings = rigid_body_readings(position, component)
+    rng = np.random.default_rng(1)
+    rigid = rng.standard_normal((50, 6)) @ readings.T                     # (50, 120)
+    np.testing.assert_allclose(rigid_body_share(rigid, position, component), 1.0, rtol=1e-12)
+    s, n = 0.05, component.size
+    rms = np.sqrt(np.mean(rigid ** 2, axis=1, keepdims=True))
+    noisy = rigid + s * rms * rng.standard_normal(rigid.shape)
+    expected = (1 + 6 * s ** 2 / n) / (1 + s ** 2)                        # 0.99752
+    assert abs(np.mean(rigid_body_share(noisy, position, component)) - expected) < 5e-4
+    # the share does not depend on where the positions' origin is
+    moved = rigid_body_share(noisy, position + [100.0, -3.0, 7.0], component)
+    np.testing.assert_allclose(moved, rigid_body_share(noisy, position, component), rtol=1e-10)
+
+
+def test_a_shape_outside_the_rigid_span_has_none():
+    position, component = _layout()
+    readings = rigid_body_readings(position, component)
+    q, _ = np.linalg.qr(readings)
+    t = np.random.default_rng(2).standard_normal((3, component.size))
+    t -= (t @ q) @ q.T
+    np.testing.assert_allclose(rigid_body_share(t, position, component), 0.0, atol=1e-12)
+
+
+def test_too_few_dofs_judge_nothing():
+    """Three sensors along z on the y axis see two motions (z and the rotation about x): three
+    DOFs are fewer than 2 x 2, so no share is given."""
+    position = np.array([[0.0, y, 0.0] for y in range(3)], float)
+    share = rigid_body_share(np.ones((2, 3)), position, [3, 3, 3])
+    assert np.isnan(share).all()
+
+
+@pytest.fixture(scope="module")
+def hung_frame(tmp_path_factory):
+    """The blind study's frame on soft grounded springs (x, y, z at the nose 1001 and the wing
+    stations 2005 / 3005): its six lowest modes are the suspension. Returns its GVT (26 modes,
+    5 % shape noise, positions from UFF-like coordinates) and the free frame's first elastic
+    frequency."""
+    folder = tmp_path_factory.mktemp("hung")
+    free = frame.write_frame(folder)
+    springs = [f"CELAS2  {9000 + 10 * i + c:<8d}{200.0:<8.1f}{g:<8d}{c:<8d}"
+               for i, g in enumerate((1001, 2005, 3005)) for c in (1, 2, 3)]
+    hung = folder / "hung.bdf"
+    hung.write_text(free.read_text().replace("ENDDATA", "\n".join(springs) + "\nENDDATA"))
+    model = read_model(hung)
+    modes = compute_modes(model, 30)
+    sensors = frame.sensors()
+    key = {(int(g), int(c)): j for j, (g, c) in
+           enumerate(zip(modes["grid"].values, modes["component"].values))}
+    shape = modes["shape"].values[:26, [key[s] for s in sensors]]
+    rng = np.random.default_rng(3)
+    shape = shape + 0.05 * np.sqrt(np.mean(shape ** 2, axis=1, keepdims=True)) * \
+        rng.standard_normal(shape.shape)
+    xyz = dict(zip(model.grids.ids.tolist(), model.grids.xyz.tolist()))
+    gvt = make_gvt_dataset(modes["frequency"].values[:26], shape, [g for g, _ in sensors],
+                           [c for _, c in sensors], mode=np.arange(1, 27),
+                           xyz=[xyz[g] for g, _ in sensors], source="hung frame", units="si")
+    free_modes = compute_modes(read_model(free), 8)
+    return gvt, float(free_modes["frequency"].values[elastic_index(free_modes)].min())
+
+
+def test_the_hung_frame_has_six_suspension_modes(hung_frame):
+    """Measured: suspension 0.09-0.21 Hz (first elastic 2.77 Hz), shares 0.997-0.998; the
+    elastic modes' at most 0.25."""
+    gvt, _ = hung_frame
+    f = gvt["frequency"].values
+    assert f[5] < 0.5 * f[6]                                               # a soft suspension
+    assert suspension_modes(gvt).tolist() == [True] * 6 + [False] * 20
+    share = rigid_body_share(gvt["shape"].values,
+                             np.stack([gvt[k].values for k in "xyz"], axis=1),
+                             gvt["component"].values)
+    assert share[:6].min() > 0.99 and share[6:].max() < RIGID_SHARE
+
+
+def test_frequency_only_uses_the_first_elastic_frequency(hung_frame):
+    """Without shapes: below half the free frame's first elastic frequency."""
+    gvt, f1 = hung_frame
+    bare = gvt.drop_vars("shape")
+    assert suspension_modes(bare, first_elastic=f1).tolist() == [True] * 6 + [False] * 20
+    assert not suspension_modes(bare).any()                                # nothing to judge by
+
+
+def test_without_positions_nothing_is_judged(hung_frame):
+    gvt, _ = hung_frame
+    assert not suspension_modes(gvt.drop_vars(["x", "y", "z"])).any()
