@@ -7,9 +7,14 @@ model has them at 0 Hz and no elastic mode that matches them, so a pairing that 
 elastic modes pairs every mode wrongly. This module finds them so that a workflow can set them
 aside and say so.
 
+Only a structure that can move as a rigid body has them: a caller asks only when its model has
+rigid-body modes (a clamped structure's first bending mode, measured in one direction, can lie
+90 % in the span below; the cantilever plate of ``plate_decks``, 20 x 12, z sensors: it did).
+
 With shapes, a test mode is a suspension mode when its shape at the sensors lies almost wholly
-in the span of the six rigid-body motions at the sensors, share rho_j >= ``RIGID_SHARE``, and it
-is below every test mode that does not (suspension modes come first):
+in the span of the six rigid-body motions at the sensors, share rho_j >= ``RIGID_SHARE``, below
+the lowest elastic analysis frequency f_1 and below every test mode that does not (suspension
+modes come first):
 
     rho_j = || P_R t_j ||^2 / || t_j ||^2,   P_R the orthogonal projector onto span(R),
 
@@ -17,14 +22,14 @@ R (n_dof, 6) the readings of the unit rigid-body motions u = t + theta x (x - x_
 sensor DOF (position x, component c in the basic frame; a translation reads e_c . u, a rotation
 e_c . theta), x_0 the sensors' centroid (span(R) does not depend on it). White shape noise of
 s (relative RMS per DOF) lowers a rigid mode's share to about 1 / (1 + s^2) (0.9975 at 5 %), and
-an elastic mode keeps a large part of its shape outside span(R) (the X-56-class example's elastic
-modes: 0.58 at most, its suspension modes 0.995-0.998). The rank of R is that of the sensor
-layout (all sensors on a line in one direction see fewer than six motions); with fewer than
-``MIN_DOFS`` DOFs, twice the motions seen, no mode is called a suspension mode.
+an elastic mode of a free structure keeps a large part of its shape outside span(R) (the
+X-56-class example's elastic modes: 0.58 at most, its suspension modes 0.995-0.998). The rank of
+R is that of the sensor layout (all sensors on a line in one direction see fewer than six
+motions); with fewer than ``MIN_DOFS`` DOFs per motion seen, no mode is judged by its shape.
 
-Without shapes, a test mode below ``FREQUENCY_RATIO`` times the lowest elastic analysis frequency
-is taken as a suspension mode: no model near enough to be tuned is that far off its first elastic
-mode, and a suspension is kept below it by design (a third or less, by the usual rule).
+Without shapes, a test mode below ``FREQUENCY_RATIO`` f_1 is taken as a suspension mode: no model
+near enough to be tuned is that far off its first elastic mode, and a suspension is kept below it
+by design (a third or less, by the usual rule).
 """
 from __future__ import annotations
 
@@ -93,17 +98,16 @@ def rigid_body_share(shape, position, component) -> np.ndarray:
     return np.divide(np.sum(q ** 2, axis=1), norm, out=np.zeros_like(norm), where=norm > 0)
 
 
-def suspension_modes(gvt: xr.Dataset, *, position=None, first_elastic: float | None = None
-                     ) -> np.ndarray:
-    """Which test modes are suspension modes (module docstring).
+def suspension_modes(gvt: xr.Dataset, first_elastic: float, *, position=None) -> np.ndarray:
+    """Which test modes are suspension modes (module docstring); ask only for a model with
+    rigid-body modes.
 
     Parameters
     ----------
     gvt : xarray.Dataset in the :mod:`structures.gvt` layout.
+    first_elastic : float, the lowest elastic analysis frequency f_1 [Hz].
     position : (n_dof, 3), optional, the sensor positions; default the Dataset's ``x``, ``y``,
         ``z`` coordinates (UFF 15); without either, shapes cannot be judged and no mode is one.
-    first_elastic : float, optional, the lowest elastic analysis frequency [Hz], used only for
-        frequency-only data (without it, no mode of such data is one).
 
     Returns
     -------
@@ -111,15 +115,13 @@ def suspension_modes(gvt: xr.Dataset, *, position=None, first_elastic: float | N
     """
     f = np.asarray(gvt["frequency"].values, float)
     if "shape" not in gvt:
-        if first_elastic is None:
-            return np.zeros(f.size, bool)
         return f < FREQUENCY_RATIO * float(first_elastic)
     if position is None:
         if not all(k in gvt.coords for k in ("x", "y", "z")):
             return np.zeros(f.size, bool)
         position = np.stack([gvt[k].values for k in ("x", "y", "z")], axis=1)
     share = rigid_body_share(gvt["shape"].values, position, gvt["component"].values)
-    rigid = share >= RIGID_SHARE                                         # NaN: False
+    rigid = (share >= RIGID_SHARE) & (f < float(first_elastic))          # NaN: False
     if not rigid.any():
         return rigid
     elastic = f[~rigid]

@@ -61,7 +61,7 @@ from structures.common.errors import InputError
 from structures.massprops import check_measured_mass
 from structures.modal import compute_modes
 from structures.model import FEModel
-from structures.modes import elastic_index
+from structures.modes import elastic_index, rigid_index
 from structures.suspension import RIGID_SHARE, suspension_modes
 
 #: Rigid-body modes added to twice the test modes for the default analysis mode count.
@@ -324,22 +324,25 @@ def _preflight(configurations, settings: DiagnoseSettings, notes: list):
 def _without_suspension(data, modes: xr.Dataset, notes: list) -> xr.Dataset:
     """The configuration's test modes without its suspension modes
     (:func:`structures.suspension.suspension_modes`: shapes at the sensors, placed at the model's
-    grids, that are rigid-body motions; frequency-only, modes below half the lowest elastic
-    analysis frequency), each set aside with a note."""
+    grids, that are rigid-body motions below the lowest elastic analysis frequency; frequency-only,
+    modes below half of it), each set aside with a note. Only a model with rigid-body modes is
+    hung on a suspension: a clamped one keeps every test mode."""
     gvt = data.gvt
+    f_fe = modes["frequency"].values[elastic_index(modes)]
+    if not rigid_index(modes).size or not f_fe.size:
+        return gvt
     position = None
     if "shape" in gvt:
         grids = data.model.grids
         position = grids.xyz[grids.index(gvt["grid"].values, card="GVT sensor grid",
                                          filename=gvt.attrs.get("source") or None)]
-    f_fe = modes["frequency"].values[elastic_index(modes)]
-    rigid = suspension_modes(gvt, position=position,
-                             first_elastic=float(f_fe.min()) if f_fe.size else None)
+    rigid = suspension_modes(gvt, float(f_fe.min()), position=position)
     if not rigid.any():
         return gvt
     f = gvt["frequency"].values[rigid]
     why = (f"their shapes are rigid-body motions at the sensors (at least {100 * RIGID_SHARE:.0f} "
-           "% of each shape)" if "shape" in gvt else
+           f"% of each shape) below the lowest elastic analysis frequency, {f_fe.min():.3g} Hz"
+           if "shape" in gvt else
            f"below half the lowest elastic analysis frequency, {f_fe.min():.3g} Hz")
     kept = gvt.isel(mode=~rigid)
     if not kept.sizes["mode"]:
