@@ -119,3 +119,14 @@ def test_wingbox_mass_named_and_none_kept(tmp_path):
                for k in ("frequency_rms_held_out", "max_cross_orthogonality_offdiag"))
     assert rms[1] < rms[0] and xo[1] < xo[0], (rms, xo)
     assert ds.attrs["none_kept"] == 1.0
+
+
+@needs_mystran
+def test_frequency_only_study_case(tmp_path):
+    """The study's ``frequency_only`` gives the workflow no shapes (wing box, none, seed 0: ~5 s):
+    its verdict record has no MAC, and a note says what frequencies alone cannot tell."""
+    run_study(["wingbox"], ["none"], [0], tmp_path, frequency_only=True, progress=None)
+    result = json.loads((tmp_path / "wingbox" / "none" / "0" / "diagnose.json").read_text())
+    assert result["gap_before"]["mac_min"] is None
+    assert any("frequency-only" in note for note in result["notes"])
+    assert result["verdict"] != "effect"

@@ -19,10 +19,11 @@ Scores (issue 14, "Must show"):
   can reach). A case's ``truth_gap.json`` holds it; ``--truth-gap DIR ...`` computes it for
   cases run without it.
 
-Run ``python -m tests.pipeline.diagnose.truth.study [--structures frame x56] [--kinds ...]
-[--seeds 10] [--first-seed 0] [--noise 0.01 0.05] [--out DIR]`` from the repository root
-(``--noise``: the test's frequency and shape noise, :func:`make_case`; the workflow is not told
-it): prints the confusion matrix, the scores and the gap of every correctly named case, writes
+Run ``python -m tests.pipeline.diagnose.truth.study [--structures frame x56 wingbox]
+[--kinds ...] [--seeds 10] [--first-seed 0] [--noise 0.01 0.05] [--frequency-only] [--out DIR]``
+from the repository root (``--noise``: the test's frequency and shape noise, :func:`make_case`;
+the workflow is not told it; ``--frequency-only``: the workflow gets the frequencies alone):
+prints the confusion matrix, the scores and the gap of every correctly named case, writes
 ``DIR/study.nc`` and every case's ``diagnose.json`` and ``score.json``. A study split over
 processes (kinds or seeds per core) is scored as one with ``--score DIR [DIR ...]``
 (:func:`rescore`; no case is run).
@@ -49,17 +50,30 @@ NAMED = KINDS + ("none", "ambiguous", "unexplained", "error")
 TRUTH_GAP = "truth_gap.json"
 
 
-def diagnose_case(case_toml: Path) -> dict:
-    """Run the workflow on a case (only what the case names); returns its JSON."""
+def _configurations(case, frequency_only: bool) -> tuple:
+    """The case's configurations, their test shapes dropped when ``frequency_only``."""
+    from dataclasses import replace
+
+    from pipeline.diagnose.inputs import configurations_from_case
+
+    configurations = tuple(configurations_from_case(case))
+    if frequency_only:
+        configurations = tuple(replace(c, gvt=c.gvt.drop_vars("shape")) for c in configurations)
+    return configurations
+
+
+def diagnose_case(case_toml: Path, *, frequency_only: bool = False) -> dict:
+    """Run the workflow on a case (only what the case names; with ``frequency_only`` its test
+    frequencies alone, as a published GVT without shapes gives them); returns its JSON."""
     from pipeline.case import read_case
     from pipeline.diagnose import diagnose
-    from pipeline.diagnose.inputs import configurations_from_case, settings_from_case
+    from pipeline.diagnose.inputs import settings_from_case
 
     case = read_case(case_toml)
-    return diagnose(configurations_from_case(case), settings_from_case(case)).to_json()
+    return diagnose(_configurations(case, frequency_only), settings_from_case(case)).to_json()
 
 
-def truth_gap(case_toml: Path, decks: Path) -> dict:
+def truth_gap(case_toml: Path, decks: Path, *, frequency_only: bool = False) -> dict:
     """The gap (``gap_after``'s keys) of a case's truth models against its test data.
 
     Each configuration's truth deck (``decks``: a ``make_case(..., decks=)`` folder) is
@@ -71,12 +85,12 @@ def truth_gap(case_toml: Path, decks: Path) -> dict:
     from pipeline.case import read_case
     from pipeline.diagnose.evidence import evaluate
     from pipeline.diagnose.gap import gap_metrics
-    from pipeline.diagnose.inputs import configurations_from_case, settings_from_case
+    from pipeline.diagnose.inputs import settings_from_case
     from pipeline.diagnose.workflow import preflight
     from structures.bdf import read_model
 
     case = read_case(case_toml)
-    configurations = tuple(configurations_from_case(case))
+    configurations = _configurations(case, frequency_only)
     refs, _ = preflight(configurations, settings_from_case(case))
     names = json.loads((Path(decks) / TRUTH_DECKS).read_text())
     evaluations = []
@@ -151,7 +165,7 @@ def _floor(folder: Path) -> dict | None:
 
 def run_study(structures=STRUCTURES, kinds=TRUTH_KINDS, seeds=range(10), out=None, *,
               diagnose: dict | None = None, noise=(FREQUENCY_NOISE, SHAPE_NOISE),
-              progress=print) -> xr.Dataset:
+              frequency_only: bool = False, progress=print) -> xr.Dataset:
     """Generate and diagnose every (structure, kind, seed) case; the scored study.
 
     Parameters
@@ -162,6 +176,7 @@ def run_study(structures=STRUCTURES, kinds=TRUTH_KINDS, seeds=range(10), out=Non
     out : folder of the cases (``out/<structure>/<kind>/<seed>/``) and ``study.nc``
     diagnose : dict, optional, the cases' ``[diagnose]`` table (default: none, the defaults)
     noise : (frequency, shape) noise of the test data (:func:`make_case`)
+    frequency_only : bool, the workflow gets the test frequencies alone (:func:`diagnose_case`)
     progress : callable(str) or None, one line per case
 
     Returns
@@ -184,12 +199,12 @@ def run_study(structures=STRUCTURES, kinds=TRUTH_KINDS, seeds=range(10), out=Non
                 with tempfile.TemporaryDirectory() as decks:
                     case = make_case(structure, kind, seed, folder, diagnose=diagnose,
                                      decks=decks, noise=noise)
-                    floor = truth_gap(case, Path(decks))
+                    floor = truth_gap(case, Path(decks), frequency_only=frequency_only)
                 write_text(json.dumps(floor, indent=1) + "\n", folder / TRUTH_GAP)
                 truth = json.loads((folder / "truth.json").read_text())
                 start, error = time.perf_counter(), ""
                 try:
-                    result = diagnose_case(case)
+                    result = diagnose_case(case, frequency_only=frequency_only)
                 except Exception as exc:  # a study records a crash and goes on
                     result, error = {"verdict": "error"}, f"{type(exc).__name__}: {exc}"
                 seconds = time.perf_counter() - start
@@ -356,6 +371,8 @@ def main(argv=None) -> None:
                         default=[FREQUENCY_NOISE, SHAPE_NOISE],
                         help="the test data's noise: standard deviations of each frequency and of "
                              "each shape DOF (fractions of the frequency, of the shape's RMS)")
+    parser.add_argument("--frequency-only", action="store_true",
+                        help="give the workflow the test frequencies alone (no shapes)")
     parser.add_argument("--out", type=Path, default=Path("runs/diagnose_blind_study"))
     parser.add_argument("--score", type=Path, nargs="+", metavar="DIR",
                         help="score the cases already run under these folders (a later folder's "
@@ -376,7 +393,7 @@ def main(argv=None) -> None:
     else:
         ds = run_study(args.structures, args.kinds,
                        range(args.first_seed, args.first_seed + args.seeds), args.out,
-                       noise=tuple(args.noise))
+                       noise=tuple(args.noise), frequency_only=args.frequency_only)
     print(confusion_text(ds))
     print(gap_text(ds))
 
