@@ -62,7 +62,7 @@ from structures.massprops import check_measured_mass
 from structures.modal import compute_modes
 from structures.model import FEModel
 from structures.modes import elastic_index, rigid_index
-from structures.suspension import RIGID_SHARE, suspension_modes
+from structures.suspension import FREQUENCY_RATIO, RIGID_SHARE, suspension_modes
 
 #: Rigid-body modes added to twice the test modes for the default analysis mode count.
 N_RIGID = 6
@@ -325,7 +325,7 @@ def _without_suspension(data, modes: xr.Dataset, notes: list) -> xr.Dataset:
     """The configuration's test modes without its suspension modes
     (:func:`structures.suspension.suspension_modes`: shapes at the sensors, placed at the model's
     grids, that are rigid-body motions below the lowest elastic analysis frequency; frequency-only,
-    modes below half of it), each set aside with a note. Only a model with rigid-body modes is
+    modes below ``FREQUENCY_RATIO`` of it), each set aside with a note. Only a model with rigid-body modes is
     hung on a suspension: a clamped one keeps every test mode."""
     gvt = data.gvt
     f_fe = modes["frequency"].values[elastic_index(modes)]
@@ -343,7 +343,8 @@ def _without_suspension(data, modes: xr.Dataset, notes: list) -> xr.Dataset:
     why = (f"their shapes are rigid-body motions at the sensors (at least {100 * RIGID_SHARE:.0f} "
            f"% of each shape) below the lowest elastic analysis frequency, {f_fe.min():.3g} Hz"
            if "shape" in gvt else
-           f"below half the lowest elastic analysis frequency, {f_fe.min():.3g} Hz")
+           f"below {FREQUENCY_RATIO:g} x the lowest elastic analysis frequency, "
+           f"{f_fe.min():.3g} Hz")
     kept = gvt.isel(mode=~rigid)
     if not kept.sizes["mode"]:
         raise InputError(f"configuration {data.name}: GVT file {gvt.attrs.get('source', '')}: "
