@@ -13,8 +13,10 @@ MYSTRAN takes no grounded CELAS2 (a blank second grid): a bungee is written to a
 fixed by GRID PS 123456, the same spring.
 
 Kinds: ``KINDS`` here (a mass, a support spring and none; the deck has no rigid element and no
-CBAR, so no joint, taper or curvature). The GVT: ``N_TEST`` modes at all three translations of
-40 of the 60 free grids (120 DOFs, evenly over the ids).
+CBAR, so no joint, taper or curvature). The nuisance scatter is the generator's
+(``effects.scatter``): every CONM2 (2 %) and the one MAT1's E (1 %, the same for every element);
+the deck has no PBAR. The GVT: ``N_TEST`` modes at all three translations of 40 of the 60 free
+grids (120 DOFs, evenly over the ids).
 """
 from __future__ import annotations
 
