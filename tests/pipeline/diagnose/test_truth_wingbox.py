@@ -5,7 +5,7 @@ References: MSC Nastran's own first frequency of the deck (the F06 excerpt of
 ``tests/data/goland_wingbox``, which our solver matches to 2.2e-6 in
 ``tests/structures/test_public_decks.py``); the public deck as it is, read by our reader; the
 truth decks the generator keeps, read card by card with pyNastran. Needs MYSTRAN (skipped
-without it); ~10 s, and the workflow on two cases, ~30 s.
+without it); ~10 s, and a ``slow`` run of the workflow on two cases.
 """
 from __future__ import annotations
 
@@ -107,10 +107,12 @@ def test_grounded_spring_reaches_mystran(tmp_path):
 
 
 @needs_mystran
+@pytest.mark.slow
 def test_wingbox_mass_named_and_none_kept(tmp_path):
-    """The workflow on two wing-box cases, seed 0 (about 30 s): the hidden mass named at its
-    grid and the gap shrinking; nothing named on the scatter-only truth, whose only model-form
-    error is MYSTRAN's element against ours."""
+    """The workflow on two wing-box cases, seed 0 (about 35 s, ``slow``; the default suite runs
+    the wing box's none case frequency-only, below): the hidden mass named at its grid and the
+    gap shrinking; nothing named on the scatter-only truth, whose only model-form error is
+    MYSTRAN's element against ours."""
     ds = run_study(["wingbox"], ["lumped_mass", "none"], [0], tmp_path, progress=None)
     assert ds.attrs["errors"] == 0, ds["error"].values
     mass = ds.isel(case=list(ds["truth_kind"].values).index("lumped_mass"))
