@@ -37,6 +37,7 @@ import numpy as np
 import xarray as xr
 
 from structures.common.errors import InputError
+from structures.frames import rigid_offset
 
 #: Share of a test shape in the rigid-body span at or above which it is a suspension mode.
 RIGID_SHARE = 0.9
@@ -64,14 +65,8 @@ def rigid_body_readings(position, component) -> np.ndarray:
     if x.ndim != 2 or x.shape != (comp.size, 3) or np.any((comp < 1) | (comp > 6)):
         raise InputError(f"sensor layout: positions {x.shape} and components {comp.shape} must be "
                          "(n_dof, 3) and (n_dof,) with components 1-6.")
-    e = np.eye(3)[(comp - 1) % 3]                                         # (n_dof, 3)
-    r = x - x.mean(axis=0)
-    translation = comp <= 3
-    out = np.zeros((comp.size, 6))
-    out[translation, :3] = e[translation]
-    out[translation, 3:] = np.cross(r[translation], e[translation])      # e . (theta x r)
-    out[~translation, 3:] = e[~translation]
-    return out
+    rows = rigid_offset(x - x.mean(axis=0))                               # (n_dof, 6, 6)
+    return rows[np.arange(comp.size), comp - 1]                          # u = t + theta x r
 
 
 def rigid_body_share(shape, position, component) -> np.ndarray:

@@ -325,8 +325,8 @@ def _without_suspension(data, modes: xr.Dataset, notes: list) -> xr.Dataset:
     """The configuration's test modes without its suspension modes
     (:func:`structures.suspension.suspension_modes`: shapes at the sensors, placed at the model's
     grids, that are rigid-body motions below the lowest elastic analysis frequency; frequency-only,
-    modes below ``FREQUENCY_RATIO`` of it), each set aside with a note. Only a model with rigid-body modes is
-    hung on a suspension: a clamped one keeps every test mode."""
+    modes below ``FREQUENCY_RATIO`` of it), each set aside with a note. Only a model with
+    rigid-body modes is hung on a suspension: a clamped one keeps every test mode."""
     gvt = data.gvt
     f_fe = modes["frequency"].values[elastic_index(modes)]
     if not rigid_index(modes).size or not f_fe.size:

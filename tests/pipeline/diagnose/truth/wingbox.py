@@ -43,7 +43,7 @@ N_GRIDS = 40
 _DESIGN = ("desvars", "dresps", "dvprels", "dscreen", "dconstrs", "dconadds", "dvgrids")
 
 
-def _sol103(nmodes: int, mystran: bool):
+def _sol103(nmodes: int):
     """The public deck parsed, its design cards dropped, as SOL 103 for ``nmodes`` roots."""
     from pyNastran.bdf.bdf import CaseControlDeck
 
@@ -57,7 +57,7 @@ def _sol103(nmodes: int, mystran: bool):
     method = next(iter(bdf.methods))
     bdf.methods[method].nd = nmodes
     lines = [f"SPC = {next(iter(bdf.spcadds))}", f"METHOD = {method}"]
-    bdf.case_control_deck = CaseControlDeck(lines + (["DISP(PLOT) = ALL"] if mystran else []))
+    bdf.case_control_deck = CaseControlDeck(lines)
     return bdf
 
 
@@ -67,7 +67,7 @@ def write_wingbox(folder: Path) -> Path:
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     path = folder / "wingbox.bdf"
-    _sol103(N_TEST + 8, False).write_bdf(str(path), enddata=True)
+    _sol103(N_TEST + 8).write_bdf(str(path), enddata=True)
     return path
 
 
