@@ -178,6 +178,9 @@ def correlation_tables(corr) -> str:
                      f"{abs(corr['paired_cross_orthogonality'].values[k]):6.3f} {klass:>9} "
                      + " ".join(f"{v:>14}" for v in verdicts))
     lines.append(f"mode interchanges: {corr.attrs.get('interchanges', 'none')}")
+    if corr.attrs.get("suspension_modes", "none") != "none":
+        lines.append(f"suspension modes left out: {corr.attrs['suspension_modes']} (rigid-body "
+                     "motions at the sensors below the first elastic analysis frequency)")
     if "max_sensor_offset" in corr.attrs:
         lines.append(f"largest distance GVT node - model grid: {corr.attrs['max_sensor_offset']:.4g} "
                      "(model units; large values mean misnumbered nodes)")

@@ -82,6 +82,10 @@ def correlation_section(corr: xr.Dataset, where: str, roles: dict | None = None)
     swaps = corr.attrs.get("interchanges", "none")
     if swaps != "none":
         out += note(f"{where}: mode interchanges {swaps}.")
+    hung = corr.attrs.get("suspension_modes", "none")
+    if hung != "none":
+        out += note(f"{where}: test modes {hung} are suspension modes (rigid-body motions at the "
+                    "sensors below the first elastic analysis frequency), left out.")
     return out
 
 

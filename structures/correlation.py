@@ -45,6 +45,7 @@ from structures.common.errors import InputError
 from structures.gvt import check_dofs_in_model, validate_gvt
 from structures.modes import check_modes, elastic_index
 from structures.pairing import pair_modes
+from structures.suspension import without_suspension
 
 _PAIR_BY = ("mac", "cross_orthogonality")
 _A_SET = ("all", "translational")
@@ -376,8 +377,13 @@ def correlate(fe_modes: xr.Dataset, gvt: xr.Dataset, settings: CorrelationSettin
         :func:`structures.acceptance.evaluate_checks` on (check, test_mode). The pairing assigns
         elastic analysis modes only (:func:`structures.modes.elastic_index`; a rigid-body mode
         has no elastic test counterpart, and a poorly matched test mode would otherwise take one
-        at 0 Hz, a 100 % frequency error), unless a test mode has zero frequency.
+        at 0 Hz, a 100 % frequency error), unless a test mode has zero frequency. Test modes
+        that are suspension modes of a model with rigid-body modes (rigid-body motions at the
+        sensors below the first elastic analysis frequency,
+        :func:`structures.suspension.without_suspension`) are left out; attribute
+        ``suspension_modes`` lists them.
     """
+    gvt, hung = without_suspension(fe_modes, gvt)
     index, a_mask, basis = _prepare(fe_modes, gvt, settings)
     phi_fe = fe_modes["shape"].values.T                                    # Phi_A (all dofs x n_fe)
     phi_gm = gvt["shape"].values.T                                         # Phi~_GM (n_MD x n)
@@ -426,6 +432,7 @@ def correlate(fe_modes: xr.Dataset, gvt: xr.Dataset, settings: CorrelationSettin
         "pair_by": settings.pair_by, "a_set": settings.a_set, "n_serep_modes": basis.shape[1],
         "n_measured_dofs": int(index.size), "n_aset_dofs": int(a_mask.sum()),
         "interchanges": swaps or "none",
+        "suspension_modes": ", ".join(str(int(m)) for m in hung) or "none",
         "normalisation": "orthogonality_ij = M_ij/sqrt(M_ii M_jj); cross_orthogonality_ij = "
                          "S_ij/sqrt(M_ii (Phi_A^T M_A Phi_A)_jj); M_A = SEREP mass (eqs. 12-13)",
         "gvt": gvt.attrs.get("source", ""), "deck": fe_modes.attrs.get("deck", ""),

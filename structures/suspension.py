@@ -38,6 +38,7 @@ import xarray as xr
 
 from structures.common.errors import InputError
 from structures.frames import rigid_offset
+from structures.modes import elastic_index, rigid_index
 
 #: Share of a test shape in the rigid-body span at or above which it is a suspension mode.
 RIGID_SHARE = 0.9
@@ -121,3 +122,37 @@ def suspension_modes(gvt: xr.Dataset, first_elastic: float, *, position=None) ->
         return rigid
     elastic = f[~rigid]
     return rigid & (f < (elastic.min() if elastic.size else np.inf))
+
+
+def without_suspension(fe_modes: xr.Dataset, gvt: xr.Dataset, *, position=None
+                       ) -> tuple[xr.Dataset, np.ndarray]:
+    """The test modes without the suspension modes, for a model with rigid-body modes.
+
+    Parameters
+    ----------
+    fe_modes : xarray.Dataset of analysis modes, rigid-body ones marked by ``rigid_motion``
+        (:func:`structures.modes.rigid_index`); without any, every test mode is kept.
+    gvt : xarray.Dataset in the :mod:`structures.gvt` layout.
+    position : (n_dof, 3), optional, as :func:`suspension_modes`.
+
+    Returns
+    -------
+    kept : xarray.Dataset, ``gvt`` without its suspension modes.
+    hung : (n_hung,) the test mode numbers left out (empty when none).
+
+    Raises
+    ------
+    InputError
+        Every test mode is a suspension mode.
+    """
+    f_fe = fe_modes["frequency"].values[elastic_index(fe_modes)]
+    if not rigid_index(fe_modes).size or not f_fe.size:
+        return gvt, gvt["mode"].values[:0]
+    rigid = suspension_modes(gvt, float(f_fe.min()), position=position)
+    if rigid.all():
+        raise InputError(f"GVT file {gvt.attrs.get('source') or '(arrays)'}: every test mode is "
+                         "a suspension mode (a rigid-body motion at the sensors, or below "
+                         f"{FREQUENCY_RATIO:g} x the lowest elastic analysis frequency "
+                         f"{f_fe.min():.3g} Hz without shapes). Fix: give the elastic modes of "
+                         "the test.")
+    return gvt.isel(mode=~rigid), gvt["mode"].values[rigid]

@@ -52,11 +52,17 @@ def test_gvt_read_back_and_every_mode_paired(correlation):
     configuration, gvt, corr = correlation
     assert gvt.sizes["dof"] == 120 and corr.attrs["n_measured_dofs"] == 120
     assert set(np.unique(gvt["component"].values)) == {1, 2, 3}
-    assert gvt.sizes["mode"] == mt.N_TEST
-    np.testing.assert_array_equal(gvt["mode"].values, np.arange(7, 7 + mt.N_TEST))
-    assert all(gvt["name"].values) and len(set(gvt["name"].values)) == mt.N_TEST
+    assert gvt.sizes["mode"] == mt.N_RIGID + mt.N_TEST
+    np.testing.assert_array_equal(gvt["mode"].values, np.arange(1, 7 + mt.N_TEST))
+    assert all(gvt["name"].values) and len(set(gvt["name"].values)) == mt.N_RIGID + mt.N_TEST
     assert np.all(gvt["frequency"].values < 40.0)
     assert np.all((gvt["damping"].values >= 0.01) & (gvt["damping"].values <= 0.02))
+    # the six suspension modes come first, well below the first elastic mode, and the
+    # correlation leaves them out (structures.suspension)
+    f = gvt["frequency"].values
+    assert np.all(f[:mt.N_RIGID] < 0.5 * f[mt.N_RIGID])
+    assert corr.attrs["suspension_modes"] == "1, 2, 3, 4, 5, 6"
+    np.testing.assert_array_equal(corr["test_mode"].values, np.arange(7, 7 + mt.N_TEST))
     paired = corr["paired_fe_mode"].values
     assert np.unique(paired).size == mt.N_TEST                 # one analysis mode per test mode
     assert np.all(paired > mt.N_RIGID)                         # never a rigid-body mode

@@ -3,10 +3,11 @@
 The pipeline never imports this script; it only reads what the script writes beside the analysis
 model (``data/x56_like/``):
 
-* ``gvt_efew.unv``, ``gvt_fffw.unv``: UFF 15 + 55, the truth model's first ``N_TEST`` elastic
-  modes of each configuration at ``sensors()`` (120 translations in the basic frame; node ids
-  are the analysis model's grid ids, node positions the analysis model's grid positions), test mode
-  numbers counting the six suspension (rigid-body) modes as the reference paper does (7, 8, ...),
+* ``gvt_efew.unv``, ``gvt_fffw.unv``: UFF 15 + 55, the truth model's six suspension modes
+  (modes 1-6, named ``suspension 1`` ..) and its first ``N_TEST`` elastic modes (7, 8, ...: the
+  reference paper's numbers) of each configuration at ``sensors()`` (120 translations in the
+  basic frame; node ids are the analysis model's grid ids, node positions the analysis model's
+  grid positions),
   names as the pre-test analysis gives them (``test_names``), 1 % frequency noise,
   5 % shape noise (white, independent per DOF, standard deviation 5 % of the mode's RMS over the
   sensors), viscous damping zeta drawn uniformly in 1-2 %;
@@ -70,12 +71,15 @@ from structures.gvt import make_gvt_dataset, write_uff  # noqa: E402
 from structures.massprops import mass_properties  # noqa: E402
 from structures.modal import compute_modes  # noqa: E402
 
-#: Seed of every random draw (scatter: stream 0; noise of configuration i: stream i + 1).
+#: Seed of every random draw (scatter: stream 0; noise of configuration i: stream i + 1, of its
+#: suspension modes stream i + 1 + ``SUSPENSION_STREAM``).
 SEED = 20121217                      # the X-56A GVT date
 #: Elastic modes "measured" per configuration (all below 40 Hz).
 N_TEST = 22
-#: Rigid-body (suspension) modes of the truth model, below the first elastic mode.
+#: Rigid-body (suspension) modes of the truth model, below the first elastic mode; the GVT files
+#: list them first (modes 1-6), as a GVT report does.
 N_RIGID = 6
+SUSPENSION_STREAM = 100
 FREQUENCY_NOISE = 0.01               # standard deviation, fraction of the frequency
 SHAPE_NOISE = 0.05                   # standard deviation, fraction of the mode's RMS at the sensors
 DAMPING = (0.010, 0.020)             # zeta, uniform
@@ -232,8 +236,21 @@ def test_names(truth: np.ndarray, own: list[str], analysis: np.ndarray,
     return out
 
 
+def _noisy(shape: np.ndarray, freq: np.ndarray, rng: np.random.Generator) -> tuple:
+    """(frequencies, shapes, damping) as measured: each shape's sign fixed (largest sensor entry
+    positive), then frequency noise (n,), shape noise (n, 120) and damping drawn in that order."""
+    peak = np.take_along_axis(shape, np.abs(shape).argmax(axis=1)[:, None], axis=1)
+    shape = shape * np.sign(peak)
+    n = shape.shape[0]
+    f_test = freq * (1.0 + FREQUENCY_NOISE * rng.standard_normal(n))
+    rms = np.sqrt(np.mean(shape ** 2, axis=1, keepdims=True))
+    shape = shape + SHAPE_NOISE * rms * rng.standard_normal(shape.shape)
+    return f_test, shape, rng.uniform(*DAMPING, n)
+
+
 def gvt_dataset(modes: xr.Dataset, params: mm.X56Parameters, configuration: str,
-                rng: np.random.Generator, analysis: xr.Dataset) -> xr.Dataset:
+                rng: np.random.Generator, analysis: xr.Dataset,
+                suspension_rng: np.random.Generator) -> xr.Dataset:
     """The GVT of one configuration from its truth modes.
 
     Parameters
@@ -244,14 +261,19 @@ def gvt_dataset(modes: xr.Dataset, params: mm.X56Parameters, configuration: str,
         The truth parameters (names, grid map).
     configuration : {"efew", "fffw"}
     rng : numpy.random.Generator
-        Draws the frequency noise (n_test,), the shape noise (n_test, 120) and the damping.
+        Draws the elastic modes' frequency noise (n_test,), shape noise (n_test, 120) and damping.
     analysis : xarray.Dataset
         The analysis model's modes (the pre-test analysis that names the test modes).
+    suspension_rng : numpy.random.Generator
+        The same draws for the suspension modes (a stream of their own: the elastic modes'
+        noise is that of the files written before the suspension modes were added).
 
     Returns
     -------
     xarray.Dataset
-        GVT Dataset (structures.gvt): modes ``N_RIGID + 1 ..``, 120 DOFs at analysis grid ids.
+        GVT Dataset (structures.gvt): the suspension modes 1 .. ``N_RIGID`` (named
+        ``suspension 1`` ..), then the elastic modes ``N_RIGID + 1 ..``; 120 DOFs at analysis
+        grid ids.
     """
     freq = modes["frequency"].values
     if not freq[N_RIGID - 1] < 0.5 * freq[N_RIGID]:
@@ -263,17 +285,17 @@ def gvt_dataset(modes: xr.Dataset, params: mm.X56Parameters, configuration: str,
     names = test_names(shape, [r["name"] for r in classify_modes(elastic, configuration, params)],
                        sensor_shapes(analysis, mm.ANALYSIS),
                        [r["name"] for r in classify_modes(analysis, configuration)])
-    peak = np.take_along_axis(shape, np.abs(shape).argmax(axis=1)[:, None], axis=1)
-    shape = shape * np.sign(peak)
-    n = shape.shape[0]
-    f_test = elastic["frequency"].values * (1.0 + FREQUENCY_NOISE * rng.standard_normal(n))
-    rms = np.sqrt(np.mean(shape ** 2, axis=1, keepdims=True))
-    shape = shape + SHAPE_NOISE * rms * rng.standard_normal(shape.shape)
-    zeta = rng.uniform(*DAMPING, n)
+    f_test, shape, zeta = _noisy(shape, elastic["frequency"].values, rng)
+    hung = modes.isel(mode=slice(0, N_RIGID))
+    f_hung, shape_hung, zeta_hung = _noisy(sensor_shapes(hung, params),
+                                           hung["frequency"].values, suspension_rng)
     xyz = mm._grids(mm.ANALYSIS)
     layout = sensors()
-    return make_gvt_dataset(f_test, shape, [g for g, _, _ in layout], [c for _, c, _ in layout],
-                            mode=np.arange(N_RIGID + 1, N_RIGID + 1 + n), damping=zeta, name=names,
+    return make_gvt_dataset(np.concatenate([f_hung, f_test]), np.vstack([shape_hung, shape]),
+                            [g for g, _, _ in layout], [c for _, c, _ in layout],
+                            mode=np.arange(1, N_RIGID + 1 + f_test.size),
+                            damping=np.concatenate([zeta_hung, zeta]),
+                            name=[f"suspension {j}" for j in range(1, N_RIGID + 1)] + names,
                             xyz=[xyz[g] for g, _, _ in layout],
                             source=f"synthetic GVT of the X-56A-class truth model, {configuration.upper()}"
                                    " (data/x56_like/truth/make_truth.py)", units=UNITS)
@@ -328,7 +350,8 @@ def write_truth(out: Path = MODEL_DIR, seed: int = SEED, decks: Path | None = No
             modes, props = deck_modes(folder, configuration)
             analysis, _ = deck_modes(Path(tmp) / "analysis", configuration)
             gvt = gvt_dataset(modes, params, configuration, np.random.default_rng((seed, k + 1)),
-                              analysis)
+                              analysis,
+                              np.random.default_rng((seed, k + 1 + SUSPENSION_STREAM)))
             name = f"gvt_{configuration}.unv"
             written[name] = write_uff(gvt, out / name,
                                       title=f"X-56A-class GVT {configuration.upper()}")
