@@ -3,7 +3,8 @@
 Runs the ``diagnose`` stage of the case (pipeline.stages.diagnose_plan: with flutter, stage 0's
 grid GAFs, modes and flutter first) in the run folder of ``pipeline run`` (``--out``, default
 ``runs/<case name>``): ``diagnose/diagnose.json``, ``diagnose.nc``, ``<config>_calibrated.bdf``
-and ``<config>_diagnosed.bdf`` (the models of the gap before and after), ``*.png``
+and ``<config>_diagnosed.bdf`` (the models of the gap before and after; with a suspension
+identified from the test's suspension modes, ``<config>_as_tested.bdf`` adds it), ``*.png``
 (pipeline.diagnose.outputs). Prints the verdict, each named effect with its location
 and parameters, the best five candidates and the gap before -> after; ``--json FILE`` also writes
 the verdict record there. The case and its ``[diagnose]`` table, every deck and GVT file and the

@@ -66,6 +66,22 @@ def diagnose_section(run_dir, labels: UnitLabels) -> str:
             for i, e in enumerate(effects, 1)], table_id="diagnose-effects")
     else:
         out += note("No effect was named, so the model is unchanged.")
+    suspension = record.get("suspension")
+    if suspension:
+        out += "<h3>The test's suspension, from its suspension modes</h3>"
+        unit = f"{labels.force}/{labels.length}"
+        out += table(("site [grids]", *(f"k_{d} [{unit}]" for d in "xyz")),
+                     [("+".join(str(g) for g in site), *(_value(v) for v in k))
+                      for site, k in zip(suspension["sites"], suspension["stiffness"])],
+                     table_id="diagnose-suspension")
+        out += table(("configuration", "test frequency [Hz]", "model frequency [Hz]"),
+                     [(name, _value(t), _value(m))
+                      for name, pair in suspension["frequencies"].items()
+                      for t, m in zip(pair["test"], pair["model"])],
+                     table_id="diagnose-suspension-frequencies")
+        out += note(f"The first {len(suspension['sites'])} effects are the test's suspension: "
+                    "they are in the as-tested decks (the gap after), not in the diagnosed "
+                    "decks that flutter and tuning take.")
     candidates = list(record.get("candidates") or [])
     out += (f"<h3>Candidates of the first round (best {min(TOP, len(candidates))} of "
             f"{len(candidates)})</h3>")

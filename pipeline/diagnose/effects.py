@@ -89,7 +89,9 @@ scale of the model (so that bounds do not depend on units):
 ``boundary_stiffness`` at a grid in direction x, y or z, parameter ``k_<direction>``
     A grounded CELAS2 of stiffness k times m_total (2 pi f_1)^2, f_1 the model's lowest elastic
     frequency and m_total its total mass (consistent units): at k = 1 the spring alone would carry
-    the whole mass at f_1. Bounds [0, 1]. x, y, z are the grid's displacement-frame axes 1, 2, 3
+    the whole mass at f_1. Bounds [0, 1]. A suspension identified from the test's suspension
+    modes (:mod:`pipeline.diagnose.suspension`) is this kind at a grid with parameters ``k_x``,
+    ``k_y``, ``k_z`` (direction ``xyz``): one CELAS2 per nonzero stiffness. x, y, z are the grid's displacement-frame axes 1, 2, 3
     (basic axes when CD = 0; a grounded CELAS2 rather than a CBUSH, which MYSTRAN cannot ground).
     One candidate per grid of ``lumped_mass`` and unconstrained direction.
 
@@ -356,12 +358,14 @@ def _lumped_mass(model, candidate, x):
 
 
 def _boundary(model, candidate, x):
-    eid = next_eid(model)
+    direction = [DIRECTIONS.index(name[2:]) + 1 for name in candidate.parameters]
+    keep = np.flatnonzero(x > 0.0)
+    n = keep.size
     elements = append_elements(
-        model, "CELAS", np.array([eid]), np.zeros(1, np.int64),
-        np.array([[candidate.location.grids[0], 0]]),
-        {"c1": np.array([DIRECTIONS.index(candidate.get("direction")) + 1]),
-         "c2": np.zeros(1, np.int64), "k": np.array([x[0] * candidate.get("k_ref")])})
+        model, "CELAS", next_eid(model) + np.arange(n), np.zeros(n, np.int64),
+        np.column_stack([np.full(n, candidate.location.grids[0]), np.zeros(n, np.int64)]),
+        {"c1": np.array(direction)[keep], "c2": np.zeros(n, np.int64),
+         "k": x[keep] * candidate.get("k_ref")})
     return replace(model, elements=elements)
 
 

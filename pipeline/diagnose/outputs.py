@@ -9,7 +9,11 @@ writes, below ``folder`` (the stage's staging folder, run-folder layout):
   parameters (``result.calibrated``), the model of ``gap_before``;
 - ``diagnose/<config>_diagnosed.bdf``: that with the final nominal parameters (``result.nominal``)
   and the named effects (:func:`pipeline.diagnose.effects.write_effect_deck`), the model of
-  ``gap_after``, when an effect was named;
+  ``gap_after``, when an effect was named; a suspension identified from the test's suspension
+  modes (``result.suspension``, the first ``len(sites)`` effects) belongs to the test, not to
+  the aircraft: it is left out of this deck (the free model that flutter and tuning take) and
+  written on top of it in ``diagnose/<config>_as_tested.bdf``, the model of ``gap_after``'s
+  modal and mass metrics;
 - ``diagnose/candidates.png`` and ``diagnose/gap.png`` (:mod:`pipeline.diagnose.plots`);
 - with the case's ``[flutter]`` and ``[diagnose] flutter`` on: ``diagnose/<config>/flutter/*``,
   the flutter solutions of the calibrated decks (``diagnose/<config>/flutter_before/*``) and of
@@ -116,20 +120,26 @@ def write_diagnosis(case, folder, run_dir, aero: dict | None = None, progress=No
     configurations = configurations_from_case(case)
     result = diagnose(configurations, options.workflow, progress=progress)
     effects = [(effect[0], effect[1]) for effect in result.effects]   # (Candidate, values)
+    n_hung = len(result.suspension["sites"]) if result.suspension else 0
+    hung, effects = effects[:n_hung], effects[n_hung:]
     calibrated, decks = {}, {}
     for data in configurations:
         calibrated[data.name] = write_calibrated_deck(
             data.deck, folder / FOLDER / f"{data.name}_calibrated.bdf", data.model,
             result.calibrated)
-        if effects:
+        if effects or hung:
             final = folder / FOLDER / f"{data.name}_diagnosed.bdf"
             write_calibrated_deck(data.deck, final, data.model, result.nominal)
-            decks[data.name] = write_effect_deck(final, final, read_model(final), effects)
+            decks[data.name] = (write_effect_deck(final, final, read_model(final), effects)
+                                if effects else final)
+        if hung:
+            write_effect_deck(final, folder / FOLDER / f"{data.name}_as_tested.bdf",
+                              read_model(final), hung)
     if options.flutter and case.flutter is not None:
         before = _diagnosed_flutter(case, folder, run_dir, calibrated, aero, progress,
                                     "flutter_before")
         after = (_diagnosed_flutter(case, folder, run_dir, decks, aero, progress)
-                 if effects else before)
+                 if decks else before)
         result = replace(result, gap_before={**result.gap_before, "flutter_speed": before},
                          gap_after={**result.gap_after, "flutter_speed": after})
     record = result.to_json()
@@ -181,9 +191,12 @@ def verdict_summary(record: dict, velocity: str = "model units", top: int = 5) -
     and parameters, the ``top`` candidates and the gap before -> after (``velocity``: the unit
     of the flutter speed)."""
     lines = [f"verdict: {record['verdict']}"]
+    n_hung = len((record.get("suspension") or {}).get("sites") or [])
     for i, effect in enumerate(record.get("effects") or [], 1):
         lines.append(f"  effect {i}: {effect['kind']} at {_location(effect.get('location'))}: "
-                     f"{_parameters(effect.get('parameters'))}")
+                     f"{_parameters(effect.get('parameters'))}"
+                     + (" (the test's suspension, from its suspension modes)" if i <= n_hung
+                        else ""))
     candidates = list(record.get("candidates") or [])[:top]
     if candidates:
         lines.append(f"candidates (best {len(candidates)} of {len(record['candidates'])}, score: "

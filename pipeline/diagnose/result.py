@@ -29,7 +29,9 @@ GAP_MODELS = {
               "CONM2 mass scale: 'calibrated') and no effect; deck <config>_calibrated.bdf",
     "after": "the nominal model with the named effects and the nominal parameters refitted with "
              "them ('nominal'); deck <config>_diagnosed.bdf (the calibrated deck when no effect "
-             "was named)"}
+             "was named); with a suspension identified from the test's suspension modes, the "
+             "modal and mass metrics are of that model on the suspension, deck "
+             "<config>_as_tested.bdf, and the flutter speed of the free one, <config>_diagnosed.bdf"}
 
 
 class EffectRecord(NamedTuple):
@@ -140,6 +142,13 @@ class DiagnoseResult:
         effect was added in its detailed form, :mod:`pipeline.diagnose.detail`: its
         ``parameters``, ``chi2`` and ``bic`` and the named form's ``named_chi2`` and
         ``named_bic``; the effect's parameters are then the detailed ones).
+    suspension : mapping or None, the suspension identified from the test's suspension modes
+        before the rounds (:mod:`pipeline.diagnose.suspension`; its sites are the first
+        ``effects``): ``sites`` (grids per site), ``stiffness`` (per site k_x, k_y, k_z, force /
+        length), ``chi2``, ``bic``, ``n_data``, ``frequencies`` (per configuration the paired
+        ``test`` and ``model`` suspension frequencies, Hz), ``alternatives`` (the other refitted
+        hypotheses: label and BIC), ``gap`` (the gap with the suspension added, keys as
+        ``gap_after``); None when the test lists no suspension modes.
     """
 
     verdict: str
@@ -152,6 +161,7 @@ class DiagnoseResult:
     nominal: Mapping = field(default_factory=dict)
     rounds: tuple = ()
     calibrated: Mapping = field(default_factory=dict)
+    suspension: Mapping | None = None
 
     def __post_init__(self):
         if self.verdict not in VERDICTS:
@@ -171,7 +181,8 @@ class DiagnoseResult:
             "gap_before": dict(self.gap_before), "gap_after": dict(self.gap_after),
             "notes": list(self.notes), "separating_measurement": self.separating_measurement,
             "nominal": dict(self.nominal), "calibrated": dict(self.calibrated),
-            "gap_models": dict(GAP_MODELS), "rounds": list(self.rounds)})
+            "gap_models": dict(GAP_MODELS), "rounds": list(self.rounds),
+            "suspension": None if self.suspension is None else dict(self.suspension)})
 
     def to_dataset(self) -> xr.Dataset:
         """Candidate table on ``rank`` (1 = best) and the gap metrics on (metric, when)."""

@@ -55,14 +55,15 @@ from pipeline.diagnose.predictive import held_out_evidence, held_out_modes, kept
 from pipeline.diagnose.result import CandidateScore, DiagnoseResult, EffectRecord
 from pipeline.diagnose.screen import (bound_release, pick_for_refit, polish, refit, screen,
                                       signatures)
+from pipeline.diagnose.suspension import hung_data, identify
 from pipeline.diagnose.verdict import (SCATTER_SIGMAS, at_bound, decide, round_scores,
                                         within_scatter)
 from structures.common.errors import InputError
 from structures.massprops import check_measured_mass
 from structures.modal import compute_modes
 from structures.model import FEModel
-from structures.modes import elastic_index, rigid_index
-from structures.suspension import FREQUENCY_RATIO, RIGID_SHARE, suspension_modes
+from structures.modes import elastic_index
+from structures.suspension import FREQUENCY_RATIO, RIGID_SHARE, without_suspension
 
 #: Rigid-body modes added to twice the test modes for the default analysis mode count.
 N_RIGID = 6
@@ -266,6 +267,12 @@ def preflight(configurations, settings: DiagnoseSettings = DiagnoseSettings()) -
         No or repeated configurations, wrong settings, too few analysis modes or sensor DOFs.
     """
     configurations = tuple(configurations)
+    _check_inputs(configurations, settings)
+    refs, notes, _ = _checked(configurations, settings)
+    return refs, notes
+
+
+def _check_inputs(configurations: tuple, settings) -> None:
     if not configurations:
         raise InputError("diagnose: no configurations. Fix: give at least one ConfigurationData.")
     names = [c.name for c in configurations]
@@ -273,18 +280,28 @@ def preflight(configurations, settings: DiagnoseSettings = DiagnoseSettings()) -
         raise InputError(f"diagnose: configuration names {names} repeat. Fix: name each once.")
     if not isinstance(settings, DiagnoseSettings):
         raise InputError("diagnose: settings must be a DiagnoseSettings.")
+
+
+def _checked(configurations, settings) -> tuple:
+    """(refs, notes, hung) of :func:`preflight`, ``hung`` each configuration's suspension modes
+    (a GVT Dataset, or None)."""
     notes: list = []
+    hung: list = []
     with threadpool_limits(limits=1):
-        refs = _preflight(configurations, settings, notes)
-    return tuple(refs), tuple(notes)
+        refs = _preflight(configurations, settings, notes, hung)
+    return tuple(refs), tuple(notes), tuple(hung)
 
 
-def _preflight(configurations, settings: DiagnoseSettings, notes: list):
+def _preflight(configurations, settings: DiagnoseSettings, notes: list, hung: list):
+    """The references of :func:`preflight`; ``hung`` receives each configuration's suspension
+    modes (a GVT Dataset, or None)."""
     refs = []
     for rotation, data in enumerate(configurations):
         nmodes = settings.nmodes or 2 * data.gvt.sizes["mode"] + N_RIGID
         modes = compute_modes(data.model, nmodes)
         gvt = _without_suspension(data, modes, notes)
+        hung.append(data.gvt.isel(mode=~np.isin(data.gvt["mode"].values, gvt["mode"].values))
+                    if gvt.sizes["mode"] < data.gvt.sizes["mode"] else None)
         n_test = gvt.sizes["mode"]
         if elastic_index(modes).size < n_test:
             raise InputError(f"diagnose: configuration {data.name}: {n_test} test modes but only "
@@ -323,37 +340,32 @@ def _preflight(configurations, settings: DiagnoseSettings, notes: list):
 
 def _without_suspension(data, modes: xr.Dataset, notes: list) -> xr.Dataset:
     """The configuration's test modes without its suspension modes
-    (:func:`structures.suspension.suspension_modes`: shapes at the sensors, placed at the model's
-    grids, that are rigid-body motions below the lowest elastic analysis frequency; frequency-only,
-    modes below ``FREQUENCY_RATIO`` of it), each set aside with a note. Only a model with
-    rigid-body modes is hung on a suspension: a clamped one keeps every test mode."""
+    (:func:`structures.suspension.without_suspension`: shapes at the sensors, placed at the
+    model's grids, that are rigid-body motions below the lowest elastic analysis frequency;
+    frequency-only, modes below ``FREQUENCY_RATIO`` of it), set aside with a note. Only a model
+    with rigid-body modes is hung on a suspension: a clamped one keeps every test mode."""
     gvt = data.gvt
-    f_fe = modes["frequency"].values[elastic_index(modes)]
-    if not rigid_index(modes).size or not f_fe.size:
-        return gvt
     position = None
     if "shape" in gvt:
         grids = data.model.grids
         position = grids.xyz[grids.index(gvt["grid"].values, card="GVT sensor grid",
                                          filename=gvt.attrs.get("source") or None)]
-    rigid = suspension_modes(gvt, float(f_fe.min()), position=position)
-    if not rigid.any():
+    try:
+        kept, hung = without_suspension(modes, gvt, position=position)
+    except InputError as exc:
+        raise InputError(f"configuration {data.name}: {exc}") from None
+    if not hung.size:
         return gvt
-    f = gvt["frequency"].values[rigid]
+    f_fe = modes["frequency"].values[elastic_index(modes)]
+    f = gvt["frequency"].values[np.isin(gvt["mode"].values, hung)]
     why = (f"their shapes are rigid-body motions at the sensors (at least {100 * RIGID_SHARE:.0f} "
            f"% of each shape) below the lowest elastic analysis frequency, {f_fe.min():.3g} Hz"
            if "shape" in gvt else
            f"below {FREQUENCY_RATIO:g} x the lowest elastic analysis frequency, "
            f"{f_fe.min():.3g} Hz")
-    kept = gvt.isel(mode=~rigid)
-    if not kept.sizes["mode"]:
-        raise InputError(f"configuration {data.name}: GVT file {gvt.attrs.get('source', '')}: "
-                         f"every test mode is a suspension mode ({why}). Fix: give the elastic "
-                         "modes of the test.")
-    notes.append(f"{data.name}: test modes {gvt['mode'].values[rigid].tolist()} "
-                 f"({f.min():.3g}-{f.max():.3g} Hz) are suspension modes, {why}: left out (no "
-                 "elastic mode of the model matches them; the suspension is the test's, not the "
-                 "structure's).")
+    notes.append(f"{data.name}: test modes {hung.tolist()} ({f.min():.3g}-{f.max():.3g} Hz) are "
+                 f"suspension modes, {why}: left out of the pairing (no elastic mode of the "
+                 "model matches them); with shapes they identify the suspension.")
     return kept
 
 
@@ -407,7 +419,8 @@ def diagnose(configurations, settings: DiagnoseSettings = DiagnoseSettings(), *,
     """
     configurations = tuple(configurations)
     t0 = time.perf_counter()
-    refs, notes = preflight(configurations, settings)
+    _check_inputs(configurations, settings)
+    refs, notes, hung = _checked(configurations, settings)
     notes = list(notes)
     with threadpool_limits(limits=1):
         problem = Problem.build(refs, [c.model for c in configurations], settings.model_scatter)
@@ -421,6 +434,20 @@ def diagnose(configurations, settings: DiagnoseSettings = DiagnoseSettings(), *,
         effects, records, rounds = [], [], []
         theta, none_evs = cal.theta, cal.evaluations
         gap_after = gap_before                                  # nothing named: the same model
+        suspension = None
+        found = _suspension(configurations, refs, hung, settings, problem, theta, notes)
+        if found is not None:
+            _say(progress, "adding the suspension")
+            best, fits = found
+            effects = best.effects(problem.model(0, theta))
+            hung_none = refit(problem, theta, effects, None, n_data=n_data,
+                              jacobian_theta=cal.jacobian)
+            lead = fits[1].bic - best.bic if len(fits) > 1 else float("inf")
+            records += [EffectRecord(c, v, lead) for c, v in effects]
+            theta, none_evs = hung_none.theta, hung_none.evaluations
+            gap_after = gap_metrics(problem, none_evs)
+            suspension = _suspension_record(best, fits, gap_after)
+            notes.append(_suspension_note(best, fits, settings.margin))
         table, separating, first = (), None, None
         for k in range(settings.max_effects):
             _say(progress, f"round {k + 1}: screening")
@@ -434,7 +461,8 @@ def diagnose(configurations, settings: DiagnoseSettings = DiagnoseSettings(), *,
             rows = screen(r0, signed)
             _say(progress, f"round {k + 1}: refitting")
             none = refit(problem, theta, effects, None, n_data=n_data,
-                         jacobian_theta=cal.jacobian) if k else _none_fit(problem, cal, n_data)
+                         jacobian_theta=cal.jacobian) if effects else _none_fit(problem, cal,
+                                                                                n_data)
             fits = [refit(problem, theta, effects, row, n_data=n_data, jacobian_theta=cal.jacobian)
                     for row in pick_for_refit(rows, settings.refit)]
             fits = [f for f in fits if f is not None]
@@ -583,7 +611,58 @@ def diagnose(configurations, settings: DiagnoseSettings = DiagnoseSettings(), *,
                           separating_measurement=separating,
                           nominal={n: float(t) for n, t in zip(problem.names, theta)},
                           rounds=tuple(rounds),
-                          calibrated={n: float(t) for n, t in zip(problem.names, cal.theta)})
+                          calibrated={n: float(t) for n, t in zip(problem.names, cal.theta)},
+                          suspension=suspension)
+
+
+def _suspension(configurations, refs, hung, settings: DiagnoseSettings, problem: Problem,
+                theta, notes: list):
+    """(best, fits) of :func:`pipeline.diagnose.suspension.identify` on the configurations whose
+    test lists suspension modes with shapes, or None (with a note when there are suspension
+    modes but they cannot be used)."""
+    used = [i for i, h in enumerate(hung) if h is not None and "shape" in h]
+    if not any(h is not None for h in hung):
+        return None
+    if "boundary_stiffness" not in settings.kinds:
+        notes.append("the test's suspension modes identify no suspension: boundary_stiffness "
+                     "is not among the kinds screened.")
+        return None
+    if not used:
+        notes.append("the suspension modes have no shapes: where the suspension acts cannot be "
+                     "told, and it is not identified (its stiffening of the elastic modes is "
+                     "left to the rounds).")
+        return None
+    models = [problem.model(i, theta) for i in used]
+    data = [hung_data(configurations[i].name, hung[i], m.grids,
+                      float(np.median(refs[i].shape_sigma)) if refs[i].shape_sigma is not None
+                      else settings.shape_noise or 0.05, configurations[i].measured_mass)
+            for i, m in zip(used, models)]
+    return identify(models, data, frequency_noise=settings.frequency_noise)
+
+
+def _suspension_record(best, fits, gap) -> dict:
+    """The JSON record of the identified suspension (DiagnoseResult ``suspension``)."""
+    return {"sites": [list(site) for site in best.sites],
+            "stiffness": best.stiffness.tolist(), "chi2": best.chi2, "bic": best.bic,
+            "n_data": best.n_data,
+            "frequencies": {name: {"test": t.tolist(), "model": m.tolist()}
+                            for name, (t, m) in best.frequencies.items()},
+            "alternatives": [{"label": f.label, "bic": f.bic} for f in fits[1:]],
+            "gap": gap}
+
+
+def _suspension_note(best, fits, margin: float) -> str:
+    """What the suspension fit found, and the hypotheses within the margin of it."""
+    springs = "; ".join(f"{'+'.join(map(str, site))}: k_x, k_y, k_z = "
+                        + ", ".join(f"{v:.4g}" for v in k)
+                        for site, k in zip(best.sites, best.stiffness))
+    rivals = [f.label for f in fits[1:] if f.bic - best.bic <= margin]
+    return (f"suspension from the test's suspension modes: grounded springs at {springs} "
+            f"(chi^2 {best.chi2:.1f} over {best.n_data} data; the runner-up, "
+            + (f"{fits[1].label}, scores {fits[1].bic - best.bic:.1f} higher" if len(fits) > 1
+               else "none") + "); added before the rounds"
+            + (f"; {', '.join(rivals)} fit within the margin {margin:g}: where the suspension "
+               "acts is not certain." if rivals else "."))
 
 
 def _none_fit(problem: Problem, cal, n_data: int):

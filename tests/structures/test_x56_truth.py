@@ -113,7 +113,23 @@ def test_generator_is_deterministic_and_shipped(tmp_path):
         runs.append({f: (out / f).read_bytes() for f in OUTPUTS})
     assert runs[0] == runs[1]
     for f in OUTPUTS:
-        assert runs[0][f] == (FOLDER / f).read_bytes(), f"{f}: rerun make_truth.py"
+        if not f.startswith("gvt_"):
+            assert runs[0][f] == (FOLDER / f).read_bytes(), f"{f}: rerun make_truth.py"
+            continue
+        # The GVT files agree byte for byte at one BLAS thread count; at another, the truth's
+        # nearly coincident suspension modes (FFFW's two sway modes 2.5e-5 apart) mix by
+        # ~2.5e-6 of the peak, which can move a shape's sixth printed digit: compared to the
+        # printed precision instead (6 digits: 5e-6 of a value), names and numbering exactly.
+        made, shipped = load_gvt(tmp_path / "a" / f), load_gvt(FOLDER / f)
+        assert list(made["name"].values) == list(shipped["name"].values), f
+        np.testing.assert_array_equal(made["mode"].values, shipped["mode"].values)
+        np.testing.assert_allclose(made["frequency"].values, shipped["frequency"].values,
+                                   rtol=5e-6, err_msg=f"{f}: rerun make_truth.py")
+        peak = np.abs(shipped["shape"].values).max(axis=1, keepdims=True)
+        assert np.all(np.abs(made["shape"].values - shipped["shape"].values) <= 2e-5 * peak), f
+        elastic = shipped["mode"].values > mt.N_RIGID                     # not mixed: exact
+        np.testing.assert_array_equal(made["shape"].values[elastic],
+                                      shipped["shape"].values[elastic])
 
 
 def test_sensor_layout():

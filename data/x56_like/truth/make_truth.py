@@ -36,9 +36,11 @@ generator's hooks (``dataclasses.replace`` of ``X56Parameters``) -- see ``truth_
   two sigma.
 
 The truth decks are written into a temporary folder and not kept (``--decks DIR`` keeps them).
-Byte-deterministic from the seed: the scatter and the noise come from ``numpy.random.
-default_rng((SEED, stream))`` and every mode shape's sign is fixed (largest sensor entry positive)
-before noise is added. Run from the repository root::
+Byte-deterministic from the seed at one BLAS thread count: the scatter and the noise come from
+``numpy.random.default_rng((SEED, stream))`` and every mode shape's sign is fixed (largest sensor
+entry positive) before noise is added. (The FFFW truth's two sway suspension modes lie 2.5e-5
+apart; the eigensolver mixes them by ~2.5e-6 differently at another thread count, which can move
+a printed sixth digit of their shapes.) Run from the repository root::
 
     python data/x56_like/truth/make_truth.py [--out FOLDER] [--decks DIR]
 """
