@@ -11,7 +11,7 @@ The optional ``[diagnose]`` table of a case file (every key optional; defaults s
     holdout = 3              # every holdout-th paired mode of each configuration is held out
     margin = 10.0            # BIC margin by which the named candidate beats the runner-up
     refit = 6                # candidates refitted after the linear screening
-    nmodes = 30              # analysis modes; left out: 2 x test modes + 6 rigid
+    nmodes = 30              # analysis modes; left out: 2 x elastic test modes + 6 rigid
     model_scatter = 0.03     # scatter of every section quantity and CONM2 (fraction)
     before_tuning = false    # pipeline run: diagnose after stage 0 and before the tuning stages
                              # (false: after the last stage, before the report)

@@ -75,7 +75,7 @@ MAX_NFEV = 60
 
 @dataclass(frozen=True)
 class HungData:
-    """One configuration's suspension modes and the current model's basis.
+    """One configuration's test suspension modes, where they were measured and its weighing.
 
     Attributes
     ----------
@@ -122,7 +122,9 @@ class SuspensionFit:
         return "grids " + ", ".join("+".join(str(g) for g in site) for site in self.sites)
 
     def effects(self, model) -> list:
-        """The fit as ``boundary_stiffness`` effects, one per site: (Candidate, values (3,)).
+        """The fit as ``boundary_stiffness`` effects, one per site: (Candidate, values (3,)),
+        each stiffness over the model's k_ref (held at the library's bound 1, a spring that
+        alone carries the whole mass at the first elastic frequency).
 
         Parameters
         ----------

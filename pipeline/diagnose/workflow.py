@@ -115,7 +115,7 @@ class DiagnoseSettings:
     holdout : every holdout-th paired mode (frequency order) of each configuration is held out.
     margin : BIC margin to name one candidate over the runner-up and over "none".
     refit : candidates refitted after the screening.
-    nmodes : analysis modes (None: 2 x test modes + 6).
+    nmodes : analysis modes (None: 2 x elastic test modes + 6: suspension modes not counted).
     model_scatter : relative scatter of the nominal section and mass properties that the few
         nominal parameters cannot follow: every section quantity of every property card and
         every CONM2 errs independently by it (:mod:`pipeline.diagnose.scatter`); it sets the
@@ -300,6 +300,9 @@ def _preflight(configurations, settings: DiagnoseSettings, notes: list, hung: li
         nmodes = settings.nmodes or 2 * data.gvt.sizes["mode"] + N_RIGID
         modes = compute_modes(data.model, nmodes)
         gvt = _without_suspension(data, modes, notes)
+        if settings.nmodes is None and gvt.sizes["mode"] < data.gvt.sizes["mode"]:
+            nmodes = 2 * gvt.sizes["mode"] + N_RIGID          # counted on the elastic test modes
+            modes = modes.isel(mode=slice(0, nmodes))
         hung.append(data.gvt.isel(mode=~np.isin(data.gvt["mode"].values, gvt["mode"].values))
                     if gvt.sizes["mode"] < data.gvt.sizes["mode"] else None)
         n_test = gvt.sizes["mode"]
