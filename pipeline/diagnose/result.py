@@ -171,9 +171,11 @@ class DiagnoseResult:
     def to_json(self) -> dict:
         """The issue's JSON schema (see the module docstring)."""
         effects = [effect_json(r) for r in self.effects]
+        n_hung = len(self.suspension["sites"]) if self.suspension else 0
         return _clean({
             "verdict": self.verdict,
-            "effect": effects[0] if effects and self.verdict == "effect" else None,
+            "effect": (effects[n_hung] if len(effects) > n_hung and self.verdict == "effect"
+                       else None),
             "effects": effects,
             "candidates": [{"kind": c.kind, "location": _location_dict(c.location),
                             "score": c.score, "label": c.label, "refitted": c.refitted}

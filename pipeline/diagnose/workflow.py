@@ -29,7 +29,10 @@ the best load path between two grids, an effect the library does not hold
 that beats it by the margin makes the round ``unexplained``, one within the margin either way
 ``ambiguous`` (the effect or a load path; sensors at the path's two grids along the line joining
 them separate them, the spring acting on their relative motion).
-The overall verdict is ``effect`` when at least one effect was named, else the first round's.
+The overall verdict is ``effect`` when at least one effect was named, else the first round's;
+a suspension identified from the test's suspension modes (:mod:`pipeline.diagnose.suspension`)
+is added before the rounds and reported, but is the test's, not the structure's: it does not
+make the verdict ``effect``.
 """
 from __future__ import annotations
 
@@ -604,7 +607,8 @@ def diagnose(configurations, settings: DiagnoseSettings = DiagnoseSettings(), *,
             records.append(EffectRecord(chosen.candidate, chosen.values, lead))
             effects.append((chosen.candidate, chosen.values))
             theta, none_evs = chosen.theta, chosen.evaluations
-    verdict = "effect" if records else first
+    n_hung = len(suspension["sites"]) if suspension else 0
+    verdict = "effect" if len(records) > n_hung else first       # the structure's, not the test's
     if records and (note := held_out_note(gap_before, gap_after)):
         notes.append(note)
     notes.append(f"diagnose took {time.perf_counter() - t0:.1f} s "

@@ -260,3 +260,31 @@ def test_x56_case_has_both_configurations(tmp_path):
         assert gvt.sizes == {"mode": 22, "dof": 120}
         weights.append(config.measured_mass["weight"])
     assert weights[1] - weights[0] == pytest.approx(2 * (30 - 1) + 6 * (30 - 0.5), rel=0.05)
+
+
+def test_suspension_hangs_the_truth_and_lists_its_modes(frame_cases, tmp_path):
+    """make_case(suspension=True): the same effect drawn as without it; the truth deck holds
+    nine grounded CELAS2 (three grids: a mirror pair and a grid on y = 0, x, y, z each); the GVT
+    lists its six suspension modes first (modes 1-6, the truth's own lowest six at 0 noise, all
+    below the first elastic one), then the elastic modes 7 ..; the wing box refuses."""
+    plain = frame_cases["lumped_mass"][0]
+    folder = make_case("frame", "lumped_mass", SEED, tmp_path / "hung", suspension=True,
+                       decks=tmp_path / "decks", noise=(0.0, 0.0)).parent
+    t = _truth(folder)
+    assert (t["grids"], t["parameters"]) == (_truth(plain)["grids"], _truth(plain)["parameters"])
+    grids = [s["grid"] for s in t["suspension"]]
+    xyz = read_model(folder / "frame.bdf").grids
+    y = xyz.xyz[xyz.index(grids)][:, 1]
+    assert y[0] == pytest.approx(-y[1]) and y[0] != 0.0 and y[2] == 0.0
+    deck = tmp_path / "decks" / json.loads((tmp_path / "decks" / "truth_decks.json").read_text())[
+        "frame"]
+    springs = [s for s in _cards(deck, "CELAS2").values() if not s.node_ids[1]]
+    assert sorted((s.node_ids[0], s.c1) for s in springs) == sorted(
+        (g, c) for g in grids for c in (1, 2, 3))
+    gvt = load_gvt(folder / "gvt_frame.unv")
+    np.testing.assert_array_equal(gvt["mode"].values, np.arange(1, N_RIGID + N_TEST + 1))
+    truth = compute_modes(read_model(deck), N_RIGID + N_TEST)["frequency"].values
+    np.testing.assert_allclose(gvt["frequency"].values, truth, rtol=1e-5)
+    assert truth[N_RIGID - 1] < 0.5 * truth[N_RIGID] and truth[0] > 1e-2
+    with pytest.raises(Exception, match="clamped"):
+        make_case("wingbox", "none", 0, tmp_path / "wb", suspension=True)

@@ -111,6 +111,43 @@ def topology(bdf) -> Topology:
                     dict(ge), _fixed(bdf))
 
 
+def draw_suspension(topo: Topology, rng: np.random.Generator, f_1: float, mass: float) -> list:
+    """A test suspension of three bungees: a mirror pair (y -> -y) and a grid on the plane of
+    symmetry, drawn among the grids elements touch and nothing fixes; heave at 0.1-0.3 x f_1
+    (the truth's first elastic frequency, Hz) over ``mass`` (consistent units), 30-70 % of its
+    stiffness on the pair, each bungee's sway (x) 10-50 % of its vertical stiffness and y within
+    20 % of x. Returns [(grid, (k_x, k_y, k_z))] for :func:`hang`."""
+    grids = topo.structural_grids()
+    tol = 1e-6 * topo.size
+    plane = [g for g in grids if abs(topo.xyz[g][1]) <= tol]
+    image = {}
+    for g in grids:
+        x, y, z = topo.xyz[g]
+        if y > tol:
+            near = [h for h in grids if np.linalg.norm(topo.xyz[h] - (x, -y, z)) <= tol]
+            if near:
+                image[g] = near[0]
+    pairs = sorted(image.items())
+    if not pairs or not plane:
+        raise ValueError("the structure has no mirror pair and plane grid for a suspension")
+    pair = pairs[rng.integers(len(pairs))]
+    centre = plane[rng.integers(len(plane))]
+    heave = mass * (2.0 * np.pi * f_1 * rng.uniform(0.1, 0.3)) ** 2
+    share = rng.uniform(0.3, 0.7)
+    k_z = np.array([share * heave / 2.0, (1.0 - share) * heave])
+    k_x = k_z * rng.uniform(0.1, 0.5, 2)
+    k = np.column_stack([k_x, k_x * rng.uniform(0.8, 1.2, 2), k_z])
+    return [(int(pair[0]), tuple(k[0])), (int(pair[1]), tuple(k[0])), (int(centre), tuple(k[1]))]
+
+
+def hang(bdf, springs) -> None:
+    """Grounded CELAS2 in x, y and z at each grid of ``springs`` (:func:`draw_suspension`)."""
+    eid = _next([*bdf.elements, *bdf.rigid_elements])
+    for i, (grid, k) in enumerate(springs):
+        for c in range(3):
+            bdf.add_celas2(eid + 3 * i + c, float(k[c]), [grid, 0], c1=c + 1, c2=0)
+
+
 def _fixed(bdf) -> frozenset:
     """Grids whose three translations GRID PS or an SPC1 constrains (every SPC1 of the deck)."""
     held = defaultdict(set)

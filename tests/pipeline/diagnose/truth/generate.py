@@ -56,6 +56,9 @@ ATTEMPTS = 30
 FREQUENCY_NOISE, SHAPE_NOISE, DAMPING = 0.01, 0.05, (0.01, 0.02)
 #: The sixth (suspension) mode must stay below this fraction of the first elastic one.
 SUSPENSION_RATIO = 0.8
+#: Stream of the suspension draw (``make_case(suspension=True)``); its modes' noise takes the
+#: streams after it.
+SUSPENSION_STREAM = 10
 #: With ``decks``: the JSON file there naming each configuration's truth deck.
 TRUTH_DECKS = "truth_decks.json"
 
@@ -93,13 +96,16 @@ def _structure(structure: str, folder: Path, work: Path) -> Structure:
     return Structure(x56.UNITS, x56.N_TEST, N_RIGID, x56.sensors(), decks, starts, _our_modes)
 
 
-def _truth_modes(start: Path, work: Path, effect, rng_seed, st: Structure):
-    """Scatter + effect on the start deck, written to ``work / truth_<start>`` and solved by the
-    structure's truth solver: (modes, mass properties)."""
+def _truth_modes(start: Path, work: Path, effect, rng_seed, st: Structure, springs=None):
+    """Scatter + effect (+ the suspension ``springs``, :func:`effects.hang`) on the start deck,
+    written to ``work / truth_<start>`` and solved by the structure's truth solver: (modes, mass
+    properties)."""
     bdf = read_pynastran(start)
     effects.scatter(bdf, np.random.default_rng(rng_seed))
     if effect is not None:
         effects.apply(bdf, effect)
+    if springs:
+        effects.hang(bdf, springs)
     path = work / f"truth_{start.stem}.bdf"
     bdf.write_bdf(str(path), enddata=True)
     return st.solve(path, st.n_rigid + st.n_test + 8), mass_properties(read_model(path))
@@ -120,23 +126,37 @@ def _suspended(modes: xr.Dataset, st: Structure) -> bool:
     return bool(f[st.n_rigid - 1] < SUSPENSION_RATIO * f[st.n_rigid])
 
 
-def _gvt(modes: xr.Dataset, st: Structure, analysis_xyz: dict, rng, title: str,
-         noise: tuple) -> xr.Dataset:
-    """Noisy GVT of the truth's elastic modes at the sensors (module docstring); ``noise`` is
-    (frequency, shape) noise."""
+def _measured(modes: xr.Dataset, sensors, rng, noise: tuple) -> tuple:
+    """(frequencies, shapes, damping) of ``modes`` at the sensors as a test gives them: each
+    shape's sign fixed (largest entry positive), then frequency and shape noise and damping."""
     key = {(int(g), int(c)): j for j, (g, c) in
            enumerate(zip(modes["grid"].values, modes["component"].values))}
-    sensors, n_test = st.sensors, st.n_test
-    elastic = modes.isel(mode=slice(st.n_rigid, st.n_rigid + n_test))
-    shape = elastic["shape"].values[:, [key[s] for s in sensors]]
+    n = modes.sizes["mode"]
+    shape = modes["shape"].values[:, [key[s] for s in sensors]]
     peak = np.take_along_axis(shape, np.abs(shape).argmax(axis=1)[:, None], axis=1)
     shape = shape * np.sign(peak)
-    f = elastic["frequency"].values * (1.0 + noise[0] * rng.standard_normal(n_test))
+    f = modes["frequency"].values * (1.0 + noise[0] * rng.standard_normal(n))
     rms = np.sqrt(np.mean(shape ** 2, axis=1, keepdims=True))
     shape = shape + noise[1] * rms * rng.standard_normal(shape.shape)
-    zeta = rng.uniform(*DAMPING, n_test)
+    return f, shape, rng.uniform(*DAMPING, n)
+
+
+def _gvt(modes: xr.Dataset, st: Structure, analysis_xyz: dict, rng, title: str,
+         noise: tuple, hung_rng=None) -> xr.Dataset:
+    """Noisy GVT of the truth's elastic modes at the sensors (module docstring); ``noise`` is
+    (frequency, shape) noise. With ``hung_rng`` the truth hangs on a suspension and its
+    ``n_rigid`` suspension modes are listed first (modes 1 ..), their noise drawn from
+    ``hung_rng`` (the elastic modes' noise is that of the case without a suspension)."""
+    sensors, n_test = st.sensors, st.n_test
+    f, shape, zeta = _measured(modes.isel(mode=slice(st.n_rigid, st.n_rigid + n_test)),
+                               sensors, rng, noise)
+    first = st.n_rigid + 1
+    if hung_rng is not None:
+        hung = _measured(modes.isel(mode=slice(0, st.n_rigid)), sensors, hung_rng, noise)
+        f, shape, zeta = (np.concatenate([a, b]) for a, b in zip(hung, (f, shape, zeta)))
+        first = 1
     return make_gvt_dataset(f, shape, [g for g, _ in sensors], [c for _, c in sensors],
-                            mode=np.arange(st.n_rigid + 1, st.n_rigid + 1 + n_test),
+                            mode=np.arange(first, first + f.size),
                             damping=zeta, xyz=[analysis_xyz[g] for g, _ in sensors], source=title,
                             units=st.units)
 
@@ -166,7 +186,7 @@ def _case_toml(name: str, units: str, configurations, diagnose: dict) -> str:
 
 def make_case(structure: str, kind: str, seed: int, out, *, decks=None,
               diagnose: dict | None = None,
-              noise: tuple = (FREQUENCY_NOISE, SHAPE_NOISE)) -> Path:
+              noise: tuple = (FREQUENCY_NOISE, SHAPE_NOISE), suspension: bool = False) -> Path:
     """Write a blind-study case into ``out``; returns the path of its ``case.toml``.
 
     Parameters
@@ -183,6 +203,10 @@ def make_case(structure: str, kind: str, seed: int, out, *, decks=None,
     noise : (frequency, shape), the standard deviations of the test's noise (fractions: of each
         frequency, of each shape's RMS per DOF); the same draws scaled (a case at other noise is
         the same case otherwise).
+    suspension : bool, the truth is tested on three bungees (:func:`effects.draw_suspension`,
+        stream ``(seed, structure, kind, SUSPENSION_STREAM)``) and its GVT lists the suspension
+        modes first (their noise from stream ``SUSPENSION_STREAM + 1 + i``); the effect, the
+        scatter and the elastic modes' noise are drawn as without it. Free structures only.
 
     Returns
     -------
@@ -203,6 +227,8 @@ def make_case(structure: str, kind: str, seed: int, out, *, decks=None,
     if len(noise) != 2 or not all(0.0 <= v < 1.0 for v in noise):
         raise InputError(f"noise {noise}: give (frequency, shape) standard deviations as "
                          "fractions in [0, 1).")
+    if suspension and structure == "wingbox":
+        raise InputError("suspension: the wing box is clamped; valid for: frame, x56.")
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     streams = (int(seed), STRUCTURES.index(structure), TRUTH_KINDS.index(kind))
@@ -216,6 +242,12 @@ def make_case(structure: str, kind: str, seed: int, out, *, decks=None,
         topo = effects.topology(analysis)
         scatter = streams[:2]
         base = _truth_modes(starts[first], work, None, scatter, st)
+        springs = None
+        if suspension:
+            springs = effects.draw_suspension(
+                topo, np.random.default_rng((*streams, SUSPENSION_STREAM)),
+                float(base[0]["frequency"].values[st.n_rigid]), base[1].mass)
+            base = _truth_modes(starts[first], work, None, scatter, st, springs)
         f_base = base[0]["frequency"].values[st.n_rigid:st.n_rigid + n_test]
         rng = np.random.default_rng((*streams, 1))
         chosen, shift, truth = effects.Effect("none"), 0.0, {first: base}
@@ -223,7 +255,7 @@ def make_case(structure: str, kind: str, seed: int, out, *, decks=None,
             best = None
             for _ in range(ATTEMPTS):
                 effect = effects.draw(kind, analysis, topo, rng, float(f_base[0]))
-                modes = _truth_modes(starts[first], work, effect, scatter, st)
+                modes = _truth_modes(starts[first], work, effect, scatter, st, springs)
                 s = _shift(f_base, modes[0], st) if _suspended(modes[0], st) else np.inf
                 miss = max(SHIFT_RANGE[0] - s, s - SHIFT_RANGE[1], 0.0)
                 if best is None or miss < best[0]:
@@ -235,11 +267,14 @@ def make_case(structure: str, kind: str, seed: int, out, *, decks=None,
                 truth = {}
         written = {}
         for i, (c, start) in enumerate(starts.items()):
-            modes, props = truth.get(c) or _truth_modes(start, work, chosen, scatter, st)
+            modes, props = truth.get(c) or _truth_modes(start, work, chosen, scatter, st,
+                                                         springs)
             xyz = effects.topology(read_pynastran(start)).xyz if c != first else topo.xyz
             gvt = _gvt(modes, st, {g: tuple(float(v) for v in p) for g, p in xyz.items()},
                        np.random.default_rng((*streams, 2 + i)),
-                       f"blind-study truth {structure} {kind} seed {seed}, {c}", noise)
+                       f"blind-study truth {structure} {kind} seed {seed}, {c}", noise,
+                       np.random.default_rng((*streams, SUSPENSION_STREAM + 1 + i))
+                       if suspension else None)
             write_uff(gvt, out / f"gvt_{c}.unv", title=f"{structure} {c} GVT")
             write_json(x56.measured_mass(props), out / f"mass_{c}.json")
             written[c] = st.decks[c]
@@ -254,7 +289,9 @@ def make_case(structure: str, kind: str, seed: int, out, *, decks=None,
               "neighbours": {"grids": grids, "elements": els} if kind != "none" else
               {"grids": [], "elements": []},
               "max_frequency_shift": shift, "parameters": _jsonable(chosen.params),
-              "noise": {"frequency": noise[0], "shape": noise[1]}}
+              "noise": {"frequency": noise[0], "shape": noise[1]},
+              "suspension": None if springs is None else
+              [{"grid": g, "stiffness": list(k)} for g, k in springs]}
     write_text(json.dumps(record, indent=1) + "\n", out / "truth.json")
     return write_text(_case_toml(f"{structure}_{kind}_{seed}", st.units, written.items(),
                                  diagnose or {}), out / "case.toml")

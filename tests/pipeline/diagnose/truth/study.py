@@ -20,9 +20,11 @@ Scores (issue 14, "Must show"):
   cases run without it.
 
 Run ``python -m tests.pipeline.diagnose.truth.study [--structures frame x56 wingbox]
-[--kinds ...] [--seeds 10] [--first-seed 0] [--noise 0.01 0.05] [--frequency-only] [--out DIR]``
-from the repository root (``--noise``: the test's frequency and shape noise, :func:`make_case`;
-the workflow is not told it; ``--frequency-only``: the workflow gets the frequencies alone):
+[--kinds ...] [--seeds 10] [--first-seed 0] [--noise 0.01 0.05] [--frequency-only]
+[--suspension] [--out DIR]`` from the repository root (``--noise``: the test's frequency and
+shape noise, :func:`make_case`; the workflow is not told it; ``--frequency-only``: the workflow
+gets the frequencies alone; ``--suspension``: the truths hang on three bungees and the GVTs list
+their suspension modes first):
 prints the confusion matrix, the scores and the gap of every correctly named case, writes
 ``DIR/study.nc`` and every case's ``diagnose.json`` and ``score.json``. A study split over
 processes (kinds or seeds per core) is scored as one with ``--score DIR [DIR ...]``
@@ -119,7 +121,8 @@ def add_truth_gap(folder: Path) -> dict:
         again = Path(tmp) / "case"
         noise = truth.get("noise", {"frequency": FREQUENCY_NOISE, "shape": SHAPE_NOISE})
         make_case(truth["structure"], truth["kind"], truth["seed"], again,
-                  decks=Path(tmp) / "decks", noise=(noise["frequency"], noise["shape"]))
+                  decks=Path(tmp) / "decks", noise=(noise["frequency"], noise["shape"]),
+                  suspension=truth.get("suspension") is not None)
         for gvt in sorted(folder.glob("gvt_*.unv")):
             if not filecmp.cmp(gvt, again / gvt.name, shallow=False):
                 raise ValueError(f"{folder}: {gvt.name} differs from the one made again: the "
@@ -165,7 +168,8 @@ def _floor(folder: Path) -> dict | None:
 
 def run_study(structures=STRUCTURES, kinds=TRUTH_KINDS, seeds=range(10), out=None, *,
               diagnose: dict | None = None, noise=(FREQUENCY_NOISE, SHAPE_NOISE),
-              frequency_only: bool = False, progress=print) -> xr.Dataset:
+              frequency_only: bool = False, suspension: bool = False,
+              progress=print) -> xr.Dataset:
     """Generate and diagnose every (structure, kind, seed) case; the scored study.
 
     Parameters
@@ -177,6 +181,8 @@ def run_study(structures=STRUCTURES, kinds=TRUTH_KINDS, seeds=range(10), out=Non
     diagnose : dict, optional, the cases' ``[diagnose]`` table (default: none, the defaults)
     noise : (frequency, shape) noise of the test data (:func:`make_case`)
     frequency_only : bool, the workflow gets the test frequencies alone (:func:`diagnose_case`)
+    suspension : bool, the truths hang on three bungees and their GVTs list the suspension modes
+        (:func:`make_case`)
     progress : callable(str) or None, one line per case
 
     Returns
@@ -198,7 +204,7 @@ def run_study(structures=STRUCTURES, kinds=TRUTH_KINDS, seeds=range(10), out=Non
                 folder = out / structure / kind / str(seed)
                 with tempfile.TemporaryDirectory() as decks:
                     case = make_case(structure, kind, seed, folder, diagnose=diagnose,
-                                     decks=decks, noise=noise)
+                                     decks=decks, noise=noise, suspension=suspension)
                     floor = truth_gap(case, Path(decks), frequency_only=frequency_only)
                 write_text(json.dumps(floor, indent=1) + "\n", folder / TRUTH_GAP)
                 truth = json.loads((folder / "truth.json").read_text())
@@ -373,6 +379,9 @@ def main(argv=None) -> None:
                              "each shape DOF (fractions of the frequency, of the shape's RMS)")
     parser.add_argument("--frequency-only", action="store_true",
                         help="give the workflow the test frequencies alone (no shapes)")
+    parser.add_argument("--suspension", action="store_true",
+                        help="hang every truth on three bungees and list its suspension modes "
+                             "in the GVT (free structures)")
     parser.add_argument("--out", type=Path, default=Path("runs/diagnose_blind_study"))
     parser.add_argument("--score", type=Path, nargs="+", metavar="DIR",
                         help="score the cases already run under these folders (a later folder's "
@@ -393,7 +402,8 @@ def main(argv=None) -> None:
     else:
         ds = run_study(args.structures, args.kinds,
                        range(args.first_seed, args.first_seed + args.seeds), args.out,
-                       noise=tuple(args.noise), frequency_only=args.frequency_only)
+                       noise=tuple(args.noise), frequency_only=args.frequency_only,
+                       suspension=args.suspension)
     print(confusion_text(ds))
     print(gap_text(ds))
 
