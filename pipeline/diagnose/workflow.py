@@ -58,7 +58,7 @@ from pipeline.diagnose.predictive import held_out_evidence, held_out_modes, kept
 from pipeline.diagnose.result import CandidateScore, DiagnoseResult, EffectRecord
 from pipeline.diagnose.screen import (bound_release, pick_for_refit, polish, refit, screen,
                                       signatures)
-from pipeline.diagnose.suspension import hung_data, identify
+from pipeline.diagnose.suspension import FIT_LIMIT, hung_data, identify
 from pipeline.diagnose.verdict import (SCATTER_SIGMAS, at_bound, decide, round_scores,
                                         within_scatter)
 from structures.common.errors import InputError
@@ -639,12 +639,27 @@ def _suspension(configurations, refs, hung, settings: DiagnoseSettings, problem:
                      "told, and it is not identified (its stiffening of the elastic modes is "
                      "left to the rounds).")
         return None
+    held = [hung[i]["frequency"].values > 0.0 for i in used]
+    if not all(h.all() for h in held):
+        notes.append("suspension modes at 0 Hz (a rigid-body motion the suspension does not "
+                     "hold) are left out of the suspension's identification.")
+    used = [i for i, h in zip(used, held) if h.any()]
+    if not used:
+        return None
     models = [problem.model(i, theta) for i in used]
-    data = [hung_data(configurations[i].name, hung[i], m.grids,
+    data = [hung_data(configurations[i].name,
+                      hung[i].isel(mode=hung[i]["frequency"].values > 0.0), m.grids,
                       float(np.median(refs[i].shape_sigma)) if refs[i].shape_sigma is not None
                       else settings.shape_noise or 0.05, configurations[i].measured_mass)
             for i, m in zip(used, models)]
-    return identify(models, data, frequency_noise=settings.frequency_noise)
+    best, fits = identify(models, data, frequency_noise=settings.frequency_noise)
+    if best.chi2 > FIT_LIMIT * best.n_data:
+        notes.append(f"the suspension modes fit no suspension of the hypotheses (best "
+                     f"{best.label}: chi^2 {best.chi2:.0f} over {best.n_data} data, more than "
+                     f"{FIT_LIMIT:g} per datum): a support they do not hold (one-sided, or "
+                     "more sites); none added, the rounds look at the free model.")
+        return None
+    return best, fits
 
 
 def _suspension_record(best, fits, gap) -> dict:

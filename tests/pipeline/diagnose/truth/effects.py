@@ -113,7 +113,9 @@ def topology(bdf) -> Topology:
 
 def draw_suspension(topo: Topology, rng: np.random.Generator, f_1: float, mass: float) -> list:
     """A test suspension of three bungees: a mirror pair (y -> -y) and a grid on the plane of
-    symmetry, drawn among the grids elements touch and nothing fixes; heave at 0.1-0.3 x f_1
+    symmetry at least 5 % of the structure's size off the pair's line (three bungees in a line
+    would leave the rotation about it free), drawn among the grids elements touch and nothing
+    fixes; heave at 0.1-0.3 x f_1
     (the truth's first elastic frequency, Hz) over ``mass`` (consistent units), 30-70 % of its
     stiffness on the pair, each bungee's sway (x) 10-50 % of its vertical stiffness and y within
     20 % of x. Returns [(grid, (k_x, k_y, k_z))] for :func:`hang`."""
@@ -132,6 +134,13 @@ def draw_suspension(topo: Topology, rng: np.random.Generator, f_1: float, mass: 
         raise ValueError("the structure has no mirror pair and plane grid for a suspension")
     pair = pairs[rng.integers(len(pairs))]
     centre = plane[rng.integers(len(plane))]
+    for _ in range(100):             # three points on one line leave the rotation about it free
+        a, b = topo.xyz[pair[0]], topo.xyz[pair[1]]
+        off = np.linalg.norm(np.cross(b - a, topo.xyz[centre] - a)) / np.linalg.norm(b - a)
+        if off > 0.05 * topo.size:
+            break
+        pair = pairs[rng.integers(len(pairs))]
+        centre = plane[rng.integers(len(plane))]
     heave = mass * (2.0 * np.pi * f_1 * rng.uniform(0.1, 0.3)) ** 2
     share = rng.uniform(0.3, 0.7)
     k_z = np.array([share * heave / 2.0, (1.0 - share) * heave])
