@@ -432,7 +432,7 @@ def correlate(fe_modes: xr.Dataset, gvt: xr.Dataset, settings: CorrelationSettin
         "pair_by": settings.pair_by, "a_set": settings.a_set, "n_serep_modes": basis.shape[1],
         "n_measured_dofs": int(index.size), "n_aset_dofs": int(a_mask.sum()),
         "interchanges": swaps or "none",
-        "suspension_modes": ", ".join(str(int(m)) for m in hung) or "none",
+        "suspension_modes": ", ".join(str(int(m)) for m in hung["mode"].values) or "none",
         "normalisation": "orthogonality_ij = M_ij/sqrt(M_ii M_jj); cross_orthogonality_ij = "
                          "S_ij/sqrt(M_ii (Phi_A^T M_A Phi_A)_jj); M_A = SEREP mass (eqs. 12-13)",
         "gvt": gvt.attrs.get("source", ""), "deck": fe_modes.attrs.get("deck", ""),

@@ -138,7 +138,7 @@ def without_suspension(fe_modes: xr.Dataset, gvt: xr.Dataset, *, position=None
     Returns
     -------
     kept : xarray.Dataset, ``gvt`` without its suspension modes.
-    hung : (n_hung,) the test mode numbers left out (empty when none).
+    hung : xarray.Dataset, the suspension modes left out (``mode`` of size 0 when none).
 
     Raises
     ------
@@ -147,7 +147,7 @@ def without_suspension(fe_modes: xr.Dataset, gvt: xr.Dataset, *, position=None
     """
     f_fe = fe_modes["frequency"].values[elastic_index(fe_modes)]
     if not rigid_index(fe_modes).size or not f_fe.size:
-        return gvt, gvt["mode"].values[:0]
+        return gvt, gvt.isel(mode=slice(0, 0))
     rigid = suspension_modes(gvt, float(f_fe.min()), position=position)
     if rigid.all():
         raise InputError(f"GVT file {gvt.attrs.get('source') or '(arrays)'}: every test mode is "
@@ -155,4 +155,4 @@ def without_suspension(fe_modes: xr.Dataset, gvt: xr.Dataset, *, position=None
                          f"{FREQUENCY_RATIO:g} x the lowest elastic analysis frequency "
                          f"{f_fe.min():.3g} Hz without shapes). Fix: give the elastic modes of "
                          "the test.")
-    return gvt.isel(mode=~rigid), gvt["mode"].values[rigid]
+    return gvt.isel(mode=~rigid), gvt.isel(mode=rigid)

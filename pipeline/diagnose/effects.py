@@ -91,7 +91,8 @@ scale of the model (so that bounds do not depend on units):
     frequency and m_total its total mass (consistent units): at k = 1 the spring alone would carry
     the whole mass at f_1. Bounds [0, 1]. A suspension identified from the test's suspension
     modes (:mod:`pipeline.diagnose.suspension`) is this kind at a grid with parameters ``k_x``,
-    ``k_y``, ``k_z`` (direction ``xyz``): one CELAS2 per nonzero stiffness. x, y, z are the grid's displacement-frame axes 1, 2, 3
+    ``k_y``, ``k_z`` (direction ``xyz``): one CELAS2 per nonzero stiffness. x, y, z are the
+    grid's displacement-frame axes 1, 2, 3
     (basic axes when CD = 0; a grounded CELAS2 rather than a CBUSH, which MYSTRAN cannot ground).
     One candidate per grid of ``lumped_mass`` and unconstrained direction.
 

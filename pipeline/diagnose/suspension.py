@@ -115,6 +115,7 @@ class SuspensionFit:
     chi2, bic : float
     n_data : int
     frequencies : dict, configuration -> (test (n_s,), model (n_s,)) paired frequencies [Hz].
+    k_ref : float, the model's ``boundary_stiffness`` scale (:mod:`pipeline.diagnose.effects`).
     """
 
     sites: tuple
@@ -123,23 +124,18 @@ class SuspensionFit:
     bic: float
     n_data: int
     frequencies: dict
+    k_ref: float
 
     @property
     def label(self) -> str:
         """``"grids 3005+4005, 1002"``: each site's grids, a mirror pair joined by ``+``."""
         return "grids " + ", ".join("+".join(str(g) for g in site) for site in self.sites)
 
-    def effects(self, model) -> list:
+    def effects(self) -> list:
         """The fit as ``boundary_stiffness`` effects, one per site: (Candidate, values (3,)),
-        each stiffness over the model's k_ref (held at the library's bound 1, a spring that
-        alone carries the whole mass at the first elastic frequency).
-
-        Parameters
-        ----------
-        model : FEModel, the model the springs are added to (its ``boundary_stiffness`` scale
-            k_ref, :mod:`pipeline.diagnose.effects`).
-        """
-        k_ref = _k_ref(model)
+        each stiffness over :attr:`k_ref` (held at the library's bound 1, a spring that alone
+        carries the whole mass at the first elastic frequency)."""
+        k_ref = self.k_ref
         out = []
         for site, k in zip(self.sites, self.stiffness):
             ones = [_site(g, k_ref) for g in site]
@@ -153,11 +149,6 @@ class SuspensionFit:
         return out
 
 
-def _k_ref(model) -> float:
-    """The model's ``boundary_stiffness`` scale (the library's, one candidate's)."""
-    return float(candidates(model, ("boundary_stiffness",))[0].get("k_ref"))
-
-
 def _site(grid: int, k_ref: float) -> Candidate:
     names = tuple(f"k_{d}" for d in DIRECTIONS)
     return Candidate("boundary_stiffness", Location(grids=(grid,)), f"grid {grid} xyz", names,
@@ -165,11 +156,13 @@ def _site(grid: int, k_ref: float) -> Candidate:
                      (("direction", "xyz"), ("k_ref", k_ref)))
 
 
-def hypotheses(model) -> list:
+def hypotheses(model, library=None) -> list:
     """Every suspension hypothesis on the model (module docstring): tuples of sites, each a
-    tuple of grids."""
-    grids = sorted({c.location.grids[0] for c in candidates(model, ("boundary_stiffness",))
-                    if len(c.location.grids) == 1})
+    tuple of grids, on the grids of ``library`` (the model's ``boundary_stiffness``
+    candidates, :func:`pipeline.diagnose.effects.candidates`; built when not given)."""
+    if library is None:
+        library = candidates(model, ("boundary_stiffness",))
+    grids = sorted({c.location.grids[0] for c in library if len(c.location.grids) == 1})
     image = mirror_grids(model)
     pairs = sorted({tuple(sorted((g, image[g]))) for g in grids
                     if image.get(g, g) != g and image[g] in grids})
@@ -358,7 +351,10 @@ def identify(models, hung, *, frequency_noise: float) -> tuple[SuspensionFit, li
     rows = [_rows(b, m) for b, m in zip(bases, models)]
     m_q = [_rigid_mass(b, m, h.measured) for b, m, h in zip(bases, models, hung)]
     z_test = [_rigid_coordinates(b, h, m) for b, h, m in zip(bases, hung, m_q)]
-    ranked = screen(hypotheses(models[0]), rows, z_test)
+    first = bases[0].lam[len(bases[0].rigid)]                  # the lowest elastic eigenvalue
+    library = candidates(models[0], ("boundary_stiffness",),
+                         frequency=float(np.sqrt(first)) / (2.0 * np.pi))
+    ranked = screen(hypotheses(models[0], library), rows, z_test)
     fits = []
     for _, hypo, k0 in ranked[:REFIT]:
         problem = _Refit(hypo, bases, hung, models[0].grids, frequency_noise, m_q)
@@ -371,7 +367,8 @@ def identify(models, hung, *, frequency_noise: float) -> tuple[SuspensionFit, li
         chi2 = float(r @ r)
         fits.append(SuspensionFit(sites=hypo, stiffness=k.reshape(-1, 3), chi2=chi2,
                                   bic=chi2 + k.size * np.log(r.size), n_data=int(r.size),
-                                  frequencies=problem.paired(k)))
+                                  frequencies=problem.paired(k),
+                                  k_ref=float(library[0].get("k_ref"))))
     fits.sort(key=lambda f: f.bic)
     return fits[0], fits
 

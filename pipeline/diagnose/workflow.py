@@ -302,12 +302,11 @@ def _preflight(configurations, settings: DiagnoseSettings, notes: list, hung: li
     for rotation, data in enumerate(configurations):
         nmodes = settings.nmodes or 2 * data.gvt.sizes["mode"] + N_RIGID
         modes = compute_modes(data.model, nmodes)
-        gvt = _without_suspension(data, modes, notes)
-        if settings.nmodes is None and gvt.sizes["mode"] < data.gvt.sizes["mode"]:
+        gvt, suspended = _without_suspension(data, modes, notes)
+        if settings.nmodes is None and suspended is not None:
             nmodes = 2 * gvt.sizes["mode"] + N_RIGID          # counted on the elastic test modes
             modes = modes.isel(mode=slice(0, nmodes))
-        hung.append(data.gvt.isel(mode=~np.isin(data.gvt["mode"].values, gvt["mode"].values))
-                    if gvt.sizes["mode"] < data.gvt.sizes["mode"] else None)
+        hung.append(suspended)
         n_test = gvt.sizes["mode"]
         if elastic_index(modes).size < n_test:
             raise InputError(f"diagnose: configuration {data.name}: {n_test} test modes but only "
@@ -344,10 +343,10 @@ def _preflight(configurations, settings: DiagnoseSettings, notes: list, hung: li
     return refs
 
 
-def _without_suspension(data, modes: xr.Dataset, notes: list) -> xr.Dataset:
-    """The configuration's test modes without its suspension modes
-    (:func:`structures.suspension.without_suspension`: shapes at the sensors, placed at the
-    model's grids, that are rigid-body motions below the lowest elastic analysis frequency;
+def _without_suspension(data, modes: xr.Dataset, notes: list) -> tuple:
+    """(the configuration's test modes without its suspension modes, the suspension modes or
+    None) (:func:`structures.suspension.without_suspension`: shapes at the sensors, placed at
+    the model's grids, that are rigid-body motions below the lowest elastic analysis frequency;
     frequency-only, modes below ``FREQUENCY_RATIO`` of it), set aside with a note. Only a model
     with rigid-body modes is hung on a suspension: a clamped one keeps every test mode."""
     gvt = data.gvt
@@ -360,19 +359,20 @@ def _without_suspension(data, modes: xr.Dataset, notes: list) -> xr.Dataset:
         kept, hung = without_suspension(modes, gvt, position=position)
     except InputError as exc:
         raise InputError(f"configuration {data.name}: {exc}") from None
-    if not hung.size:
-        return gvt
+    if not hung.sizes["mode"]:
+        return gvt, None
     f_fe = modes["frequency"].values[elastic_index(modes)]
-    f = gvt["frequency"].values[np.isin(gvt["mode"].values, hung)]
+    f = hung["frequency"].values
     why = (f"their shapes are rigid-body motions at the sensors (at least {100 * RIGID_SHARE:.0f} "
            f"% of each shape) below the lowest elastic analysis frequency, {f_fe.min():.3g} Hz"
            if "shape" in gvt else
            f"below {FREQUENCY_RATIO:g} x the lowest elastic analysis frequency, "
            f"{f_fe.min():.3g} Hz")
-    notes.append(f"{data.name}: test modes {hung.tolist()} ({f.min():.3g}-{f.max():.3g} Hz) are "
+    notes.append(f"{data.name}: test modes {hung['mode'].values.tolist()} ({f.min():.3g}-"
+                 f"{f.max():.3g} Hz) are "
                  f"suspension modes, {why}: left out of the pairing (no elastic mode of the "
                  "model matches them); with shapes they identify the suspension.")
-    return kept
+    return kept, hung
 
 
 def _rounded(value):
@@ -445,7 +445,7 @@ def diagnose(configurations, settings: DiagnoseSettings = DiagnoseSettings(), *,
         if found is not None:
             _say(progress, "adding the suspension")
             best, fits = found
-            effects = best.effects(problem.model(0, theta))
+            effects = best.effects()
             hung_none = refit(problem, theta, effects, None, n_data=n_data,
                               jacobian_theta=cal.jacobian)
             lead = fits[1].bic - best.bic if len(fits) > 1 else float("inf")
@@ -639,16 +639,15 @@ def _suspension(configurations, refs, hung, settings: DiagnoseSettings, problem:
                      "told, and it is not identified (its stiffening of the elastic modes is "
                      "left to the rounds).")
         return None
-    held = [hung[i]["frequency"].values > 0.0 for i in used]
-    if not all(h.all() for h in held):
+    held = {i: hung[i].isel(mode=hung[i]["frequency"].values > 0.0) for i in used}
+    if any(held[i].sizes["mode"] < hung[i].sizes["mode"] for i in used):
         notes.append("suspension modes at 0 Hz (a rigid-body motion the suspension does not "
                      "hold) are left out of the suspension's identification.")
-    used = [i for i, h in zip(used, held) if h.any()]
+    used = [i for i in used if held[i].sizes["mode"]]
     if not used:
         return None
     models = [problem.model(i, theta) for i in used]
-    data = [hung_data(configurations[i].name,
-                      hung[i].isel(mode=hung[i]["frequency"].values > 0.0), m.grids,
+    data = [hung_data(configurations[i].name, held[i], m.grids,
                       float(np.median(refs[i].shape_sigma)) if refs[i].shape_sigma is not None
                       else settings.shape_noise or 0.05, configurations[i].measured_mass)
             for i, m in zip(used, models)]
