@@ -119,7 +119,12 @@ class DiagnoseResult:
     nominal : mapping {parameter: relative change} of the final model (``gap_after``'s).
     calibrated : mapping {parameter: relative change} of the nominal calibration without
         effects (``gap_before``'s model).
-    rounds : tuple of mapping, per look-again round: its ``verdict``, ``n_data`` (training
+    rounds : tuple of mapping, per look-again round: its ``verdict`` and the ``reason``
+        (:func:`pipeline.diagnose.verdict.decide`: ``gain``, ``no_gain``, ``runner_up``,
+        ``held_out`` or ``past_veto``, the last when the held-out modes contradicted the best
+        fit and took part in naming the next; before the load path and bound checks, which can
+        still turn an ``effect`` into ``unexplained``), ``vetoed`` (the labels of the fits
+        the held-out modes contradict by more than the margin), ``n_data`` (training
         residuals), ``n_modal`` (the modal ones among them: frequencies and shapes),
         ``dispersion`` (the modal dispersion c of the round's scores and held-out evidence,
         :func:`pipeline.diagnose.verdict.round_scores`), ``n_held_out`` (held-out residual

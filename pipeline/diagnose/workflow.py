@@ -549,9 +549,11 @@ def diagnose(configurations, settings: DiagnoseSettings = DiagnoseSettings(), *,
                         verdict, path = again
                         fits[best] = rich
                         modes[best] = held_out_modes(problem, rich.evaluations)[0]
+            vetoed = [f.candidate.label for f, m in zip(fits, modes)
+                      if held_out_evidence(modes_none, m, entries, c) < -settings.margin]
             rounds.append(_round_record(k, verdict, fits, best, runner, none,
                                         (modes_none, modes, entries), n_data, scored + (c,),
-                                        path, same))
+                                        path, same, reason=reason, vetoed=vetoed))
             if path is not None and verdict in ("unexplained", "ambiguous"):
                 cand = fits[best].candidate
                 a, b = path[0].grids
@@ -562,14 +564,23 @@ def diagnose(configurations, settings: DiagnoseSettings = DiagnoseSettings(), *,
                              f"{b} (k = {path[0].stiffness:.4g}), fits the training data {how} "
                              f"(score {path[1]:.1f} against {path[2]:.1f}){end}")
             if reason == "held_out":
-                cand, vetoed = fits[best].candidate, rounds[-1]["best"]
-                kept = np.asarray(vetoed["held_out_modes_kept"])
+                cand, record = fits[best].candidate, rounds[-1]["best"]
+                kept = np.asarray(record["held_out_modes_kept"])
                 notes.append(f"round {k + 1}: {cand.kind} {cand.label} fits the training modes "
                              f"(chi^2 {none.chi2:.0f} -> {fits[best].chi2:.0f}) but not the "
                              f"{int(kept.sum())} held-out modes either model reproduces (chi^2 "
                              f"{modes_none[kept].sum():.0f} -> {modes[best][kept].sum():.0f}, "
-                             f"evidence {vetoed['held_out_evidence']:.1f}; per mode in the round "
+                             f"evidence {record['held_out_evidence']:.1f}; per mode in the round "
                              "record): it compensates for something else; not named.")
+            if reason == "past_veto" and verdict == "effect":
+                cand, named = fits[best].candidate, rounds[-1]["best"]
+                notes.append(f"round {k + 1}: the held-out modes contradict "
+                             f"{'; '.join(vetoed)} (a compensation the training modes prefer); "
+                             f"{cand.kind} {cand.label}, the best fit they do not contradict, "
+                             f"beats the rest by {lead:.1f} and the held-out modes support it "
+                             f"(evidence {named['held_out_evidence']:+.1f}): named. The held-out "
+                             "modes took part in naming it, so its gap on them is no blind "
+                             "check.")
             if k == 0:
                 first = verdict
                 table = _table(problem, r0, rows, fits, none, n_data, len(cands))
@@ -712,7 +723,7 @@ def _against_path(found, problem: Problem, scored, best: int, n_data: int, n_can
 
 
 def _round_record(k: int, verdict: str, fits, best, runner, none, held_out, n_data: int,
-                  scored, path=None, alike=()) -> dict:
+                  scored, path=None, alike=(), *, reason: str = "", vetoed=()) -> dict:
     """The JSON record of round k (:class:`pipeline.diagnose.result.DiagnoseResult` ``rounds``).
 
     ``held_out`` is (modes_none, per fit modes, entries) of
@@ -721,7 +732,9 @@ def _round_record(k: int, verdict: str, fits, best, runner, none, held_out, n_da
     (..., chi2_modal, chi2_stated, n_params), c the modal dispersion); ``path`` is
     (LoadPath, its score, the named effect's score) of :func:`_against_path`, or None when
     the round named nothing; ``alike`` the labels of the fits that predict the same data as the
-    best (:func:`pipeline.diagnose.gap.indistinguishable`).
+    best (:func:`pipeline.diagnose.gap.indistinguishable`); ``reason`` and ``vetoed`` as
+    :func:`pipeline.diagnose.verdict.decide` gave them and the labels of the fits the held-out
+    modes contradict by more than the margin.
     """
     modes_none, modes, entries = held_out
     none_row, rows, n_modal, c = scored
@@ -737,7 +750,8 @@ def _round_record(k: int, verdict: str, fits, best, runner, none, held_out, n_da
                 "held_out_modes_kept": kept_modes(modes_none, modes[i], entries).tolist(),
                 "held_out_evidence": held_out_evidence(modes_none, modes[i], entries, c),
                 "parameters": dict(zip(f.candidate.parameters, map(float, f.values)))}
-    return {"round": k + 1, "verdict": verdict, "n_data": n_data, "n_modal": n_modal,
+    return {"round": k + 1, "verdict": verdict, "reason": reason, "vetoed": list(vetoed),
+            "n_data": n_data, "n_modal": n_modal,
             "dispersion": c,
             "n_held_out": int(np.sum(entries)), "held_out_modes_entries": entries.tolist(),
             "none_bic": none.bic,

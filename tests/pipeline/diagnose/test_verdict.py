@@ -100,6 +100,40 @@ def test_held_out_modes_veto_a_compensating_fit():
     assert lead == pytest.approx(30.0, rel=1e-12)
 
 
+def test_past_a_veto_the_next_fit_is_named_only_when_the_held_out_modes_support_it():
+    """Training scores (c = max(1, 370 / 397) = 1, p = 3): mass 370 (it beats the joint by 30,
+    not ambiguous), joint 400, taper 450, "none" 600 (p = 2). Three held-out modes of 10 entries (limit 29.588), "none" 20, 25, 28
+    (73): the mass gives 20, 90, 28 (evidence 73 - 138 = -65: vetoed), the taper 73 (0).
+    A joint at 8, 10, 12 (evidence +43 > 10) that leads the taper by 50 and "none" by
+    200 - ln n is named past the veto, the taper its runner-up; the vetoed mass is no rival.
+    With the joint at 18, 22, 28 (+5, no support beyond the margin), or within the margin of
+    the taper (taper 405), the round stays unexplained by the veto."""
+    entries = np.array([10, 10, 10])
+    none_modes = np.array([20.0, 25.0, 28.0])
+    mass, taper = np.array([20.0, 90.0, 28.0]), none_modes.copy()
+
+    def table(taper_chi2=450.0):
+        return [("lumped_mass", 1, 370.0, 0.0, 3), ("joint_flexibility", 2, 400.0, 0.0, 3),
+                ("member_taper", 3, taper_chi2, 0.0, 3)]
+
+    supported = (none_modes, [mass, np.array([8.0, 10.0, 12.0]), taper], entries)
+    verdict, best, runner, lead, reason, c = decide((600.0, 0.0, 2), table(), 10.0, _never_near,
+                                                    N, n_modal=N, held_out=supported)
+    assert (verdict, best, runner, reason, c) == ("effect", 1, 2, "past_veto", 1.0)
+    assert lead == pytest.approx(50.0, rel=1e-12)
+    weak = (none_modes, [mass, np.array([18.0, 22.0, 28.0]), taper], entries)
+    verdict, best, _, _, reason, _ = decide((600.0, 0.0, 2), table(), 10.0, _never_near, N,
+                                            n_modal=N, held_out=weak)
+    assert (verdict, best, reason) == ("unexplained", 0, "held_out")
+    assert decide((600.0, 0.0, 2), table(405.0), 10.0, _never_near, N, n_modal=N,
+                  held_out=supported)[::4] == ("unexplained", "held_out")
+    # the next fit's neighbour of its own kind is no rival (as for the best): named
+    near = decide((600.0, 0.0, 2), table(405.0)[:2] + [("joint_flexibility", 3, 405.0, 0.0, 3)],
+                  10.0, lambda a, b: {a, b} == {2, 3}, N, n_modal=N, held_out=supported)
+    assert near[:3] + near[4:5] == ("effect", 1, None, "past_veto")
+    assert near[3] == pytest.approx(200.0 - LN, rel=1e-12)
+
+
 def test_a_held_out_mode_neither_model_reproduces_does_not_veto():
     """Mode 2 is a local mode both models pair with the wrong analysis mode (chi^2 3000 and
     5000 > 29.588): summed, the evidence would be (3020 - 5018) / 1 = -1998 (c = 1), a veto;
