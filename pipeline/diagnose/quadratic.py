@@ -246,9 +246,13 @@ def line_searches(out, r0, residual, kinds) -> None:
     """The exact line search (:func:`line_search`) of the :data:`LINE_SEARCH_TOP` entries of
     each kind of ``kinds`` (mapping kind -> scheme of :data:`SCHEMES`) in ``out`` (the
     screening's (Candidate, S, exact) list, :func:`pipeline.diagnose.screen.signatures`) whose
-    model fits best; each is replaced in place by (Candidate, S, (x*, chi2*)).
-    ``residual(cand, x)`` is the exact training residual (InputError or SolverError where the
-    model cannot be analysed)."""
+    model fits best; each is replaced in place by (Candidate, S, (x*, chi2*)). A ray along
+    which the exact chi^2 is nowhere below the current model's (the quadratic model was wrong at
+    every sampled size) gives the size 0, the current chi^2 and a zero signature: a candidate's
+    screening result is never worse than leaving it out (the example aircraft's main-gear taper
+    pair in its first round: best ray point 119 above the current chi^2, so listed below
+    "nothing missing"). ``residual(cand, x)`` is the exact training residual (InputError or
+    SolverError where the model cannot be analysed)."""
     fits = {kind: [] for kind in kinds}
     for i, (cand, s, exact) in enumerate(out):
         if cand.kind in kinds and exact is None:
@@ -257,6 +261,7 @@ def line_searches(out, r0, residual, kinds) -> None:
             if np.any(x):
                 fits[cand.kind].append((chi2, i, x))
     chosen = [f for kind in kinds for f in sorted(fits[kind], key=lambda f: f[0])[:LINE_SEARCH_TOP]]
+    current = float(np.sum(np.square(r0)))
     for _, i, x in chosen:
         cand = out[i][0]
 
@@ -266,9 +271,12 @@ def line_searches(out, r0, residual, kinds) -> None:
             except (InputError, SolverError):
                 return None
         found = line_search(residual_at, x, cand.lower, cand.upper)
-        if found is not None:
-            size, r, chi2 = found
-            out[i] = (cand, secant(r0, r, size), (size, chi2))
+        if found is None:
+            continue
+        size, r, chi2 = found
+        if chi2 >= current:
+            size, r, chi2 = np.zeros_like(size), r0, current
+        out[i] = (cand, secant(r0, r, size), (size, chi2))
 
 
 def secant(r0, r, x) -> np.ndarray:

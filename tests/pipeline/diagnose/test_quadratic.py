@@ -3,12 +3,15 @@ with known coefficients and minima (its match to exact reanalysis of a bowed mem
 test_screen.py, where the frame fixture is)."""
 from __future__ import annotations
 
+from types import SimpleNamespace
+
 import numpy as np
 import pytest
 
 from structures.common.errors import InputError
-from pipeline.diagnose.quadratic import (RAY, coefficients, line_search, monomials, n_columns,
-                                         quadratic_fit, sample_points, trust_box)
+from pipeline.diagnose.quadratic import (RAY, coefficients, line_search, line_searches,
+                                         monomials, n_columns, quadratic_fit, sample_points,
+                                         trust_box)
 
 # r(x) = R0 + A x + C11 x1^2 + C22 x2^2 + C12 x1 x2, three data rows
 R0 = np.array([1.0, -2.0, 0.5])
@@ -87,6 +90,24 @@ def test_line_search_passes_over_sizes_that_cannot_be_analysed():
     x, _, chi2 = line_search(residual_at, [0.05, 0.0], [0.0, 0.0], [0.15, 0.15])
     assert np.linalg.norm(x) <= 0.1 and chi2 == pytest.approx((np.linalg.norm(x) - 0.2) ** 2)
     assert line_search(lambda x: None, [0.05, 0.0], [0.0, 0.0], [0.15, 0.15]) is None
+
+
+def test_a_ray_worse_everywhere_than_the_current_model_gives_size_0():
+    """The model r(x) = 1 - 40 x + 400 x^2 predicts r = 0 at x = 0.05; the exact residual is
+    1 + x everywhere (chi^2 > 1 = the current one at every x > 0): the line search's best
+    point would be worse than leaving the candidate out, so the result is x = 0, chi^2 1 and a
+    zero signature. Where the exact residual agrees with the model, its minimum is found."""
+    cand = SimpleNamespace(kind="bow", reference=(0.05,), lower=(0.0,), upper=(0.15,))
+    s = coefficients([1.0], [[0.0], [1.0]], [0.05])
+    out = [(cand, s, None)]
+    line_searches(out, np.array([1.0]), lambda c, x: np.array([1.0 + x[0]]), {"bow": "one_sided"})
+    _, signature, (size, chi2) = out[0]
+    assert size.tolist() == [0.0] and chi2 == 1.0 and not signature.any()
+    out = [(cand, s, None)]
+    line_searches(out, np.array([1.0]), lambda c, x: np.array([1.0 - 20.0 * x[0]]),
+                  {"bow": "one_sided"})
+    _, _, (size, chi2) = out[0]
+    assert size[0] == pytest.approx(0.05, rel=0.2) and chi2 < 0.05
 
 
 def test_centred_samples_and_trust_box_by_hand():
