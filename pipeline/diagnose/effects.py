@@ -14,6 +14,12 @@ scale of the model (so that bounds do not depend on units):
     (r up to L / 10). One candidate per grid that carries structure (referenced by an element,
     a rigid element or a CONM2) and whose translations are not all constrained. The screening
     samples the mass at inertia 0 (a point mass) and the refit frees the inertia.
+    *Spread* (:func:`spread_sites`): the same mass spread in equal shares over a grid and the
+    free grids one element layer around it (rigid elements included; label ``grid g spread
+    over a, b, ...``), each share a CONM2 with its share of the inertia: a mass distributed
+    along a member or over an attachment (a cable run, an engine on its pylon) that no one grid
+    represents, where the rotary inertia of a point mass is its second moment only. One such
+    candidate per distinct set of grids; a grid without a free neighbour has none.
 ``joint_flexibility`` of a rigid element, parameters ``compliance`` and ``rotation``
     An RBE2, or an RBAR with all six independent components on one grid, stays rigid but is
     moved onto a new grid (id: the largest + 1) at its independent grid, which hangs on a
@@ -273,6 +279,10 @@ def candidates(model: FEModel, kinds=KINDS, *, frequency: float | None = None
             out += [_candidate(kind, Location(grids=(g,)), f"grid {g}",
                                tuple(PARAMETER_RANGES[kind]), detail)
                     for g in free_grids.tolist()]
+            out += [_candidate(kind, Location(grids=spread), f"grid {g} spread over "
+                               + ", ".join(str(n) for n in spread if n != g),
+                               tuple(PARAMETER_RANGES[kind]), detail)
+                    for g, spread in spread_sites(model, free_grids)]
         elif kind == "boundary_stiffness":
             f1 = _lowest_elastic_frequency(model) if frequency is None else float(frequency)
             k_ref = props.mass * (2.0 * np.pi * f1) ** 2
@@ -303,6 +313,36 @@ def candidates(model: FEModel, kinds=KINDS, *, frequency: float | None = None
                                        upper=(cand.upper[0], max(0.0, side * cand.upper[1])),
                                        reference=(cand.reference[0], side * cand.reference[1])))
     return tuple(out) + mirror_pairs(model, out)
+
+
+def spread_sites(model: FEModel, free_grids) -> list:
+    """(g, grids) of every spread mass (module docstring): grid g and the free grids one element
+    layer around it (rigid elements included), sorted, each set of grids once (the first
+    centre's), none for a grid without a free neighbour.
+
+    Parameters
+    ----------
+    model : FEModel
+    free_grids : (n,) ids of the grids a mass may sit on.
+
+    Returns
+    -------
+    list of (int, tuple of int)
+    """
+    free = set(np.asarray(free_grids, np.int64).tolist())
+    around = {g: {g} for g in free}
+    for _, nodes, _ in connectivity(model):
+        for row in np.asarray(nodes).tolist():
+            on = [n for n in row if n in free]
+            for n in on:
+                around[n].update(on)
+    out, seen = [], set()
+    for g in sorted(free):
+        grids = tuple(sorted(around[g]))
+        if len(grids) > 1 and grids not in seen:
+            seen.add(grids)
+            out.append((g, grids))
+    return out
 
 
 def neighbours(model: FEModel, location: Location) -> Location:
@@ -349,12 +389,14 @@ def _lumped_mass(model, candidate, x):
     if total is None:
         total = mass_properties(model).weight
     cm = model.masses
-    inertia = x[0] * total * x[1] * candidate.get("length") ** 2 * np.eye(3)     # m (r / L)^2 L^2
-    masses = replace(cm, eids=np.append(cm.eids, next_eid(model)),
-                     grid=np.append(cm.grid, candidate.location.grids[0]),
-                     mass=np.append(cm.mass, x[0] * total),
-                     offset=np.concatenate([cm.offset, np.zeros((1, 3))]),
-                     inertia=np.concatenate([cm.inertia, inertia[None]]))
+    grids = np.asarray(candidate.location.grids, np.int64)
+    n = grids.size                                      # 1, or a spread mass's equal shares
+    share = x[0] * total / n
+    inertia = share * x[1] * candidate.get("length") ** 2 * np.eye(3)           # m (r / L)^2 L^2
+    masses = replace(cm, eids=np.append(cm.eids, next_eid(model) + np.arange(n)),
+                     grid=np.append(cm.grid, grids), mass=np.append(cm.mass, np.full(n, share)),
+                     offset=np.concatenate([cm.offset, np.zeros((n, 3))]),
+                     inertia=np.concatenate([cm.inertia, np.repeat(inertia[None], n, axis=0)]))
     return replace(model, masses=masses)
 
 

@@ -42,7 +42,8 @@ or 2 for a pair).
 
 A ``lumped_mass`` candidate of size x adds a point mass mu = x m_ref (m_ref the model's total mass,
 times PARAM WTMASS) at one grid (three translations, basic axes): M(x) = M + mu E E^T with E the
-a-set columns of the grid's basic translations, K unchanged. The exact mode solves
+a-set columns of the grid's basic translations, K unchanged (a spread mass's n grids each take
+mu / n: E's columns are each grid's translations times sqrt(1 / n)). The exact mode solves
 (K - lambda M) x = lambda mu E (E^T x), x ~ (K - lambda M)^-1 E: the same form as the spring's,
 so the same basis serves (:func:`reduce_mass`: Psi = [Phi, R], R the residual attachment vectors
 of the three unit loads), with K_r = diag(Lambda, R^T K R) fixed and
@@ -347,7 +348,8 @@ def _template(nmodes: int, rigid) -> xr.Dataset:
 
 
 def reduce_mass(basis: SpringBasis, candidate) -> ReducedMass:
-    """The ``lumped_mass`` candidate (one grid, or a mirror pair's two) on the basis's Ritz basis.
+    """The ``lumped_mass`` candidate (one grid, or a mirror pair's two; a spread mass's grids
+    with their equal shares) on the basis's Ritz basis.
 
     Parameters
     ----------
@@ -360,13 +362,15 @@ def reduce_mass(basis: SpringBasis, candidate) -> ReducedMass:
     """
     model, system = basis.model, basis.system
     basic = (system.rotation @ system.T).tocsr()                           # (n_g, na)
-    rows = model.grids.index([site.location.grids[0] for site in sites(candidate)])
-    e = np.column_stack([np.asarray(basic[6 * int(g) + c].toarray()).ravel()
-                         for g in rows for c in range(3)])                 # (na, 3 q)
+    rows = model.grids.index([g for site in sites(candidate) for g in site.location.grids])
+    share = np.array([1.0 / len(site.location.grids) for site in sites(candidate)
+                      for _ in site.location.grids])                      # a spread's shares
+    e = np.column_stack([np.sqrt(w) * np.asarray(basic[6 * int(g) + c].toarray()).ravel()
+                         for g, w in zip(rows, share) for c in range(3)])  # (na, 3 q)
     psi, k0 = _ritz(basis, e)
     props = basis.props
     d = rigid_offset(model.grids.xyz[rows] - props.reference_point)[:, :3, :]   # (q, 3, 6)
-    unit = np.einsum("gai,gaj->ij", d, d)
+    unit = np.einsum("g,gai,gaj->ij", share, d, d)
     rigid = basis.rigid
     n = min(basis.nmodes, psi.shape[1])
     u, s, _ = np.linalg.svd(psi.T @ e, full_matrices=False)

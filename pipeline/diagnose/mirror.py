@@ -15,7 +15,9 @@ the reflected position (within :data:`TOLERANCE` of the model's size; grids that
 another, as at a hinge, have none, and images are mutual); a grid on the plane is its own image
 and has no pair. The image of each kind's site:
 
-- ``lumped_mass``: the image grid; both get the same mass (parameter ``mass`` per site).
+- ``lumped_mass``: the image grid (a spread mass: the image grids); both get the same mass
+  (parameter ``mass`` per site). Two spreads that share a grid on the plane have no pair (the
+  shared grid would carry both shares; the spread around that grid is a candidate of its own).
 - ``boundary_stiffness``: the image grid, the same direction letter (a spring's stiffness has no
   sign); only grids displaced in basic axes (CD = 0) on both sides.
 - ``joint_flexibility``: the rigid element whose grids are the images of the joint's grids; whole
@@ -116,8 +118,10 @@ def mirror_pairs(model: FEModel, candidates) -> tuple:
     out = []
     for cand in one_sided:
         twin = by_site.get(_key(cand, image))
-        if twin is None or min(twin.location.grids) <= min(cand.location.grids):
+        if twin is None or twin.location.grids <= cand.location.grids:
             continue                                # no image, its own image, or the other side
+        if cand.kind == "lumped_mass" and set(cand.location.grids) & set(twin.location.grids):
+            continue                                # spreads meeting on the plane: see above
         signs = _signs(model, image, cand, twin)
         if signs is not None:
             out.append(_pair(cand, twin, signs))

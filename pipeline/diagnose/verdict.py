@@ -79,8 +79,8 @@ def within_scatter(model: FEModel, candidate, values, scatter: float) -> bool:
     exactly. Such a fit is not a missing effect when it stays within ``SCATTER_SIGMAS`` x s of
     what it changes:
 
-    - ``lumped_mass``: the added mass against the CONM2 mass already at its grid (at each grid
-      of a mirror pair: the scatter must make both);
+    - ``lumped_mass``: the added mass against the CONM2 mass already at its grid (a spread
+      mass: its grids; at each site of a mirror pair: the scatter must make both);
     - ``member_taper``: the largest change of a section field, (1 + |scale|)^4 (1 + |taper| / 2)^4
       - 1 (I ~ s^4 at the member's ends), against s.
     Other kinds change nothing the scatter changes (False).
@@ -96,7 +96,7 @@ def within_scatter(model: FEModel, candidate, values, scatter: float) -> bool:
     x = dict(zip(candidate.parameters, np.abs(np.asarray(values, float))))
     if candidate.kind == "lumped_mass":
         cm = model.masses
-        local = min(float(cm.mass[cm.grid == site.location.grids[0]].sum())
+        local = min(float(cm.mass[np.isin(cm.grid, site.location.grids)].sum())
                     for site in sites(candidate))
         return bool(x["mass"] * candidate.get("total_mass") <= limit * local)
     if candidate.kind == "member_taper":

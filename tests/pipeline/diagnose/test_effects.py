@@ -15,6 +15,7 @@ from pipeline.diagnose.effects import (KINDS, Candidate, Location, apply_effect,
                                        effect_cards, effect_matrices, neighbours,
                                        write_effect_deck)
 from pipeline.diagnose.effect_deck import model_changes, write_patched_deck
+from pipeline.diagnose.mirror import mirror_grids
 from pipeline.diagnose.members import find_members
 from structures.assembly import assemble, assemble_g, line_offsets
 from structures.bdf import read_model
@@ -130,6 +131,17 @@ def test_total_mass_and_cg_follow_the_added_mass(x56, x56_candidates):
     assert after.mass - before.mass == pytest.approx(p * before.mass, rel=1e-12)
     x_grid = x56.grids.xyz[x56.grids.index([3005])[0]]
     np.testing.assert_allclose(after.cg, (before.cg + p * x_grid) / (1 + p), rtol=1e-12)
+    # spread in equal shares over the pylon base, its top and the engine: the CG moves towards
+    # the three grids' centroid, and each carries a third of the mass
+    spread = _pick(x56_candidates, "lumped_mass", "grid 5111 spread over 5101, 5121")
+    model = apply_effect(x56, spread, [p, 0.0])
+    after = mass_properties(model)
+    assert after.mass - before.mass == pytest.approx(p * before.mass, rel=1e-12)
+    centroid = x56.grids.xyz[x56.grids.index([5101, 5111, 5121])].mean(axis=0)
+    np.testing.assert_allclose(after.cg, (before.cg + p * centroid) / (1 + p), rtol=1e-12)
+    added = model.masses.mass[len(x56.masses.mass):]
+    assert model.masses.grid[len(x56.masses.mass):].tolist() == [5101, 5111, 5121]
+    np.testing.assert_allclose(added, p * before.weight / 3, rtol=1e-12)
 
 
 # ------------------------------------------------------------------------------------ members
@@ -510,7 +522,8 @@ def test_effect_matrices_equal_the_difference_of_assembled_models(x56, x56_candi
 # ----------------------------------------------------------------------------- written decks
 def test_written_deck_reads_back_to_the_same_model(x56, x56_candidates, tmp_path):
     """Every kind alone and all together: the same assembled K and M, and the same modes."""
-    picks = [("lumped_mass", "grid 5021"), ("joint_flexibility", "RBE2 7501"),
+    picks = [("lumped_mass", "grid 5021"), ("lumped_mass", "grid 3005 spread over"),
+             ("joint_flexibility", "RBE2 7501"),
              ("member_taper", "PID 101 (CBAR 1003"), ("member_curvature", "PID 101 (CBAR 1003"),
              ("member_curvature", "PID 132"), ("boundary_stiffness", "grid 1004 z")]
     effects = []
@@ -663,17 +676,33 @@ def test_candidates_of_x56_and_neighbours(x56, x56_candidates):
     counts = {k: sum(c.kind == k for c in one_sided) for k in KINDS}
     # 28 RBE2 in structure_x56.inc, 26 of them with two dependent grids (one-sided variants)
     assert counts["joint_flexibility"] == 28 + 2 * 26
-    assert counts["lumped_mass"] == len(x56.grids)     # every grid carries structure, none fixed
+    # every grid carries structure, none fixed: a point mass at each, and a spread mass over
+    # each distinct set of a grid and its neighbours (neighbours(): one element layer)
+    points = [c for c in one_sided if c.kind == "lumped_mass" and len(c.location.grids) == 1]
+    assert len(points) == len(x56.grids)
+    grown = {neighbours(x56, Location(grids=(g,))).grids for g in x56.grids.ids.tolist()}
+    spreads = {c.location.grids for c in one_sided
+               if c.kind == "lumped_mass" and len(c.location.grids) > 1}
+    assert spreads == {g for g in grown if len(g) > 1}
+    assert counts["lumped_mass"] == len(x56.grids) + len(spreads)
+    assert _pick(x56_candidates, "lumped_mass", "grid 5111 spread over 5101, 5121"
+                 ).location.grids == (5101, 5111, 5121)      # pylon base and top, engine
     assert counts["boundary_stiffness"] == 3 * len(x56.grids)
     assert counts["member_taper"] == counts["member_curvature"] / 2 == len(find_members(x56))
     # mirror pairs (pipeline.diagnose.mirror): 92 of the 103 grids lie off the plane y = 0, the
-    # 28 RBE2 are 14 left / right pairs, 14 members have a mirror image (two bow quadrants each)
+    # 28 RBE2 are 14 left / right pairs, 16 members have a mirror image (two bow quadrants each;
+    # two of them, PID 101 from grid 1006 and PID 103 from grid 1004, meet it on the plane), and
+    # a spread mass has one when its image grids are another spread's sharing no grid with it
     pairs = {k: sum(c.kind == k and c.get("sites") is not None for c in x56_candidates)
              for k in KINDS}
     off_plane = int(np.sum(np.abs(x56.grids.xyz[:, 1]) > 1e-9))
     assert off_plane == 92
-    assert pairs == {"lumped_mass": off_plane // 2, "boundary_stiffness": 3 * off_plane // 2,
-                     "joint_flexibility": 14, "member_taper": 14, "member_curvature": 28}
+    image = mirror_grids(x56)
+    twins = {g for g in spreads if tuple(sorted(image[i] for i in g)) in spreads - {g}
+             and not set(g) & {image[i] for i in g}}          # spreads meeting on the plane
+    assert pairs == {"lumped_mass": off_plane // 2 + len(twins) // 2,
+                     "boundary_stiffness": 3 * off_plane // 2,
+                     "joint_flexibility": 14, "member_taper": 16, "member_curvature": 32}
     grown = neighbours(x56, Location(grids=(3005,)))
     assert grown.grids == (3004, 3005, 3006, 3105, 3205)
     assert grown.elements == (3004, 3005, 7005)

@@ -175,22 +175,29 @@ def test_mass_ladder_finds_the_size_and_the_grid(frame_model):
     """A test made by the frame with 6 % of its mass added at the tail grid 4004 (the mass's own
     mode falls through the measured ones). The secant at the reference size 0.02 (exact
     reanalysis) fits a size and chi^2 far off; the screening on the Ritz basis ranks grid 4004
-    first among the 126 mass candidates, at a size within one rung (1/4 decade) of 0.06 and a
-    chi^2 below 1 % of the nominal model's, which is the exact reanalysis's at that size to
-    1e-3 + 0.01."""
+    first among the mass candidates (126 point masses and pairs, and the spread ones), at a size
+    within one rung (1/4 decade) of 0.06 and a chi^2 below 1 % of the nominal model's, which is
+    the exact reanalysis's at that size to 1e-3 + 0.01. The mass spread over 4004 and its
+    neighbours (equal shares on the Ritz basis's weighted load vectors) also matches its exact
+    reanalysis at its screened size."""
     model, _ = frame_model
     masses = candidates(model, ("lumped_mass",))
     cand = next(c for c in masses if c.label == "grid 4004")
     problem, ref, theta, evs, r0, chi_lin = _made_by(model, cand, 0.06)
     _, out, skipped = screen.signatures(problem, theta, (), evs, masses)
     rows = screen.screen(r0, out)
-    assert not skipped and len(rows) == len(masses) == 126
+    assert not skipped and len(rows) == len(masses)
+    assert sum("spread" not in c.label for c in masses) == 126          # 88 grids, 38 pairs
     best = rows[0]
     assert best.candidate.label == "grid 4004"
     assert abs(np.log10(best.values[0] / 0.06)) <= 0.25
     assert best.chi2 < 0.01 * chi_square(r0) and best.chi2 < 0.1 * chi_lin
     assert best.chi2 == pytest.approx(_exact_chi2(problem, ref, model, cand, best.values),
                                       rel=1e-3, abs=0.01)
+    spread = next(r for r in rows if r.candidate.label.startswith("grid 4004 spread over"))
+    assert len(spread.candidate.location.grids) > 1 and spread.values[0] > 0
+    assert spread.chi2 == pytest.approx(
+        _exact_chi2(problem, ref, model, spread.candidate, spread.values), rel=1e-3, abs=0.01)
 
 
 def test_ladder_sizes_refine_where_the_modes_turn(frame_model):

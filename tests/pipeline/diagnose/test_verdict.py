@@ -156,7 +156,7 @@ def test_a_held_out_mode_neither_model_reproduces_does_not_veto():
 
 def test_an_effect_within_the_nominal_scatter_is_not_named():
     """3 x s = 9 % of what the effect changes (s = 0.03): a mass at a grid carrying a 40 kg CONM2
-    (total 500 kg) is scatter up to 3.6 kg; a member's scale up to 1.09^(1/4) - 1 = 2.18 %."""
+    (total 500 kg) is scatter up to 3.6 kg, one spread over grids carrying 45 kg up to 4.05 kg; a member's scale up to 1.09^(1/4) - 1 = 2.18 %."""
     model = SimpleNamespace(masses=SimpleNamespace(grid=np.array([7, 7, 9]),
                                                    mass=np.array([30.0, 10.0, 5.0])))
 
@@ -167,6 +167,11 @@ def test_an_effect_within_the_nominal_scatter_is_not_named():
     assert within_scatter(model, cand("lumped_mass", 7, ("mass",)), [3.5 / 500], 0.03)
     assert not within_scatter(model, cand("lumped_mass", 7, ("mass",)), [3.7 / 500], 0.03)
     assert not within_scatter(model, cand("lumped_mass", 8, ("mass",)), [1e-4], 0.03)
+    # a mass spread over grids 7 and 9 against the 45 kg there: scatter up to 4.05 kg
+    spread = Candidate("lumped_mass", Location(grids=(7, 9)), "c", ("mass",), (-1.0,), (1.0,),
+                       (0.1,), (("total_mass", 500.0),))
+    assert within_scatter(model, spread, [4.0 / 500], 0.03)
+    assert not within_scatter(model, spread, [4.1 / 500], 0.03)
     taper = cand("member_taper", 7, ("scale", "taper"))
     assert within_scatter(model, taper, [-0.0215, 0.0], 0.03)
     assert not within_scatter(model, taper, [0.0, 0.05], 0.03)       # 1.025^4 - 1 = 10.4 %
