@@ -65,7 +65,7 @@ from structures.common.errors import InputError
 from structures.massprops import check_measured_mass
 from structures.modal import compute_modes
 from structures.model import FEModel
-from structures.modes import elastic_index
+from structures.modes import elastic_index, rigid_index
 from structures.suspension import FREQUENCY_RATIO, RIGID_SHARE, without_suspension
 
 #: Rigid-body modes added to twice the test modes for the default analysis mode count.
@@ -297,7 +297,7 @@ def _checked(configurations, settings) -> tuple:
 
 def _preflight(configurations, settings: DiagnoseSettings, notes: list, hung: list):
     """The references of :func:`preflight`; ``hung`` receives each configuration's suspension
-    modes (a GVT Dataset, or None)."""
+    modes (a GVT Dataset, or None; attribute ``n_rigid``: the model's rigid-body modes)."""
     refs = []
     for rotation, data in enumerate(configurations):
         nmodes = settings.nmodes or 2 * data.gvt.sizes["mode"] + N_RIGID
@@ -306,7 +306,8 @@ def _preflight(configurations, settings: DiagnoseSettings, notes: list, hung: li
         if settings.nmodes is None and suspended is not None:
             nmodes = 2 * gvt.sizes["mode"] + N_RIGID          # counted on the elastic test modes
             modes = modes.isel(mode=slice(0, nmodes))
-        hung.append(suspended)
+        hung.append(suspended if suspended is None else
+                    suspended.assign_attrs(n_rigid=int(rigid_index(modes).size)))
         n_test = gvt.sizes["mode"]
         if elastic_index(modes).size < n_test:
             raise InputError(f"diagnose: configuration {data.name}: {n_test} test modes but only "
@@ -649,6 +650,16 @@ def _suspension(configurations, refs, hung, settings: DiagnoseSettings, problem:
         notes.append("the suspension modes have no shapes: where the suspension acts cannot be "
                      "told, and it is not identified (its stiffening of the elastic modes is "
                      "left to the rounds).")
+        return None
+    short = [(configurations[i].name, hung[i].sizes["mode"], hung[i].attrs["n_rigid"])
+             for i in used if hung[i].sizes["mode"] < hung[i].attrs["n_rigid"]]
+    if short:
+        name, n, n_rigid = short[0]
+        notes.append(f"{name}: {n} suspension modes where the model has {n_rigid} rigid-body "
+                     "motions, and every suspension of the hypotheses holds all of them: the "
+                     "missing one is held by something stiffer than the suspension (a support: "
+                     "the rounds look for it) or was not measured; the suspension is not "
+                     "identified from them.")
         return None
     held = {i: hung[i].isel(mode=hung[i]["frequency"].values > 0.0) for i in used}
     if any(held[i].sizes["mode"] < hung[i].sizes["mode"] for i in used):

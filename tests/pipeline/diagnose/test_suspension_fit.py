@@ -161,6 +161,29 @@ def test_workflow_adds_the_suspension_first(frame):
     assert json.loads(json.dumps(record)) == record
 
 
+def test_a_suspension_mode_missing_identifies_no_suspension(frame):
+    """The same test with only five of the six suspension modes listed (the free frame has six
+    rigid-body motions, and every hypothesis holds all six): the sixth was not measured or is
+    held by something stiffer (the X-56 blind study's support-spring seed 0 on its bungees:
+    five suspension modes, a wrong four-point suspension fitted them at chi^2 1.03 per datum):
+    no suspension is identified, with a note naming the configuration and the counts."""
+    from pipeline.diagnose import DiagnoseSettings, diagnose
+
+    data, _ = _test_modes(_hang(frame.model), frame.gvt, np.random.default_rng(3))
+    gvt = frame.gvt
+    five = make_gvt_dataset(np.concatenate([data["frequency"].values[1:],
+                                            gvt["frequency"].values]),
+                            np.vstack([data["shape"].values[1:], gvt["shape"].values]),
+                            gvt["grid"].values, gvt["component"].values,
+                            mode=np.arange(1, 6 + gvt.sizes["mode"]),
+                            source="frame GVT with five suspension modes", units="si")
+    result = diagnose([replace(frame, gvt=five)],
+                      DiagnoseSettings(kinds=("boundary_stiffness",), max_effects=1))
+    assert result.to_json()["suspension"] is None
+    assert any(n.startswith("frame: 5 suspension modes where the model has 6 rigid-body motions")
+               for n in result.notes), result.notes
+
+
 def test_random_suspensions_found(frame):
     """Ten frames hung on three bungees at random sites (a mirror pair and a grid on the plane
     of symmetry, drawn from the identification's own candidates), random stiffnesses (heave at
