@@ -102,8 +102,9 @@ def test_held_out_modes_veto_a_compensating_fit():
 
 def test_past_a_veto_the_next_fit_is_named_only_when_the_held_out_modes_support_it():
     """Training scores (c = max(1, 370 / 397) = 1, p = 3): mass 370 (it beats the joint by 30,
-    not ambiguous), joint 400, taper 450, "none" 600 (p = 2). Three held-out modes of 10 entries (limit 29.588), "none" 20, 25, 28
-    (73): the mass gives 20, 90, 28 (evidence 73 - 138 = -65: vetoed), the taper 73 (0).
+    not ambiguous), joint 400, taper 450, "none" 600 (p = 2). Three held-out modes of 10
+    entries (limit 29.588), "none" 20, 25, 28 (73): the mass gives 20, 90, 28 (evidence
+    73 - 138 = -65: vetoed), the taper 73 (0).
     A joint at 8, 10, 12 (evidence +43 > 10) that leads the taper by 50 and "none" by
     200 - ln n is named past the veto, the taper its runner-up; the vetoed mass is no rival.
     With the joint at 18, 22, 28 (+5, no support beyond the margin), or within the margin of
@@ -156,7 +157,8 @@ def test_a_held_out_mode_neither_model_reproduces_does_not_veto():
 
 def test_an_effect_within_the_nominal_scatter_is_not_named():
     """3 x s = 9 % of what the effect changes (s = 0.03): a mass at a grid carrying a 40 kg CONM2
-    (total 500 kg) is scatter up to 3.6 kg, one spread over grids carrying 45 kg up to 4.05 kg; a member's scale up to 1.09^(1/4) - 1 = 2.18 %."""
+    (total 500 kg) is scatter up to 3.6 kg, one spread over grids carrying 45 kg up to 4.05 kg;
+    a member's scale up to 1.09^(1/4) - 1 = 2.18 %."""
     model = SimpleNamespace(masses=SimpleNamespace(grid=np.array([7, 7, 9]),
                                                    mass=np.array([30.0, 10.0, 5.0])))
 
