@@ -68,6 +68,11 @@ def _location_dict(location) -> dict:
     return location.as_dict() if hasattr(location, "as_dict") else dict(location)
 
 
+def suspension_effects(suspension: Mapping | None) -> int:
+    """How many of the effects are the suspension's (its sites, added first), 0 without one."""
+    return len(suspension["sites"]) if suspension else 0
+
+
 def effect_json(record: EffectRecord) -> dict:
     """{"kind", "location", "parameters", "label", "score", "sites"} of a named effect.
 
@@ -176,7 +181,7 @@ class DiagnoseResult:
     def to_json(self) -> dict:
         """The issue's JSON schema (see the module docstring)."""
         effects = [effect_json(r) for r in self.effects]
-        n_hung = len(self.suspension["sites"]) if self.suspension else 0
+        n_hung = suspension_effects(self.suspension)
         return _clean({
             "verdict": self.verdict,
             "effect": (effects[n_hung] if len(effects) > n_hung and self.verdict == "effect"

@@ -235,12 +235,19 @@ def decide(none_fit, fits, margin: float, near, n_data: int, n_candidates: int =
         return ("none" if fitting else "unexplained"), None, None, float("nan"), "no_gain", 1.0
     scores, none_score, c = round_scores(none_fit, fits, n_data, n_candidates, n_modal=n_modal)
     best = int(np.argmin(scores))
-    kind, loc = fits[best][0], fits[best][1]
-    rivals = [i for i, f in enumerate(fits)
-              if i != best and (f[0] != kind or not near(loc, f[1]))
-              and not (alike is not None and alike(best, i))]
-    runner = min(rivals, key=lambda i: scores[i]) if rivals else None
-    lead = float(min(none_score, scores[runner] if runner is not None else np.inf) - scores[best])
+
+    def runner_up(i, pool):
+        """(runner, lead) of fit i among ``pool``: the best-scoring fit of another kind or at a
+        location that is not i's neighbour and does not predict i's data; the score of the
+        better of "none" and it minus i's."""
+        kind, loc = fits[i][0], fits[i][1]
+        rivals = [j for j in pool if j != i and (fits[j][0] != kind or not near(loc, fits[j][1]))
+                  and not (alike is not None and alike(i, j))]
+        runner = min(rivals, key=lambda j: scores[j]) if rivals else None
+        return runner, float(min(none_score, scores[runner] if runner is not None else np.inf)
+                             - scores[i])
+
+    runner, lead = runner_up(best, range(len(fits)))
     if not scores[best] + margin < none_score:
         return ("none" if fitting else "unexplained"), best, runner, lead, "no_gain", c
     if runner is not None and not scores[best] + margin < scores[runner]:
@@ -254,12 +261,7 @@ def decide(none_fit, fits, margin: float, near, n_data: int, n_candidates: int =
     if not kept:
         return "unexplained", best, runner, lead, "held_out", c
     alt = min(kept, key=lambda i: scores[i])
-    kind, loc = fits[alt][0], fits[alt][1]
-    rivals = [i for i in kept if i != alt and (fits[i][0] != kind or not near(loc, fits[i][1]))
-              and not (alike is not None and alike(alt, i))]
-    alt_runner = min(rivals, key=lambda i: scores[i]) if rivals else None
-    alt_lead = float(min(none_score, scores[alt_runner] if alt_runner is not None else np.inf)
-                     - scores[alt])
+    alt_runner, alt_lead = runner_up(alt, kept)
     if alt_lead > margin and evidence[alt] > margin:
         return "effect", alt, alt_runner, alt_lead, "past_veto", c
     return "unexplained", best, runner, lead, "held_out", c

@@ -55,7 +55,8 @@ from pipeline.diagnose.gap import (EQUIVALENT_SIGMAS, gap_metrics, held_out_note
 from pipeline.diagnose.loadpath import best_load_path, load_path_measurement, outscores
 from pipeline.diagnose.mirror import sites
 from pipeline.diagnose.predictive import held_out_evidence, held_out_modes, kept_modes
-from pipeline.diagnose.result import CandidateScore, DiagnoseResult, EffectRecord
+from pipeline.diagnose.result import (CandidateScore, DiagnoseResult, EffectRecord,
+                                      suspension_effects)
 from pipeline.diagnose.screen import (bound_release, pick_for_refit, polish, refit, screen,
                                       signatures)
 from pipeline.diagnose.suspension import FIT_LIMIT, hung_data, identify
@@ -550,11 +551,9 @@ def diagnose(configurations, settings: DiagnoseSettings = DiagnoseSettings(), *,
                         verdict, path = again
                         fits[best] = rich
                         modes[best] = held_out_modes(problem, rich.evaluations)[0]
-            vetoed = [f.candidate.label for f, m in zip(fits, modes)
-                      if held_out_evidence(modes_none, m, entries, c) < -settings.margin]
             rounds.append(_round_record(k, verdict, fits, best, runner, none,
                                         (modes_none, modes, entries), n_data, scored + (c,),
-                                        path, same, reason=reason, vetoed=vetoed))
+                                        path, same, reason=reason, margin=settings.margin))
             if path is not None and verdict in ("unexplained", "ambiguous"):
                 cand = fits[best].candidate
                 a, b = path[0].grids
@@ -576,7 +575,8 @@ def diagnose(configurations, settings: DiagnoseSettings = DiagnoseSettings(), *,
             if reason == "past_veto" and verdict == "effect":
                 cand, named = fits[best].candidate, rounds[-1]["best"]
                 notes.append(f"round {k + 1}: the held-out modes contradict "
-                             f"{'; '.join(vetoed)} (a compensation the training modes prefer); "
+                             f"{'; '.join(rounds[-1]['vetoed'])} (a compensation the training "
+                             "modes prefer); "
                              f"{cand.kind} {cand.label}, the best fit they do not contradict, "
                              f"beats the rest by {lead:.1f} and the held-out modes support it "
                              f"(evidence {named['held_out_evidence']:+.1f}): named. The held-out "
@@ -619,8 +619,8 @@ def diagnose(configurations, settings: DiagnoseSettings = DiagnoseSettings(), *,
             records.append(EffectRecord(chosen.candidate, chosen.values, lead))
             effects.append((chosen.candidate, chosen.values))
             theta, none_evs = chosen.theta, chosen.evaluations
-    n_hung = len(suspension["sites"]) if suspension else 0
-    verdict = "effect" if len(records) > n_hung else first       # the structure's, not the test's
+    verdict = ("effect" if len(records) > suspension_effects(suspension)
+               else first)                                      # the structure's, not the test's
     if records and (note := held_out_note(gap_before, gap_after)):
         notes.append(note)
     notes.append(f"diagnose took {time.perf_counter() - t0:.1f} s "
@@ -734,7 +734,8 @@ def _against_path(found, problem: Problem, scored, best: int, n_data: int, n_can
 
 
 def _round_record(k: int, verdict: str, fits, best, runner, none, held_out, n_data: int,
-                  scored, path=None, alike=(), *, reason: str = "", vetoed=()) -> dict:
+                  scored, path=None, alike=(), *, reason: str = "", margin: float = np.inf
+                  ) -> dict:
     """The JSON record of round k (:class:`pipeline.diagnose.result.DiagnoseResult` ``rounds``).
 
     ``held_out`` is (modes_none, per fit modes, entries) of
@@ -743,9 +744,9 @@ def _round_record(k: int, verdict: str, fits, best, runner, none, held_out, n_da
     (..., chi2_modal, chi2_stated, n_params), c the modal dispersion); ``path`` is
     (LoadPath, its score, the named effect's score) of :func:`_against_path`, or None when
     the round named nothing; ``alike`` the labels of the fits that predict the same data as the
-    best (:func:`pipeline.diagnose.gap.indistinguishable`); ``reason`` and ``vetoed`` as
-    :func:`pipeline.diagnose.verdict.decide` gave them and the labels of the fits the held-out
-    modes contradict by more than the margin.
+    best (:func:`pipeline.diagnose.gap.indistinguishable`); ``reason`` as
+    :func:`pipeline.diagnose.verdict.decide` gave it; ``vetoed`` lists the fits whose held-out
+    evidence is below -``margin``.
     """
     modes_none, modes, entries = held_out
     none_row, rows, n_modal, c = scored
@@ -761,7 +762,9 @@ def _round_record(k: int, verdict: str, fits, best, runner, none, held_out, n_da
                 "held_out_modes_kept": kept_modes(modes_none, modes[i], entries).tolist(),
                 "held_out_evidence": held_out_evidence(modes_none, modes[i], entries, c),
                 "parameters": dict(zip(f.candidate.parameters, map(float, f.values)))}
-    return {"round": k + 1, "verdict": verdict, "reason": reason, "vetoed": list(vetoed),
+    fitted = [entry(i) for i in range(len(fits))]
+    return {"round": k + 1, "verdict": verdict, "reason": reason,
+            "vetoed": [e["label"] for e in fitted if e["held_out_evidence"] < -margin],
             "n_data": n_data, "n_modal": n_modal,
             "dispersion": c,
             "n_held_out": int(np.sum(entries)), "held_out_modes_entries": entries.tolist(),
@@ -773,7 +776,7 @@ def _round_record(k: int, verdict: str, fits, best, runner, none, held_out, n_da
             "gap": None, "nominal": None, "detailed": None, "best": entry(best),
             "runner_up": entry(runner),
             "alike": list(alike),
-            "fits": [entry(i) for i in range(len(fits))],
+            "fits": fitted,
             "load_path": None if path is None else {
                 "grids": list(path[0].grids), "stiffness": path[0].stiffness,
                 "chi2": chi_square(path[0].residual), "n_pairs": path[0].n_pairs,
