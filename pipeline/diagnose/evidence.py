@@ -355,6 +355,9 @@ class Reference:
         kept shape coordinates mode by mode) per standard deviation of every scatter group's
         error (:func:`scatter_rows`), or None.
     whitening : (n_train_rows, n_train_rows) W applied to those entries, or None (independent).
+    scatter_modes : (d_frequency (n_g, n_test), d_mixing (n_g, n_test, m), scatter) of
+        :func:`scatter_rows` for every test mode, from which :func:`with_training` derives
+        ``scatter_rows`` and ``whitening`` for another training split; or None.
     """
 
     name: str
@@ -375,6 +378,7 @@ class Reference:
     nmodes: int
     scatter_rows: np.ndarray | None = None
     whitening: np.ndarray | None = None
+    scatter_modes: tuple | None = None
 
     @property
     def has_shapes(self) -> bool:
@@ -687,8 +691,16 @@ def build_reference(name: str, model: FEModel, gvt: xr.Dataset, measured_mass: M
         except InputError:
             facts["self_orthogonality"] = None
         ref = replace(ref, projector=projector, shape_scale=scale, shape_keep=keep_mask)
-    rows = scatter_rows(ref, d_freq[:, own], d_mix[:, own], model_scatter)
-    return replace(ref, scatter_rows=rows, whitening=whitening(rows)), facts
+    ref = replace(ref, scatter_modes=(d_freq[:, own], d_mix[:, own], model_scatter))
+    return with_training(ref, ref.train), facts
+
+
+def with_training(ref: Reference, train) -> Reference:
+    """``ref`` with the modes ``train`` (n_test,) bool used to fit, the others held out: its
+    scatter rows (:func:`scatter_rows`) and whitening for them."""
+    ref = replace(ref, train=np.asarray(train, bool))
+    rows = scatter_rows(ref, *ref.scatter_modes)
+    return replace(ref, scatter_rows=rows, whitening=whitening(rows))
 
 
 def scatter_rows(ref: Reference, d_frequency, d_mixing, scatter: float) -> np.ndarray:

@@ -41,7 +41,10 @@ GAP_UNITS = {"frequency_rms_held_out": "%", "frequency_rms": "%",
              "max_cross_orthogonality_offdiag": "-",
              "max_cross_orthogonality_offdiag_held_out": "-",
              "max_cross_orthogonality_offdiag_unfiltered": "-", "mac_min": "-",
-             "mac_min_held_out": "-", "mac_mean": "-"}
+             "mac_min_held_out": "-", "mac_mean": "-", "frequency_rms_cross_validated": "%",
+             "frequency_rms_cross_validated_expected": "%", "n_cross_validated": "-",
+             "max_cross_orthogonality_offdiag_cross_validated": "-",
+             "mac_min_cross_validated": "-"}
 
 
 def final_deck(run_dir, config: str) -> Path:

@@ -16,6 +16,8 @@ KIND_COLOURS = {"lumped_mass": "tab:blue", "joint_flexibility": "tab:red",
                 "boundary_stiffness": "tab:orange", "none": "0.5"}
 #: The gap metrics drawn, per panel: (title, unit, [(key, label)]).
 GAP_PANELS = (("frequency error", "RMS %", (("frequency_rms_held_out", "held-out modes"),
+                                            ("frequency_rms_cross_validated",
+                                             "every mode, cross-validated"),
                                             ("frequency_rms", "all paired modes"))),
               ("mode shapes", "-", (("max_cross_orthogonality_offdiag", "largest |S_ij|, i != j"),
                                     ("mac_min", "smallest paired MAC"))))
@@ -97,8 +99,9 @@ def plot_gap(record: dict, velocity: str = "model units") -> Figure:
         the flutter speed when it was computed before and after.
     """
     before, after = record.get("gap_before") or {}, record.get("gap_after") or {}
-    panels = [(title, unit, [(label, _value(before, k), _value(after, k)) for k, label in keys])
-              for title, unit, keys in GAP_PANELS]
+    panels = [(title, unit, [(label, _value(before, k), _value(after, k)) for k, label in keys
+                             if not np.isnan([_value(before, k), _value(after, k)]).all()])
+              for title, unit, keys in GAP_PANELS]                  # a metric not computed: no bar
     mass = sorted(set(before.get("mass") or {}) | set(after.get("mass") or {}))
     if mass:
         panels.append(("mass properties", "error %", [

@@ -21,7 +21,9 @@ GAP_METRICS = ("frequency_rms_held_out", "frequency_rms", "frequency_rms_held_ou
                "max_cross_orthogonality_offdiag",
                "max_cross_orthogonality_offdiag_held_out",
                "max_cross_orthogonality_offdiag_unfiltered", "mac_min", "mac_min_held_out",
-               "mac_mean")
+               "mac_mean", "frequency_rms_cross_validated",
+               "frequency_rms_cross_validated_expected",
+               "max_cross_orthogonality_offdiag_cross_validated", "mac_min_cross_validated")
 
 #: Which model each gap is of (JSON ``gap_models``). The pipeline stage writes both decks.
 GAP_MODELS = {
@@ -118,7 +120,11 @@ class DiagnoseResult:
         ``_unfiltered`` on all, :mod:`pipeline.diagnose.gap`), ``mac_min``, ``mac_min_held_out``,
         ``mac_mean`` (None without shapes), ``mass`` {quantity: % error of the
         configuration with the largest |error|}, ``mass_by_configuration``, ``flutter_speed``
-        (None: filled by the pipeline stage). :data:`GAP_MODELS` says which model each is.
+        (None: filled by the pipeline stage); when an effect was added, the cross-validated
+        ``frequency_rms_cross_validated`` [%], ``frequency_rms_cross_validated_expected`` [%],
+        ``n_cross_validated``, ``max_cross_orthogonality_offdiag_cross_validated`` and
+        ``mac_min_cross_validated`` (:mod:`pipeline.diagnose.crossval`). :data:`GAP_MODELS`
+        says which model each is.
     notes : tuple of str
     separating_measurement : str or None, for an ambiguous verdict.
     nominal : mapping {parameter: relative change} of the final model (``gap_after``'s).

@@ -479,10 +479,19 @@ def polish(problem: Problem, effects, fit: Refitted, *, n_data: int,
     -------
     Refitted
     """
-    row = Screened(fit.candidate, np.asarray(fit.values, float), fit.chi2, 0.0, None)
-    out = refit(problem, fit.theta, effects, row, n_data=n_data, jacobian_theta=jacobian_theta,
-                max_nfev=POLISH_NFEV, starts=(1.0,), ftol=POLISH_FTOL)
+    out = continued(problem, fit.theta, effects, fit.candidate, fit.values, n_data=n_data,
+                    jacobian_theta=jacobian_theta)
     return out if out is not None and out.chi2 < fit.chi2 else fit
+
+
+def continued(problem: Problem, theta0, effects, candidate, values, *, n_data: int,
+              jacobian_theta) -> Refitted | None:
+    """A candidate's fit, with the nominal parameters, continued to convergence from
+    (``values``, ``theta0``): :func:`refit` with :data:`POLISH_NFEV` iterations at most and
+    tolerance :data:`POLISH_FTOL` (:func:`polish`); None when the start cannot be analysed."""
+    row = Screened(candidate, np.asarray(values, float), np.nan, 0.0, None)
+    return refit(problem, theta0, effects, row, n_data=n_data, jacobian_theta=jacobian_theta,
+                 max_nfev=POLISH_NFEV, starts=(1.0,), ftol=POLISH_FTOL)
 
 
 def bound_release(problem: Problem, effects, fit: Refitted, *, jacobian_theta) -> tuple:

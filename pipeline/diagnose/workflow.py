@@ -16,7 +16,9 @@
 6. Look again: the named effect, its fit continued to convergence
    (:func:`pipeline.diagnose.screen.polish`), is added and steps 4-5 repeat, up to
    ``settings.max_effects`` (a site already named is not offered again, alone or in a mirror
-   pair).
+   pair). The gap is then cross-validated (:mod:`pipeline.diagnose.crossval`): the calibration
+   and the named effects' fits are repeated on the other splits of the modes, so that every
+   paired mode is judged once by a fit that did not see it.
 
 The verdict of each round is :func:`pipeline.diagnose.verdict.decide`; an effect it names must
 also fit inside its bounds (a parameter on a non-zero bound,
@@ -47,6 +49,7 @@ import xarray as xr
 from threadpoolctl import threadpool_limits
 
 from pipeline.diagnose.calibrate import Problem, calibrate
+from pipeline.diagnose.crossval import cross_validated, cross_validated_note
 from pipeline.diagnose.detail import detailed
 from pipeline.diagnose.effects import KINDS, candidates, neighbours
 from pipeline.diagnose.evidence import SELF_ORTHOGONALITY_LIMIT, build_reference, chi_square
@@ -623,6 +626,18 @@ def diagnose(configurations, settings: DiagnoseSettings = DiagnoseSettings(), *,
                else first)                                      # the structure's, not the test's
     if records and (note := held_out_note(gap_before, gap_after)):
         notes.append(note)
+    if records:
+        _say(progress, "cross-validating the gap")
+        n_hung = suspension_effects(suspension)
+        with threadpool_limits(limits=1):
+            cv = cross_validated(problem, settings.holdout, gap_before, gap_after,
+                                 effects[:n_hung], effects[n_hung:])
+        if cv is None:
+            notes.append("gap: not cross-validated: a refit on another split of the modes could "
+                         "not be analysed at its start.")
+        else:
+            gap_before, gap_after = {**gap_before, **cv[0]}, {**gap_after, **cv[1]}
+            notes.append(cross_validated_note(gap_before, gap_after, settings.holdout))
     notes.append(f"diagnose took {time.perf_counter() - t0:.1f} s "
                  f"({len(rounds)} round{'s' if len(rounds) > 1 else ''}).")
     return DiagnoseResult(verdict=verdict, effects=tuple(records), candidates=table,

@@ -140,6 +140,14 @@ def test_hidden_mass_is_named_and_the_gap_shrinks(folder, capsys):
                                                           HIDDEN_GRID + 100}
     assert (record["gap_after"]["frequency_rms_held_out"]
             < record["gap_before"]["frequency_rms_held_out"])
+    # cross-validated: on each of the 3 splits the mass, refitted without the split's held-out
+    # modes, is the truth's again (noise-free data), so every one of the 12 paired modes is
+    # predicted to the UFF file's six digits, as the diagnosed deck below
+    before, after = record["gap_before"], record["gap_after"]
+    assert after["n_cross_validated"] == before["n_cross_validated"] == 12
+    assert after["frequency_rms_cross_validated"] < 1e-3
+    assert before["frequency_rms_cross_validated"] > 1.0
+    assert any(n.startswith("gap, cross-validated over 3 splits") for n in record["notes"])
     # the diagnosed deck carries the truth's mass and gives the truth's (the GVT's) frequencies:
     # the named fit is converged (screen.polish), so to the UFF file's six significant digits
     # (round-off up to 5e-6; 1.4e-6 measured), not to where the ranking refits stop (0.12 %)

@@ -35,14 +35,17 @@ TRUTH = {"kind": "member_taper", "grids": [2002, 2003], "elements": [2003], "pro
 
 
 def _verdict(kind, grids=(), elements=(), properties=(), verdict="effect", before=5.0,
-             after=1.0):
+             after=1.0, cross_validated=(4.0, 1.5)):
     effect = {"kind": kind, "location": {"grids": list(grids), "elements": list(elements),
                                          "properties": list(properties)}, "parameters": {}}
     return {"verdict": verdict, "effect": effect if verdict == "effect" else None,
             "gap_before": {"frequency_rms_held_out": before,
-                           "max_cross_orthogonality_offdiag": 0.3},
+                           "max_cross_orthogonality_offdiag": 0.3,
+                           "frequency_rms_cross_validated": cross_validated[0],
+                           "frequency_rms_cross_validated_expected": 1.4},
             "gap_after": {"frequency_rms_held_out": after,
-                          "max_cross_orthogonality_offdiag": 0.1}}
+                          "max_cross_orthogonality_offdiag": 0.1,
+                          "frequency_rms_cross_validated": cross_validated[1]}}
 
 
 def test_score_location_by_neighbour():
@@ -77,6 +80,7 @@ def test_scores_of_a_study():
     assert ds.attrs["none_kept"] == 1.0
     assert ds.attrs["outside_not_named"] == 0.5
     assert ds.attrs["gap_shrinks"] == 1.0
+    assert ds.attrs["gap_shrinks_cross_validated"] == 1.0
     assert ds["confusion"].sel(truth_kind_row="member_taper").sum() == 2
     assert int(ds["confusion"].sel(truth_kind_row="outside",
                                    named_kind_column="unexplained")) == 1
@@ -105,23 +109,29 @@ def test_rescore_merges_split_runs_and_reruns(tmp_path):
     _write_case(second, "frame", "none", 0, {**TRUTH, "kind": "none"},
                 _verdict("none", verdict="none"), seconds=40.0)
     _write_case(second, "frame", "member_taper", 0, taper,
-                _verdict("member_taper", elements=[2004]), seconds=70.0)
+                _verdict("member_taper", elements=[2004], cross_validated=(4.0, 4.5)),
+                seconds=70.0)
     (first / "frame" / "member_taper" / "1" / "truth_gap.json").write_text(json.dumps(
         {"frequency_rms_held_out": 0.9, "max_cross_orthogonality_offdiag": 0.02,
-         "frequency_rms_held_out_expected": 1.5, "n_held_out": 8}))
+         "frequency_rms_held_out_expected": 1.5, "n_held_out": 8, "frequency_rms": 1.1}))
     ds = rescore([first, second])
     assert ds.sizes["case"] == 3
     assert ds.attrs["top1_kind_accuracy"] == 1.0 and ds.attrs["none_kept"] == 1.0
     assert sorted(ds["seconds"].values.tolist()) == [40.0, 61.5, 70.0]
     assert ds.attrs["gap_shrinks"] == 0.5                 # seed 1's held-out error rose
+    # seed 0's cross-validated error rose, seed 1's fell
+    assert ds.attrs["gap_shrinks_cross_validated"] == 0.5
     text = gap_text(ds)
-    # seed 1 starts at 2.0 %, within 1.5 (1 + 2 / sqrt(16)) = 2.25 %: noise and scatter alone
-    assert ("2.00 ->   2.50 ( 0.90;  1.50)  0.300 -> 0.100 (0.020)  RMS up, held-out within "
-            "noise before") in text
-    assert "5.00 ->   1.00 (  nan;   nan)  0.300 -> 0.100 (nan)\n" in text  # no truth_gap.json
+    # seed 1 starts at 2.0 %, within 1.5 (1 + 2 / sqrt(16)) = 2.25 %: noise and scatter alone;
+    # the truth's cross-validated error is its RMS over every paired mode, 1.1 %
+    assert ("2.00 ->   2.50 ( 0.90;  1.50)  0.300 -> 0.100 (0.020)    4.00 ->   1.50 ( 1.10;  "
+            "1.40)  RMS up, held-out within noise before") in text
+    assert ("5.00 ->   1.00 (  nan;   nan)  0.300 -> 0.100 (nan)    4.00 ->   4.50 (  nan;  "
+            "1.40)  cross-validated RMS not down\n") in text                 # no truth_gap.json
     assert text.endswith("drops: RMS 1, off-diagonal 2, both 1 of 2; of the 1 others, 1 start "
                          "with a held-out error within what noise and scatter alone give (2 "
-                         "standard deviations)")
+                         "standard deviations); cross-validated RMS 1, it and the off-diagonal "
+                         "both 1 of 2")
     with pytest.raises(FileNotFoundError):
         rescore([tmp_path / "empty"])
 

@@ -24,9 +24,11 @@ RECORD = {
          "score": 40.25, "label": "PBAR 151"},
     ],
     "gap_before": {"frequency_rms_held_out": 4.1, "frequency_rms": 3.9,
+                   "frequency_rms_cross_validated": 3.5,
                    "max_cross_orthogonality_offdiag": 0.31, "mac_min": 0.62,
                    "mass": {"weight": -3.5, "x_cg": 1.0}, "flutter_speed": 1200.0},
     "gap_after": {"frequency_rms_held_out": 0.8, "frequency_rms": 0.7,
+                  "frequency_rms_cross_validated": 0.75,
                   "max_cross_orthogonality_offdiag": 0.05, "mac_min": 0.97,
                   "mass": {"weight": -0.2, "x_cg": 0.1}, "flutter_speed": 1100.0},
     "notes": [],
@@ -64,7 +66,7 @@ def test_gap_groups_before_and_after_per_metric():
                                                    "mass properties", "flutter"]
     heights = [[p.get_height() for p in ax.patches] for ax in fig.axes]
     # bars: every "before" of the panel, then every "after"
-    assert heights[0] == [4.1, 3.9, 0.8, 0.7]
+    assert heights[0] == [4.1, 3.5, 3.9, 0.8, 0.75, 0.7]
     assert heights[1] == [0.31, 0.62, 0.05, 0.97]
     assert heights[2] == [-3.5, 1.0, -0.2, 0.1]
     assert heights[3] == [1200.0, 1100.0]
@@ -76,3 +78,7 @@ def test_gap_without_mass_or_flutter_leaves_their_panels_out():
               "gap_after": {**RECORD["gap_after"], "mass": {}, "flutter_speed": None}}
     fig = plot_gap(record)
     assert [ax.get_title() for ax in fig.axes] == ["frequency error", "mode shapes"]
+    # no cross-validated gap (nothing was named): no bar for it
+    plain = {w: {k: v for k, v in RECORD[w].items() if k != "frequency_rms_cross_validated"}
+             for w in ("gap_before", "gap_after")}
+    assert [p.get_height() for p in plot_gap(plain).axes[0].patches] == [4.1, 3.9, 0.8, 0.7]

@@ -17,7 +17,10 @@ Scores (issue 14, "Must show"):
   after, per case, beside the truth's own (:func:`truth_gap`: the truth models, the ones the
   test data were drawn from, against those data; their gap is the noise's, the least any model
   can reach). A case's ``truth_gap.json`` holds it; ``--truth-gap DIR ...`` computes it for
-  cases run without it.
+  cases run without it. Beside it, the cross-validated RMS frequency error of every paired mode
+  (:mod:`pipeline.diagnose.crossval`; the truth's own: its RMS over every paired mode, it fits
+  nothing): ``gap_shrinks_cross_validated`` counts a case when that RMS and the largest
+  off-diagonal both drop.
 
 Run ``python -m tests.pipeline.diagnose.truth.study [--structures frame x56 wingbox]
 [--kinds ...] [--seeds 10] [--first-seed 0] [--noise 0.01 0.05] [--frequency-only]
@@ -158,7 +161,11 @@ def score(truth: dict, result: dict, floor: dict | None = None) -> dict:
             "xo_after": gap("gap_after", "max_cross_orthogonality_offdiag"),
             "xo_truth": least("max_cross_orthogonality_offdiag"),
             "rms_expected": least("frequency_rms_held_out_expected"),
-            "n_held_out": least("n_held_out")}
+            "n_held_out": least("n_held_out"),
+            "cv_before": gap("gap_before", "frequency_rms_cross_validated"),
+            "cv_after": gap("gap_after", "frequency_rms_cross_validated"),
+            "cv_truth": least("frequency_rms"),                 # the truth fits nothing
+            "cv_expected": gap("gap_before", "frequency_rms_cross_validated_expected")}
 
 
 def _floor(folder: Path) -> dict | None:
@@ -284,6 +291,10 @@ def study_dataset(rows: list[dict]) -> xr.Dataset:
          "frequency_rms_held_out_expected": ("case", np.array(col["rms_expected"], float),
                                              {"units": "%"}),
          "n_held_out": ("case", np.array(col["n_held_out"], float)),
+         "frequency_rms_cross_validated": (("case", "when"), np.array(
+             [col["cv_before"], col["cv_after"], col["cv_truth"]], float).T, {"units": "%"}),
+         "frequency_rms_cross_validated_expected": ("case", np.array(col["cv_expected"], float),
+                                                    {"units": "%"}),
          "max_cross_orthogonality_offdiag": (("case", "when"), np.array(
              [col["xo_before"], col["xo_after"], col["xo_truth"]], float).T),
          "confusion": (("truth_kind_row", "named_kind_column"), confusion)},
@@ -303,13 +314,16 @@ def scores(ds: xr.Dataset) -> dict:
     lib = np.isin(truth, KINDS)
     right = lib & ds["kind_correct"].values
     rms, xo = ds["frequency_rms_held_out"].values, ds["max_cross_orthogonality_offdiag"].values
-    shrinks = (rms[:, 1] < rms[:, 0]) & ((xo[:, 1] < xo[:, 0]) | np.isnan(xo[:, 0]))
+    cv = ds["frequency_rms_cross_validated"].values
+    xo_drops = (xo[:, 1] < xo[:, 0]) | np.isnan(xo[:, 0])
+    shrinks = (rms[:, 1] < rms[:, 0]) & xo_drops
     return {"top1_kind_accuracy": _fraction(right[lib]),
             "location_accuracy": _fraction(ds["location_hit"].values[right]),
             "none_kept": _fraction(~np.isin(named[truth == "none"], KINDS)),
             "outside_not_named": _fraction(np.isin(named[truth == "outside"],
                                                    ("ambiguous", "unexplained"))),
             "gap_shrinks": _fraction(shrinks[right]),
+            "gap_shrinks_cross_validated": _fraction(((cv[:, 1] < cv[:, 0]) & xo_drops)[right]),
             "errors": int(np.sum(named == "error")), "cases": int(truth.size)}
 
 
@@ -326,7 +340,8 @@ def confusion_text(ds: xr.Dataset) -> str:
     lines.append("")
     lines += [f"{k}: {v:.3f}" if isinstance(v, float) else f"{k}: {v}" for k, v in ds.attrs.items()
               if k in ("top1_kind_accuracy", "location_accuracy", "none_kept",
-                       "outside_not_named", "gap_shrinks", "errors", "cases")]
+                       "outside_not_named", "gap_shrinks", "gap_shrinks_cross_validated",
+                       "errors", "cases")]
     lines.append(f"diagnose time per case: median {np.median(ds['seconds'].values):.1f} s, "
                  f"max {np.max(ds['seconds'].values):.1f} s")
     return "\n".join(lines)
@@ -341,29 +356,37 @@ def gap_text(ds: xr.Dataset) -> str:
     right = ds["kind_correct"].values & np.isin(ds["truth_kind"].values, KINDS)
     rms, xo = ds["frequency_rms_held_out"].values, ds["max_cross_orthogonality_offdiag"].values
     rms_drops, xo_drops = rms[:, 1] < rms[:, 0], (xo[:, 1] < xo[:, 0]) | np.isnan(xo[:, 0])
+    cv = ds["frequency_rms_cross_validated"].values
+    cv_drops = cv[:, 1] < cv[:, 0]
     quiet = rms[:, 0] <= held_out_upper(ds["frequency_rms_held_out_expected"].values,
                                          ds["n_held_out"].values)
     lines = [f"gap of the {int(right.sum())} correctly named cases (held-out RMS frequency error "
-             "%, largest cross-orthogonality off-diagonal; before -> after (the truth's own; "
-             "what noise and scatter alone give)):"]
+             "%, largest cross-orthogonality off-diagonal, cross-validated RMS frequency error "
+             "% of every paired mode; before -> after (the truth's own; what noise and scatter "
+             "alone give)):"]
     for i in np.flatnonzero(right):
         same = abs(xo[i, 1] - xo[i, 0]) < 0.5e-3                   # equal as printed
         marks = [m for m, ok in (("RMS up", rms_drops[i]),
                                  ("off-diagonal the same" if same else "off-diagonal up",
                                   xo_drops[i]),
-                                 ("held-out within noise before", not quiet[i])) if not ok]
+                                 ("held-out within noise before", not quiet[i]),
+                                 ("cross-validated RMS not down", cv_drops[i])) if not ok]
         lines.append(f"  {ds['structure'].values[i]:6s} {ds['truth_kind'].values[i]:18s} seed "
                      f"{int(ds['seed'].values[i]):3d}: {rms[i, 0]:6.2f} -> {rms[i, 1]:6.2f} "
                      f"({rms[i, 2]:5.2f}; "
                      f"{float(ds['frequency_rms_held_out_expected'].values[i]):5.2f})  "
                      f"{xo[i, 0]:.3f} -> {xo[i, 1]:.3f} ({xo[i, 2]:.3f})  "
+                     f"{cv[i, 0]:6.2f} -> {cv[i, 1]:6.2f} ({cv[i, 2]:5.2f}; "
+                     f"{float(ds['frequency_rms_cross_validated_expected'].values[i]):5.2f})  "
                      f"{', '.join(marks)}".rstrip())
     both = right & rms_drops & xo_drops
     lines.append(f"drops: RMS {int(np.sum(right & rms_drops))}, off-diagonal "
                  f"{int(np.sum(right & xo_drops))}, both {int(both.sum())} of {int(right.sum())}; "
                  f"of the {int(np.sum(right & ~both))} others, {int(np.sum(right & ~both & quiet))} "
                  "start with a held-out error within what noise and scatter alone give "
-                 f"({HELD_OUT_SIGMAS:g} standard deviations)")
+                 f"({HELD_OUT_SIGMAS:g} standard deviations); cross-validated RMS "
+                 f"{int(np.sum(right & cv_drops))}, it and the off-diagonal both "
+                 f"{int(np.sum(right & cv_drops & xo_drops))} of {int(right.sum())}")
     return "\n".join(lines)
 
 
