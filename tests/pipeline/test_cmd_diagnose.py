@@ -324,5 +324,7 @@ def test_example_hidden_effects_are_named(tmp_path, capsys):
     assert any(kind in ("member_curvature", "member_taper") and grids <= gear
                for kind, grids, _ in named)
     assert ("joint_flexibility", {5011, 5021, 5111, 5121}, {7501, 7601}) in named
-    for key in ("frequency_rms_held_out", "max_cross_orthogonality_offdiag"):
+    for key in ("frequency_rms_held_out", "max_cross_orthogonality_offdiag",
+                "frequency_rms_cross_validated"):
         assert record["gap_after"][key] < record["gap_before"][key], key
+    assert record["gap_after"]["n_cross_validated"] == 44         # 22 paired modes a loading

@@ -188,6 +188,7 @@ def test_quick_gap_shrinks_on_the_named_mass(quick_run):
     assert float(truth["max_cross_orthogonality_offdiag"][0]) < 0.1
     assert after["max_cross_orthogonality_offdiag"] < before["max_cross_orthogonality_offdiag"]
     assert after["frequency_rms_held_out"] < before["frequency_rms_held_out"]
+    assert after["frequency_rms_cross_validated"] < before["frequency_rms_cross_validated"]
 
 
 @pytest.mark.slow
