@@ -10,7 +10,8 @@
   thresholds -- top-1 kind accuracy >= 90 %, location (named element / grid or its neighbour)
   >= 80 % of the correctly named cases, no effect named on ``none`` data in >= 95 % of seeds,
   an effect outside the library never given a library name, and on every correctly named case
-  the held-out RMS frequency error and the largest cross-orthogonality off-diagonal both drop.
+  the held-out RMS frequency error (cross-validated: every paired mode held out once,
+  :mod:`pipeline.diagnose.crossval`) and the largest cross-orthogonality off-diagonal both drop.
   ``python -m tests.pipeline.diagnose.truth.study`` runs the same study and prints the matrix.
 """
 from __future__ import annotations
@@ -195,13 +196,15 @@ def test_quick_gap_shrinks_on_the_named_mass(quick_run):
 @pytest.mark.xfail(strict=True, reason=(
     "the issue's thresholds are not met (the gap). Measured per kind, seeds 0-9, at the commits "
     "the README names: frame top-1 48/50 (joints, masses, tapers, boundary 10/10, curvature "
-    "8/10), location 47/48, 'none' 10/10, 'outside' named 0/10, gap both drop 35/48 (joints "
-    "5/10, masses 8/10, tapers 8/10, boundary 8/10, curvature 6/8; 9 of the 13 misses start "
-    "within the noise-and-scatter level of the held-out modes); X-56 top-1 45/50 (joints, "
-    "masses, tapers 9/10, boundary 10/10, curvature 8/10), 'none' 10/10, 'outside' named 0/10, "
-    "gap both drop 27/27 (joints, masses, tapers) and 13/18 (boundary, curvature); wing box "
-    "(MYSTRAN truths) top-1 18/20 (masses 10/10, support springs 8/10), location 18/18, 'none' "
-    "10/10, gap both drop 17/18"))
+    "8/10), location 47/48, 'none' 10/10, 'outside' named 0/10; at 21af6b8 the cross-validated "
+    "RMS frequency error and the largest off-diagonal both drop in 42/48 (the off-diagonal "
+    "rises on joint seeds 3, 7, 8 and boundary seed 7, stays on curvature seed 2; taper seed 5's "
+    "cross-validated error rises 1.55 -> 1.65 %), the first split's held-out RMS with it 35/48; "
+    "X-56 top-1 45/50 (joints, masses, tapers 9/10, boundary 10/10, curvature 8/10), 'none' "
+    "10/10, 'outside' named 0/10, gap both drop 27/27 (joints, masses, tapers) and 13/18 "
+    "(boundary, curvature; 15/18 cross-validated, re-scored offline); wing box (MYSTRAN "
+    "truths) top-1 18/20 (masses 10/10, support springs 8/10), location 18/18, 'none' 10/10, "
+    "gap both drop 17/18 (18/18 cross-validated, re-scored offline)"))
 def test_full_blind_study(tmp_path):
     ds = run_study(STRUCTURES, TRUTH_KINDS, range(10), tmp_path, progress=None)
     print(confusion_text(ds))
@@ -211,4 +214,6 @@ def test_full_blind_study(tmp_path):
     assert ds.attrs["none_kept"] >= 0.95
     outside = ds["named_kind"].values[ds["truth_kind"].values == "outside"]
     assert not np.isin(outside, KINDS).any(), outside
-    assert ds.attrs["gap_shrinks"] == 1.0
+    print(gap_text(ds))
+    # the held-out RMS over every split, each mode's from a fit that did not see it
+    assert ds.attrs["gap_shrinks_cross_validated"] == 1.0
