@@ -622,13 +622,12 @@ def diagnose(configurations, settings: DiagnoseSettings = DiagnoseSettings(), *,
             records.append(EffectRecord(chosen.candidate, chosen.values, lead))
             effects.append((chosen.candidate, chosen.values))
             theta, none_evs = chosen.theta, chosen.evaluations
-    verdict = ("effect" if len(records) > suspension_effects(suspension)
-               else first)                                      # the structure's, not the test's
+    n_hung = suspension_effects(suspension)
+    verdict = "effect" if len(records) > n_hung else first      # the structure's, not the test's
     if records and (note := held_out_note(gap_before, gap_after)):
         notes.append(note)
     if records:
         _say(progress, "cross-validating the gap")
-        n_hung = suspension_effects(suspension)
         with threadpool_limits(limits=1):
             cv = cross_validated(problem, settings.holdout, gap_before, gap_after,
                                  effects[:n_hung], effects[n_hung:])
