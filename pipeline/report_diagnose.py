@@ -1,10 +1,11 @@
 """The report's diagnose section, from the run folder's ``diagnose/`` (no computation).
 
 :func:`diagnose_section` reads ``diagnose/diagnose.json`` (pipeline.diagnose.outputs) and shows the
-verdict, the named effects with their location and parameters, the ranked candidates, the gap
-before and after (frequency errors, MAC, cross-orthogonality, mass properties, flutter speed) with
-units, the notes, and the candidate-ranking and gap figures (``diagnose/*.png``) embedded. A run
-folder without ``diagnose/diagnose.json`` gives an empty section.
+verdict, the named effects with their location, parameters and what they add (deck units), the
+ranked candidates, the gap before and after (frequency errors, MAC, cross-orthogonality, mass
+properties, flutter speed) with units, the notes, and the candidate-ranking and gap figures
+(``diagnose/*.png``) embedded. A run folder without ``diagnose/diagnose.json`` gives an empty
+section.
 """
 from __future__ import annotations
 
@@ -60,9 +61,10 @@ def diagnose_section(run_dir, labels: UnitLabels) -> str:
            f"<p>Verdict: <b>{html.escape(str(record['verdict']))}</b>.</p>")
     effects = record.get("effects") or []
     if effects:
-        out += table(("round", "kind", "location", "parameters"), [
+        out += table(("round", "kind", "location", "parameters", "adds (deck units)"), [
             (i, e["kind"], _location(e.get("location")),
-             ", ".join(f"{k} = {_value(v)}" for k, v in (e.get("parameters") or {}).items()))
+             ", ".join(f"{k} = {_value(v)}" for k, v in (e.get("parameters") or {}).items()),
+             ", ".join(f"{k} = {_value(v)}" for k, v in (e.get("quantities") or {}).items()))
             for i, e in enumerate(effects, 1)], table_id="diagnose-effects")
     else:
         out += note("No effect was named, so the model is unchanged.")

@@ -295,7 +295,8 @@ def small_field_text(removed: dict, cards: list, header: str = "") -> str:
 
 
 def write_patched_deck(deck_in, deck_out, changes) -> Path:
-    """Write ``deck_in`` with the changes applied, large field, INCLUDEs merged.
+    """Write ``deck_in`` with the changes applied, large field, INCLUDEs merged (CELAS2 excepted:
+    pyNastran 1.4.1 writes it in small field, its stiffness to 7 significant digits).
 
     Parameters
     ----------

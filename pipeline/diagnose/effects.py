@@ -420,13 +420,13 @@ def _joint(model, candidate, x):
                              "every component a compliance > 0, or all 0 for the rigid joint.")
         c = x
     else:
-        c = _component_compliances(x)
+        c = component_compliances(x)
     k_ref = np.repeat([candidate.get("k_translation"), candidate.get("k_rotation")], 3)
     return flexible_joint(model, candidate.location.elements[0], k_ref / c,
                           candidate.get("dependent"))
 
 
-def _component_compliances(x) -> np.ndarray:
+def component_compliances(x) -> np.ndarray:
     """(6,) compliance per CBUSH component of a joint at (compliance, rotation):
     c_t = c 10^(-rotation / 2) three times, then c_r = c 10^(rotation / 2) three times."""
     split = 10.0 ** (0.5 * x[1])
@@ -455,7 +455,7 @@ def directional(candidate: Candidate, values) -> tuple[Candidate, np.ndarray]:
     if x[0] <= 0.0:
         raise InputError(f"candidate {candidate.label!r}: compliance {x[0]:g} is the rigid "
                          "joint, which has no directional form. Fix: pass a compliance > 0.")
-    c = _component_compliances(x)
+    c = component_compliances(x)
     lo, hi, ref = DIRECTIONAL_RANGE
     n = len(JOINT_DIRECTIONS)
     fields = {"parameters": JOINT_DIRECTIONS, "lower": (lo,) * n, "upper": (hi,) * n,

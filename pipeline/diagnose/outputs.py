@@ -190,9 +190,9 @@ def _parameters(parameters: dict) -> str:
 
 
 def verdict_summary(record: dict, velocity: str = "model units", top: int = 5) -> str:
-    """A few lines of a diagnosis' JSON record: the verdict, each named effect with its location
-    and parameters, the ``top`` candidates and the gap before -> after (``velocity``: the unit
-    of the flutter speed)."""
+    """A few lines of a diagnosis' JSON record: the verdict, each named effect with its location,
+    parameters and what it adds (``quantities``, deck units), the ``top`` candidates and the gap
+    before -> after (``velocity``: the unit of the flutter speed)."""
     lines = [f"verdict: {record['verdict']}"]
     n_hung = len((record.get("suspension") or {}).get("sites") or [])
     for i, effect in enumerate(record.get("effects") or [], 1):
@@ -200,6 +200,8 @@ def verdict_summary(record: dict, velocity: str = "model units", top: int = 5) -
                      f"{_parameters(effect.get('parameters'))}"
                      + (" (the test's suspension, from its suspension modes)" if i <= n_hung
                         else ""))
+        if effect.get("quantities"):
+            lines.append(f"    adds (deck units): {_parameters(effect['quantities'])}")
     candidates = list(record.get("candidates") or [])[:top]
     if candidates:
         lines.append(f"candidates (best {len(candidates)} of {len(record['candidates'])}, score: "

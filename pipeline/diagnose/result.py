@@ -13,6 +13,7 @@ import numpy as np
 import xarray as xr
 
 from pipeline.diagnose.mirror import site_values
+from pipeline.diagnose.quantities import quantities
 from structures.common.errors import InputError
 
 VERDICTS = ("effect", "none", "ambiguous", "unexplained")
@@ -76,20 +77,27 @@ def suspension_effects(suspension: Mapping | None) -> int:
 
 
 def effect_json(record: EffectRecord) -> dict:
-    """{"kind", "location", "parameters", "label", "score", "sites"} of a named effect.
+    """{"kind", "location", "parameters", "quantities", "label", "score", "sites"} of a named
+    effect.
 
-    ``sites`` lists the places it acts on, each with its ``location`` and ``parameters``: one for
-    a one-sided effect, two for a mirror pair (:mod:`pipeline.diagnose.mirror`; ``location`` is
-    then the union of both and ``parameters`` the first site's: a pair of masses adds
-    ``parameters["mass"]`` at each, twice in all).
+    ``parameters`` are relative to scales of the model of the effect's round
+    (:mod:`pipeline.diagnose.effects`); ``quantities`` is what they add to the model in deck units
+    (:mod:`pipeline.diagnose.quantities`: masses, spring stiffnesses, section factors, rises).
+    ``sites`` lists the places it acts on, each with its ``location``, ``parameters`` and
+    ``quantities``: one for a one-sided effect, two for a mirror pair
+    (:mod:`pipeline.diagnose.mirror`; ``location`` is then the union of both and ``parameters``
+    and ``quantities`` the first site's: a pair of masses adds ``parameters["mass"]`` at each,
+    twice in all).
     """
     cand = record.candidate
+    per_site = quantities(cand, record.values)
     return {"kind": cand.kind, "location": _location_dict(cand.location),
             "parameters": {name: float(v) for name, v in zip(cand.parameters, record.values)},
-            "label": cand.label, "score": float(record.score),
+            "quantities": per_site[0], "label": cand.label, "score": float(record.score),
             "sites": [{"location": _location_dict(site.location),
-                       "parameters": {name: float(v) for name, v in zip(site.parameters, x)}}
-                      for site, x in site_values(cand, record.values)]}
+                       "parameters": {name: float(v) for name, v in zip(site.parameters, x)},
+                       "quantities": q}
+                      for (site, x), q in zip(site_values(cand, record.values), per_site)]}
 
 
 def _clean(value):

@@ -153,6 +153,11 @@ def test_hidden_mass_is_named_and_the_gap_shrinks(folder, capsys):
     # (round-off up to 5e-6; 1.4e-6 measured), not to where the ranking refits stop (0.12 %)
     diagnosed = read_model(run / "base_diagnosed.bdf")
     assert mass_properties(diagnosed).mass == pytest.approx(sum(MASSES) + HIDDEN_MASS, rel=1e-5)
+    # what the JSON says the effect adds is the diagnosed deck's new CONM2s
+    added = ~np.isin(diagnosed.masses.eids, read_model(folder / "chain.bdf").masses.eids)
+    assert diagnosed.masses.mass[added].sum() == pytest.approx(
+        record["effect"]["quantities"]["mass"], rel=1e-12)
+    assert diagnosed.masses.mass[added].sum() == pytest.approx(HIDDEN_MASS, rel=1e-5)
     test = load_gvt(folder / "gvt.unv")["frequency"].values
     fe = compute_modes(diagnosed, 18)["frequency"].values[6:]
     np.testing.assert_allclose(fe, test, rtol=1e-5)

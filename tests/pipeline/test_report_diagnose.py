@@ -11,7 +11,8 @@ RECORD = {
     "effect": None,
     "effects": [{"kind": "joint_flexibility",
                  "location": {"grids": [5011, 5021], "elements": [5100], "properties": []},
-                 "parameters": {"compliance": 3.2}, "label": "RBE2 5100", "score": 42.0}],
+                 "parameters": {"compliance": 3.2}, "quantities": {"K1": 1.5e5, "K4": 2.0e3},
+                 "label": "RBE2 5100", "score": 42.0}],
     "candidates": [{"kind": "joint_flexibility", "label": "RBE2 5100", "score": 0.0,
                     "location": {"grids": [5011], "elements": [5100], "properties": []}},
                    {"kind": "lumped_mass", "label": "grid 3005", "score": 42.0,
@@ -37,7 +38,7 @@ def test_section_tables_with_units(tmp_path):
     page = diagnose_section(tmp_path, unit_labels("english_in"))
     assert "<b>effect</b>" in page
     assert ("<tr><td>1</td><td>joint_flexibility</td><td>grids: 5011, 5021; elements: 5100</td>"
-            "<td>compliance = 3.2</td></tr>") in page
+            "<td>compliance = 3.2</td><td>K1 = 1.5e+05, K4 = 2000</td></tr>") in page
     assert "<td>2</td><td>lumped_mass</td><td>grid 3005</td><td>grids: 3005</td><td>42</td>" in page
     velocity = unit_labels("english_in").velocity
     for row in (("frequency_rms_held_out", "%", "4.1", "0.8"), ("mac_min", "-", "0.62", "0.97"),

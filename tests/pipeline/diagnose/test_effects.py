@@ -28,16 +28,6 @@ from structures.mystran import mystran_executable
 X56 = Path(__file__).resolve().parents[3] / "data" / "x56_like" / "x56_efew.bdf"
 
 
-@pytest.fixture(scope="module")
-def x56():
-    return read_model(X56)
-
-
-@pytest.fixture(scope="module")
-def x56_candidates(x56):
-    return candidates(x56)
-
-
 def _deck(tmp_path, name, cards, params=()):
     text = "SOL 103\nCEND\nBEGIN BULK\n" + "".join(p + "\n" for p in params)
     text += "\n".join(card(*c) for c in cards) + "\nENDDATA\n"

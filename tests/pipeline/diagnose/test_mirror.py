@@ -1,26 +1,18 @@
 """Mirror-image pairs of candidates: a pair keeps a symmetric model symmetric (every grid keeps
 its image, every mode is symmetric or antisymmetric), one side or a wrong sign does not."""
 from dataclasses import replace
-from pathlib import Path
 
 import numpy as np
 import pytest
 
 from pipeline.diagnose.effects import apply_effect, candidates
 from pipeline.diagnose.mirror import mirror_grids, mirror_pairs, sites
-from structures.bdf import read_model
 from structures.massprops import mass_properties
 from structures.modal import compute_modes
 
-X56 = Path(__file__).resolve().parents[3] / "data" / "x56_like" / "x56_efew.bdf"
 #: Reflection y -> -y of a displacement: translations (components 1-3) as a vector, rotations
 #: (4-6) as a pseudo-vector (det R R).
 COMPONENT_SIGN = {1: 1.0, 2: -1.0, 3: 1.0, 4: -1.0, 5: 1.0, 6: -1.0}
-
-
-@pytest.fixture(scope="module")
-def x56():
-    return read_model(X56)
 
 
 @pytest.fixture(scope="module")
