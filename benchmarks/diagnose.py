@@ -26,8 +26,7 @@ sys.path.insert(0, str(REPO))
 sys.path.insert(0, str(REPO / "tests" / "structures"))
 
 from plate_decks import plate_deck  # noqa: E402
-from pipeline.diagnose import DiagnoseSettings, diagnose  # noqa: E402
-from pipeline.diagnose.workflow import ConfigurationData  # noqa: E402
+from pipeline.diagnose import ConfigurationData, DiagnoseSettings, diagnose  # noqa: E402
 from structures.bdf import read_model  # noqa: E402
 from structures.gvt import make_gvt_dataset  # noqa: E402
 from structures.massprops import mass_properties  # noqa: E402

@@ -1,7 +1,7 @@
 """``diagnose()``: name the effect a model is missing (DESIGN.md section 5, issue 14 steps 1-6).
 
-1. Preflight per configuration (:func:`pipeline.diagnose.evidence.build_reference`): analysis
-   modes (``settings.nmodes`` or 2 x test + 6), pairing (MAC assignment at the sensors, or nearest
+1. Preflight per configuration (:mod:`pipeline.diagnose.preflight`): analysis modes
+   (``settings.nmodes`` or 2 x test + 6), pairing (MAC assignment at the sensors, or nearest
    frequency without shapes), test self-orthogonality with the SEREP analysis mass, shape noise
    (the test shapes' part outside the analysis modes' span), mass-property residual.
 2. Residual vector with stated scales (:mod:`pipeline.diagnose.evidence`); every
@@ -39,150 +39,35 @@ make the verdict ``effect``.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
 from functools import cache
-from pathlib import Path
-from typing import Mapping
 
 import numpy as np
-import xarray as xr
 from threadpoolctl import threadpool_limits
 
 from pipeline.diagnose.calibrate import Problem, calibrate
 from pipeline.diagnose.crossval import cross_validated, cross_validated_note
 from pipeline.diagnose.detail import detailed
-from pipeline.diagnose.effects import KINDS, candidates, neighbours
-from pipeline.diagnose.evidence import SELF_ORTHOGONALITY_LIMIT, build_reference, chi_square
+from pipeline.diagnose.effects import candidates, neighbours
 from pipeline.diagnose.gap import (EQUIVALENT_SIGMAS, gap_metrics, held_out_note,
                                    indistinguishable, separating_measurement)
-from pipeline.diagnose.loadpath import best_load_path, load_path_measurement, outscores
+from pipeline.diagnose.loadpath import best_load_path, load_path_measurement
 from pipeline.diagnose.mirror import sites
-from pipeline.diagnose.predictive import held_out_evidence, held_out_modes, kept_modes
-from pipeline.diagnose.result import (CandidateScore, DiagnoseResult, EffectRecord,
-                                      suspension_effects)
+from pipeline.diagnose.predictive import held_out_modes
+from pipeline.diagnose.preflight import DiagnoseSettings, check_inputs, checked
+from pipeline.diagnose.result import DiagnoseResult, EffectRecord, suspension_effects
+from pipeline.diagnose.rounds import (against_path, chi2_split, none_fit, ranking_table,
+                                      round_record, score_rows)
 from pipeline.diagnose.screen import (bound_release, pick_for_refit, polish, refit, screen,
                                       signatures)
 from pipeline.diagnose.suspension import FIT_LIMIT, hung_data, identify
 from pipeline.diagnose.verdict import (SCATTER_SIGMAS, at_bound, decide, round_scores,
                                         within_scatter)
-from structures.common.errors import InputError
-from structures.massprops import check_measured_mass
-from structures.modal import compute_modes
-from structures.model import FEModel
-from structures.modes import elastic_index, rigid_index
-from structures.suspension import FREQUENCY_RATIO, RIGID_SHARE, without_suspension
-
-#: Rigid-body modes added to twice the test modes for the default analysis mode count.
-N_RIGID = 6
-
-
-@dataclass(frozen=True)
-class ConfigurationData:
-    """One tested configuration.
-
-    Attributes
-    ----------
-    name : str
-    model : FEModel, the analysis model (nominal).
-    gvt : xarray.Dataset, :mod:`structures.gvt` layout; ``shape`` may be absent (frequency-only).
-    measured_mass : mapping or None, :func:`structures.massprops.read_measured_mass` layout.
-    deck : Path, the deck (messages and :func:`pipeline.diagnose.effects.write_effect_deck`).
-    """
-
-    name: str
-    model: FEModel
-    gvt: xr.Dataset
-    measured_mass: Mapping | None
-    deck: Path
-
-    def __post_init__(self):
-        if not isinstance(self.model, FEModel):
-            raise InputError(f"diagnose: configuration {self.name!r}: model is a "
-                             f"{type(self.model).__name__}, not an FEModel. Fix: read the deck "
-                             "with structures.bdf.read_model.")
-        if not isinstance(self.gvt, xr.Dataset) or "frequency" not in self.gvt:
-            raise InputError(f"diagnose: configuration {self.name!r}: the GVT data has no "
-                             "frequency(mode). Fix: load it with structures.gvt.load_gvt.")
-        if self.measured_mass is not None:
-            object.__setattr__(self, "measured_mass", check_measured_mass(
-                self.measured_mass, f"configuration {self.name} measured mass"))
-        object.__setattr__(self, "deck", Path(self.deck))
-
-
-@dataclass(frozen=True)
-class DiagnoseSettings:
-    """Settings of :func:`diagnose`.
-
-    Attributes
-    ----------
-    kinds : effect kinds screened (:data:`pipeline.diagnose.effects.KINDS`).
-    max_effects : look-again rounds (effects named at most).
-    frequency_noise : test frequency standard deviation (fraction).
-    shape_noise : test shape noise per DOF relative to the shape's RMS; None: estimated.
-    holdout : every holdout-th paired mode (frequency order) of each configuration is held out.
-    margin : BIC margin to name one candidate over the runner-up and over "none".
-    refit : candidates refitted after the screening.
-    nmodes : analysis modes (None: 2 x elastic test modes + 6: suspension modes not counted).
-    model_scatter : relative scatter of the nominal section and mass properties that the few
-        nominal parameters cannot follow: every section quantity of every property card and
-        every CONM2 errs independently by it (:mod:`pipeline.diagnose.scatter`); it sets the
-        residual's covariance (its scales and the correlation between modes).
-    """
-
-    kinds: tuple = KINDS
-    max_effects: int = 3
-    frequency_noise: float = 0.01
-    shape_noise: float | None = None
-    holdout: int = 3
-    margin: float = 10.0
-    refit: int = 6
-    nmodes: int | None = None
-    model_scatter: float = 0.03
-
-    def __post_init__(self):
-        kinds = (self.kinds,) if isinstance(self.kinds, str) else tuple(self.kinds)
-        bad = [k for k in kinds if k not in KINDS]
-        if bad or not kinds:
-            raise InputError(f"diagnose: kinds {bad or '[]'} not in {list(KINDS)}. Fix: list some "
-                             "of them.")
-        object.__setattr__(self, "kinds", kinds)
-        for name, low in (("max_effects", 1), ("holdout", 2), ("refit", 1)):
-            value = getattr(self, name)
-            if not isinstance(value, (int, np.integer)) or value < low:
-                raise InputError(f"diagnose: {name} = {value!r} must be an integer >= {low}.")
-        for name in ("frequency_noise", "margin"):
-            value = getattr(self, name)
-            if not (isinstance(value, (int, float)) and np.isfinite(value) and value > 0):
-                raise InputError(f"diagnose: {name} = {value!r} must be a positive number.")
-        for name in ("shape_noise",):
-            value = getattr(self, name)
-            if value is not None and not (np.isfinite(value) and value > 0):
-                raise InputError(f"diagnose: {name} = {value!r} must be positive or None.")
-        if not (np.isfinite(self.model_scatter) and self.model_scatter >= 0):
-            raise InputError(f"diagnose: model_scatter = {self.model_scatter!r} must be >= 0.")
-        if self.nmodes is not None and not (isinstance(self.nmodes, (int, np.integer))
-                                            and self.nmodes > 0):
-            raise InputError(f"diagnose: nmodes = {self.nmodes!r} must be a positive integer.")
 
 
 # ------------------------------------------------------------------------------------ diagnose
 def _overlaps(a, b) -> bool:
     return bool(set(a.grids) & set(b.grids) or set(a.elements) & set(b.elements)
                 or set(a.properties) & set(b.properties))
-
-
-def _chi2_split(problem: Problem, fit) -> tuple:
-    """(chi2_modal, chi2_stated) of a refit: its training residual's modal rows and the rest
-    (:meth:`pipeline.diagnose.calibrate.Problem.modal_rows`); they sum to ``fit.chi2``."""
-    r, modal = problem.residual(fit.theta, fit.evaluations), problem.modal_rows()
-    return chi_square(r[modal]), chi_square(r[~modal])
-
-
-def _score_rows(problem: Problem, refits) -> list:
-    """The (kind, location, chi2_modal, chi2_stated, n_params) rows of refitted candidates that
-    :func:`pipeline.diagnose.verdict.decide` and :func:`round_scores` take."""
-    return [(f.candidate.kind, f.candidate.location, *_chi2_split(problem, f), f.n_params)
-            for f in refits]
 
 
 def _prefer_one_side(problem: Problem, theta, effects, rows, fits, none, n_data: int,
@@ -206,8 +91,8 @@ def _prefer_one_side(problem: Problem, theta, effects, rows, fits, none, n_data:
     n_modal = int(problem.modal_rows().sum())
 
     def scores(refits):
-        return round_scores((*_chi2_split(problem, none), none.n_params),
-                            _score_rows(problem, refits), n_data, n_modal=n_modal)[0]
+        return round_scores((*chi2_split(problem, none), none.n_params),
+                            score_rows(problem, refits), n_data, n_modal=n_modal)[0]
 
     best = int(np.argmin(scores(fits)))
     pair = fits[best].candidate
@@ -250,167 +135,6 @@ def _say(progress, text: str) -> None:
         progress(text)
 
 
-def preflight(configurations, settings: DiagnoseSettings = DiagnoseSettings()) -> tuple:
-    """Every data check of :func:`diagnose` that can fail, without calibration or screening.
-
-    Analysis modes of every configuration, pairing, enough elastic modes and sensor DOFs, the
-    shape-noise estimate, test self-orthogonality and the measured-mass residual scales (step 1
-    of the module docstring), so that a caller (the CLI) can reject bad data before any stage
-    runs.
-
-    Parameters
-    ----------
-    configurations : sequence of ConfigurationData
-    settings : DiagnoseSettings
-
-    Returns
-    -------
-    refs : tuple of :class:`pipeline.diagnose.evidence.Reference`, one per configuration.
-    notes : tuple of str, what the data can and cannot tell.
-
-    Raises
-    ------
-    InputError
-        No or repeated configurations, wrong settings, too few analysis modes or sensor DOFs.
-    """
-    configurations = tuple(configurations)
-    _check_inputs(configurations, settings)
-    refs, notes, _ = _checked(configurations, settings)
-    return refs, notes
-
-
-def _check_inputs(configurations: tuple, settings) -> None:
-    if not configurations:
-        raise InputError("diagnose: no configurations. Fix: give at least one ConfigurationData.")
-    names = [c.name for c in configurations]
-    if len(set(names)) != len(names):
-        raise InputError(f"diagnose: configuration names {names} repeat. Fix: name each once.")
-    if not isinstance(settings, DiagnoseSettings):
-        raise InputError("diagnose: settings must be a DiagnoseSettings.")
-
-
-def _checked(configurations, settings) -> tuple:
-    """(refs, notes, hung) of :func:`preflight`, ``hung`` each configuration's suspension modes
-    (a GVT Dataset, or None)."""
-    notes: list = []
-    hung: list = []
-    with threadpool_limits(limits=1):
-        refs = _preflight(configurations, settings, notes, hung)
-    return tuple(refs), tuple(notes), tuple(hung)
-
-
-def _preflight(configurations, settings: DiagnoseSettings, notes: list, hung: list):
-    """The references of :func:`preflight`; ``hung`` receives each configuration's suspension
-    modes (a GVT Dataset, or None; attribute ``n_rigid``: the model's rigid-body modes)."""
-    refs = []
-    for rotation, data in enumerate(configurations):
-        nmodes = settings.nmodes or 2 * data.gvt.sizes["mode"] + N_RIGID
-        modes = compute_modes(data.model, nmodes)
-        gvt, suspended = _without_suspension(data, modes, notes)
-        if settings.nmodes is None and suspended is not None:
-            nmodes = 2 * gvt.sizes["mode"] + N_RIGID          # counted on the elastic test modes
-            modes = modes.isel(mode=slice(0, nmodes))
-        hung.append(suspended if suspended is None else
-                    suspended.assign_attrs(n_rigid=int(rigid_index(modes).size)))
-        n_test = gvt.sizes["mode"]
-        if elastic_index(modes).size < n_test:
-            raise InputError(f"diagnose: configuration {data.name}: {n_test} test modes but only "
-                             f"{elastic_index(modes).size} elastic analysis modes. Fix: raise "
-                             "[diagnose] nmodes.")
-        ref, facts = build_reference(
-            data.name, data.model, gvt, data.measured_mass, modes,
-            frequency_noise=settings.frequency_noise,
-            shape_noise_value=settings.shape_noise, model_scatter=settings.model_scatter,
-            holdout=settings.holdout, nmodes=nmodes, rotation=rotation)
-        refs.append(ref)
-        if ref.has_shapes:
-            notes.append(f"{data.name}: {n_test} test modes, {ref.sensor_index.size} sensor DOFs, "
-                         f"shape noise {100 * facts['shape_noise']:.1f} % of the RMS (median), "
-                         f"test self-orthogonality largest off-diagonal "
-                         f"{_rounded(facts['self_orthogonality'])}, "
-                         f"paired MAC min {min(facts['mac']):.2f}.")
-            if facts["unmatched"]:
-                notes.append(f"{data.name}: test modes {facts['unmatched']} have no counterpart "
-                             "among the analysis modes (their shapes lie outside the modes' span "
-                             "at the sensors): a local mode the model lacks.")
-            if facts["self_orthogonality"] is not None and \
-                    facts["self_orthogonality"] > SELF_ORTHOGONALITY_LIMIT:
-                notes.append(f"{data.name}: the test modes are not orthogonal in the analysis mass "
-                             f"(largest off-diagonal {facts['self_orthogonality']:.2f}): noisy or "
-                             "aliased shapes, or a mass distribution the model lacks.")
-        else:
-            notes.append(f"{data.name}: frequency-only data ({n_test} modes): paired by nearest "
-                         "frequency; the shapes cannot tell where along a symmetric structure, "
-                         "nor a member from a joint at one spot.")
-        if not ref.mass_scale:
-            notes.append(f"{data.name}: no measured mass properties: a missing mass is seen only "
-                         "through the frequencies.")
-    return refs
-
-
-def _without_suspension(data, modes: xr.Dataset, notes: list) -> tuple:
-    """(the configuration's test modes without its suspension modes, the suspension modes or
-    None) (:func:`structures.suspension.without_suspension`: shapes at the sensors, placed at
-    the model's grids, that are rigid-body motions below the lowest elastic analysis frequency;
-    frequency-only, modes below ``FREQUENCY_RATIO`` of it), set aside with a note. Only a model
-    with rigid-body modes is hung on a suspension: a clamped one keeps every test mode."""
-    gvt = data.gvt
-    position = None
-    if "shape" in gvt:
-        grids = data.model.grids
-        position = grids.xyz[grids.index(gvt["grid"].values, card="GVT sensor grid",
-                                         filename=gvt.attrs.get("source") or None)]
-    try:
-        kept, hung = without_suspension(modes, gvt, position=position)
-    except InputError as exc:
-        raise InputError(f"configuration {data.name}: {exc}") from None
-    if not hung.sizes["mode"]:
-        return gvt, None
-    f_fe = modes["frequency"].values[elastic_index(modes)]
-    f = hung["frequency"].values
-    why = (f"their shapes are rigid-body motions at the sensors (at least {100 * RIGID_SHARE:.0f} "
-           f"% of each shape) below the lowest elastic analysis frequency, {f_fe.min():.3g} Hz"
-           if "shape" in gvt else
-           f"below {FREQUENCY_RATIO:g} x the lowest elastic analysis frequency, "
-           f"{f_fe.min():.3g} Hz")
-    notes.append(f"{data.name}: test modes {hung['mode'].values.tolist()} ({f.min():.3g}-"
-                 f"{f.max():.3g} Hz) are "
-                 f"suspension modes, {why}: left out of the pairing (no elastic mode of the "
-                 "model matches them); with shapes they identify the suspension.")
-    return kept, hung
-
-
-def _rounded(value):
-    """``value`` to 3 decimals, None as it is."""
-    return None if value is None else round(value, 3)
-
-
-def _table(problem: Problem, r0, rows, refits, none, n_data: int, n_candidates: int) -> tuple:
-    """The first round's ranked candidates by the scores :func:`decide` compared
-    (:func:`round_scores`: refitted ones from their refit, the rest from their linearised
-    residual r0 + S x (:class:`pipeline.diagnose.screen.Screened`: S x is the residual's change
-    at x for every kind) with the same modal dispersion c, "none" with its prior odds), minus
-    the best."""
-    modal = problem.modal_rows()
-    scores, none_score, c = round_scores((*_chi2_split(problem, none), none.n_params),
-                                         _score_rows(problem, refits), n_data, n_candidates,
-                                         n_modal=int(modal.sum()))
-    scored = [(b, fit.candidate, True) for b, fit in zip(scores, refits)]
-    done = {id(fit.candidate) for fit in refits}
-    for row in rows:
-        if id(row.candidate) not in done:
-            p = len(row.candidate.parameters) + problem.n_theta
-            r = r0 + row.signature @ row.values                              # linearised residual
-            scored.append((chi_square(r[modal]) / c + chi_square(r[~modal]) + p * np.log(n_data),
-                           row.candidate, False))
-    scored.append((none_score, None, True))
-    scored.sort(key=lambda s: s[0])
-    best = scored[0][0]
-    return tuple(CandidateScore(c.kind if c else "none", c.location.as_dict() if c else
-                                {"grids": [], "elements": [], "properties": []}, float(b - best),
-                                c.label if c else "nothing missing", refitted)
-                 for b, c, refitted in scored)
-
 
 def diagnose(configurations, settings: DiagnoseSettings = DiagnoseSettings(), *,
              progress=None) -> DiagnoseResult:
@@ -430,8 +154,8 @@ def diagnose(configurations, settings: DiagnoseSettings = DiagnoseSettings(), *,
     """
     configurations = tuple(configurations)
     t0 = time.perf_counter()
-    _check_inputs(configurations, settings)
-    refs, notes, hung = _checked(configurations, settings)
+    check_inputs(configurations, settings)
+    refs, notes, hung = checked(configurations, settings)
     notes = list(notes)
     with threadpool_limits(limits=1):
         problem = Problem.build(refs, [c.model for c in configurations], settings.model_scatter)
@@ -472,7 +196,7 @@ def diagnose(configurations, settings: DiagnoseSettings = DiagnoseSettings(), *,
             rows = screen(r0, signed)
             _say(progress, f"round {k + 1}: refitting")
             none = refit(problem, theta, effects, None, n_data=n_data,
-                         jacobian_theta=cal.jacobian) if effects else _none_fit(problem, cal,
+                         jacobian_theta=cal.jacobian) if effects else none_fit(problem, cal,
                                                                                 n_data)
             fits = [refit(problem, theta, effects, row, n_data=n_data, jacobian_theta=cal.jacobian)
                     for row in pick_for_refit(rows, settings.refit)]
@@ -496,7 +220,7 @@ def diagnose(configurations, settings: DiagnoseSettings = DiagnoseSettings(), *,
 
             modes_none, entries = held_out_modes(problem, none.evaluations)
             modes = [held_out_modes(problem, f.evaluations)[0] for f in fits]
-            scored = ((*_chi2_split(problem, none), none.n_params), _score_rows(problem, fits),
+            scored = ((*chi2_split(problem, none), none.n_params), score_rows(problem, fits),
                       int(problem.modal_rows().sum()))
             alike = cache(lambda i, j: indistinguishable(problem, fits[i], fits[j]))
             verdict, best, runner, lead, reason, c = decide(
@@ -534,13 +258,13 @@ def diagnose(configurations, settings: DiagnoseSettings = DiagnoseSettings(), *,
                                     if outward else "moves it inward)."))
             if verdict == "effect":
                 found = best_load_path(problem, theta, effects, none_evs, r0)
-                verdict, path = _against_path(found, problem, scored, best, n_data, len(cands),
+                verdict, path = against_path(found, problem, scored, best, n_data, len(cands),
                                               settings.margin)
                 rich = (detailed(problem, effects, fits[best], n_data=n_data,
                                  jacobian_theta=cal.jacobian) if verdict == "ambiguous" else None)
                 if rich is not None:
-                    row = _score_rows(problem, [rich])
-                    again = _against_path(found, problem, (scored[0], scored[1][:best] + row +
+                    row = score_rows(problem, [rich])
+                    again = against_path(found, problem, (scored[0], scored[1][:best] + row +
                                                            scored[1][best + 1:], scored[2]),
                                           best, n_data, len(cands), settings.margin)
                     notes.append(f"round {k + 1}: {fits[best].candidate.kind} "
@@ -554,7 +278,7 @@ def diagnose(configurations, settings: DiagnoseSettings = DiagnoseSettings(), *,
                         verdict, path = again
                         fits[best] = rich
                         modes[best] = held_out_modes(problem, rich.evaluations)[0]
-            rounds.append(_round_record(k, verdict, fits, best, runner, none,
+            rounds.append(round_record(k, verdict, fits, best, runner, none,
                                         (modes_none, modes, entries), n_data, scored + (c,),
                                         path, same, reason=reason, margin=settings.margin))
             if path is not None and verdict in ("unexplained", "ambiguous"):
@@ -587,7 +311,7 @@ def diagnose(configurations, settings: DiagnoseSettings = DiagnoseSettings(), *,
                              "check.")
             if k == 0:
                 first = verdict
-                table = _table(problem, r0, rows, fits, none, n_data, len(cands))
+                table = ranking_table(problem, r0, rows, fits, none, n_data, len(cands))
             if verdict == "ambiguous" and not effects:
                 separating = (load_path_measurement(fits[best].candidate, path[0])
                               if path is not None else
@@ -721,77 +445,3 @@ def _suspension_note(best, fits, margin: float) -> str:
             + (f"; {', '.join(rivals)} fit within the margin {margin:g}: where the suspension "
                "acts is not certain." if rivals else "."))
 
-
-def _none_fit(problem: Problem, cal, n_data: int):
-    from pipeline.diagnose.evidence import bic
-    from pipeline.diagnose.screen import Refitted
-
-    return Refitted(None, np.zeros(0), cal.theta, cal.chi2, bic(cal.chi2, len(cal.theta), n_data),
-                    len(cal.theta), cal.evaluations)
-
-
-def _against_path(found, problem: Problem, scored, best: int, n_data: int, n_candidates: int,
-                  margin: float) -> tuple:
-    """(verdict, (LoadPath, its score, the named effect's score) or None): "unexplained" when the
-    best load path ``found`` (:func:`pipeline.diagnose.loadpath.best_load_path`, None: no path)
-    beats the named effect (fit ``best`` of the round's ``scored`` rows) by the margin,
-    "ambiguous" when neither beats the other by it, else "effect"; both scored at the modal
-    dispersion of those rows (:func:`pipeline.diagnose.verdict.round_scores`)."""
-    if found is None:
-        return "effect", None
-    scores, _, c = round_scores(scored[0], scored[1], n_data, n_candidates, n_modal=scored[2])
-    beats, score = outscores(found, float(scores[best]), problem.modal_rows(), c,
-                             problem.n_theta, n_data, n_candidates, margin)
-    named = float(scores[best])
-    verdict = "unexplained" if beats else ("effect" if named + margin < score else "ambiguous")
-    return verdict, (found, score, named)
-
-
-def _round_record(k: int, verdict: str, fits, best, runner, none, held_out, n_data: int,
-                  scored, path=None, alike=(), *, reason: str = "", margin: float = np.inf
-                  ) -> dict:
-    """The JSON record of round k (:class:`pipeline.diagnose.result.DiagnoseResult` ``rounds``).
-
-    ``held_out`` is (modes_none, per fit modes, entries) of
-    :func:`pipeline.diagnose.predictive.held_out_modes`; ``scored`` is (the "none" row, the fits'
-    rows, n_modal, c) that :func:`pipeline.diagnose.verdict.decide` took and returned (rows
-    (..., chi2_modal, chi2_stated, n_params), c the modal dispersion); ``path`` is
-    (LoadPath, its score, the named effect's score) of :func:`_against_path`, or None when
-    the round named nothing; ``alike`` the labels of the fits that predict the same data as the
-    best (:func:`pipeline.diagnose.gap.indistinguishable`); ``reason`` as
-    :func:`pipeline.diagnose.verdict.decide` gave it; ``vetoed`` lists the fits whose held-out
-    evidence is below -``margin``.
-    """
-    modes_none, modes, entries = held_out
-    none_row, rows, n_modal, c = scored
-
-    def entry(i):
-        if i is None:
-            return None
-        f = fits[i]
-        return {"kind": f.candidate.kind, "label": f.candidate.label, "bic": f.bic,
-                "chi2": f.chi2, "chi2_modal": rows[i][2], "n_params": f.n_params,
-                "held_out_chi2": float(modes[i].sum()),
-                "held_out_modes_chi2": modes[i].tolist(),
-                "held_out_modes_kept": kept_modes(modes_none, modes[i], entries).tolist(),
-                "held_out_evidence": held_out_evidence(modes_none, modes[i], entries, c),
-                "parameters": dict(zip(f.candidate.parameters, map(float, f.values)))}
-    fitted = [entry(i) for i in range(len(fits))]
-    return {"round": k + 1, "verdict": verdict, "reason": reason,
-            "vetoed": [e["label"] for e in fitted if e["held_out_evidence"] < -margin],
-            "n_data": n_data, "n_modal": n_modal,
-            "dispersion": c,
-            "n_held_out": int(np.sum(entries)), "held_out_modes_entries": entries.tolist(),
-            "none_bic": none.bic,
-            "none_chi2": none.chi2, "none_chi2_modal": none_row[0],
-            "none_n_params": none.n_params,
-            "none_held_out_chi2": float(modes_none.sum()),
-            "none_held_out_modes_chi2": modes_none.tolist(),
-            "gap": None, "nominal": None, "detailed": None, "best": entry(best),
-            "runner_up": entry(runner),
-            "alike": list(alike),
-            "fits": fitted,
-            "load_path": None if path is None else {
-                "grids": list(path[0].grids), "stiffness": path[0].stiffness,
-                "chi2": chi_square(path[0].residual), "n_pairs": path[0].n_pairs,
-                "score": path[1], "named_score": path[2]}}

@@ -18,7 +18,8 @@ from pipeline.diagnose import DiagnoseSettings, diagnose, preflight
 from pipeline.diagnose.inputs import configurations_from_case, settings_from_case
 from pipeline.diagnose.verdict import decide
 from pipeline.diagnose.mirror import sites
-from pipeline.diagnose.workflow import _chi2_split, _round_record, _table, unnamed
+from pipeline.diagnose.rounds import chi2_split, ranking_table, round_record
+from pipeline.diagnose.workflow import unnamed
 from structures.bdf import read_model
 from structures.common.errors import InputError
 from structures.common.files import read_dataset, write_dataset
@@ -198,7 +199,7 @@ def test_published_ranking_is_the_one_that_decided():
     rows = [SimpleNamespace(candidate=x, signature=step[:, None] * k, values=np.array([1.0]))
             for x, k in ((a, 0.5), (b, 0.5), (c, 1.0))]
     none = SimpleNamespace(theta=None, evaluations=r0, chi2=540.0, n_params=2)
-    table = _table(problem, r0, rows, refits, none, 100, 10)
+    table = ranking_table(problem, r0, rows, refits, none, 100, 10)
     hand = {"lumped_mass": 0.0, "member_taper": 74.0, "boundary_stiffness": 23.0,
             "none": 144.0 - log(100.0) - 2.0 * log(10.0)}
     assert [t.kind for t in table] == ["lumped_mass", "boundary_stiffness", "member_taper",
@@ -240,7 +241,7 @@ def test_chi2_split_separates_the_modal_rows():
     modal = problem.modal_rows()
     assert modal.tolist() == [True] * 6 + [False] * 2 + [True, False]
     fit = SimpleNamespace(theta=np.array([0.05, 0.04]), evaluations=evs)
-    assert _chi2_split(problem, fit) == (pytest.approx(32.0, rel=1e-12),
+    assert chi2_split(problem, fit) == (pytest.approx(32.0, rel=1e-12),
                                          pytest.approx(29.0, rel=1e-12))
 
 
@@ -261,7 +262,7 @@ def test_round_record_judges_held_out_modes_on_the_training_dispersion():
     none_row, rows = (1980.0, 20.0, 2), [("lumped_mass", 1, 774.0, 20.0, 3),
                                         ("lumped_mass", 2, 1000.0, 0.0, 3)]
     *_, c = decide(none_row, rows, 10.0, _never_near, 400, n_modal=390, held_out=held)
-    record = _round_record(0, "effect", [fit("A", 794.0), fit("B", 1000.0)], 0, 1, none, held,
+    record = round_record(0, "effect", [fit("A", 794.0), fit("B", 1000.0)], 0, 1, none, held,
                            400, (none_row, rows, 390, c))
     assert record["dispersion"] == pytest.approx(2.0, rel=1e-12)
     assert (record["n_modal"], record["none_chi2_modal"]) == (390, 1980.0)
@@ -308,7 +309,7 @@ def test_a_pair_is_named_only_when_it_beats_its_side_alone_by_the_margin(monkeyp
     against 382.1 for one of its sides, same parameter count, 375 modal rows (c = 1): the lead
     8.3 < 10, so the pair is left out and the side (refitted here, it was not among the fits)
     stays; a pair at 340.0 leads by 42 and stays, the side's fit added beside it."""
-    from pipeline.diagnose import workflow
+    from pipeline.diagnose import rounds, workflow
     from pipeline.diagnose.mirror import _pair
     from pipeline.diagnose.screen import Screened
 
@@ -324,7 +325,8 @@ def test_a_pair_is_named_only_when_it_beats_its_side_alone_by_the_margin(monkeyp
         return SimpleNamespace(candidate=cand, chi2=chi2, n_params=3)
 
     problem = SimpleNamespace(modal_rows=lambda: np.ones(375, bool))
-    monkeypatch.setattr(workflow, "_chi2_split", lambda problem, f: (f.chi2, 0.0))
+    for module in (workflow, rounds):
+        monkeypatch.setattr(module, "chi2_split", lambda problem, f: (f.chi2, 0.0))
     refitted = []
 
     def refit(problem, theta, effects, row, **kw):

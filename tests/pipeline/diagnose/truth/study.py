@@ -91,7 +91,7 @@ def truth_gap(case_toml: Path, decks: Path, *, frequency_only: bool = False) -> 
     from pipeline.diagnose.evidence import evaluate
     from pipeline.diagnose.gap import gap_metrics
     from pipeline.diagnose.inputs import settings_from_case
-    from pipeline.diagnose.workflow import preflight
+    from pipeline.diagnose import preflight
     from structures.bdf import read_model
 
     case = read_case(case_toml)
