@@ -140,8 +140,9 @@ class DiagnoseResult:
         effects (``gap_before``'s model).
     rounds : tuple of mapping, per look-again round: its ``verdict`` and the ``reason``
         (:func:`pipeline.diagnose.verdict.decide`: ``gain``, ``no_gain``, ``runner_up``,
-        ``held_out`` or ``past_veto``, the last when the held-out modes contradicted the best
-        fit and took part in naming the next; before the load path and bound checks, which can
+        ``held_out``, ``past_veto`` or ``held_out_reversal``, the last two when the held-out
+        modes took part in naming (past a veto of the best, or reversing the training
+        ranking); before the load path and bound checks, which can
         still turn an ``effect`` into ``unexplained``), ``vetoed`` (the labels of the fits
         the held-out modes contradict by more than the margin), ``n_data`` (training
         residuals), ``n_modal`` (the modal ones among them: frequencies and shapes),

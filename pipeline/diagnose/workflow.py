@@ -52,7 +52,7 @@ from pipeline.diagnose.gap import (EQUIVALENT_SIGMAS, gap_metrics, held_out_note
                                    indistinguishable, separating_measurement)
 from pipeline.diagnose.loadpath import best_load_path, load_path_measurement
 from pipeline.diagnose.mirror import sites
-from pipeline.diagnose.predictive import held_out_modes
+from pipeline.diagnose.predictive import held_out_evidence, held_out_modes
 from pipeline.diagnose.preflight import DiagnoseSettings, check_inputs, checked
 from pipeline.diagnose.result import DiagnoseResult, EffectRecord, suspension_effects
 from pipeline.diagnose.rounds import (against_path, chi2_split, none_fit, ranking_table,
@@ -60,8 +60,8 @@ from pipeline.diagnose.rounds import (against_path, chi2_split, none_fit, rankin
 from pipeline.diagnose.screen import (bound_release, pick_for_refit, polish, refit, screen,
                                       signatures)
 from pipeline.diagnose.suspension import FIT_LIMIT, hung_data, identify
-from pipeline.diagnose.verdict import (SCATTER_SIGMAS, at_bound, decide, round_scores,
-                                        within_scatter)
+from pipeline.diagnose.verdict import (SCATTER_SIGMAS, at_bound, decide, preference,
+                                        round_scores, within_scatter)
 
 
 # ------------------------------------------------------------------------------------ diagnose
@@ -309,6 +309,10 @@ def diagnose(configurations, settings: DiagnoseSettings = DiagnoseSettings(), *,
                              f"(evidence {named['held_out_evidence']:+.1f}): named. The held-out "
                              "modes took part in naming it, so its gap on them is no blind "
                              "check.")
+            if reason == "held_out_reversal":
+                notes.append(_reversal_note(k, fits, best, runner, lead, scored, n_data,
+                                            len(cands), (modes_none, modes, entries), c,
+                                            verdict))
             if k == 0:
                 first = verdict
                 table = ranking_table(problem, r0, rows, fits, none, n_data, len(cands))
@@ -370,6 +374,27 @@ def diagnose(configurations, settings: DiagnoseSettings = DiagnoseSettings(), *,
                           rounds=tuple(rounds),
                           calibrated={n: float(t) for n, t in zip(problem.names, cal.theta)},
                           suspension=suspension)
+
+
+def _reversal_note(k: int, fits, best: int, runner, lead: float, scored, n_data: int,
+                   n_candidates: int, held_out, c: float, verdict: str) -> str:
+    """The note of a round whose held-out modes reversed the training ranking
+    (:func:`pipeline.diagnose.verdict.decide`, reason ``held_out_reversal``)."""
+    scores = round_scores(scored[0], scored[1], n_data, n_candidates, n_modal=scored[2])[0]
+    trained = int(np.argmin(scores))
+    b, a = fits[trained].candidate, fits[best].candidate
+    held = held_out_evidence(held_out[1][trained], held_out[1][best], held_out[2], c)
+    text = (f"round {k + 1}: the training modes prefer {b.kind} {b.label} to {a.kind} "
+            f"{a.label} by {scores[best] - scores[trained]:.1f}, the held-out modes prefer the "
+            f"latter by {held:.1f} (on the modes either reproduces): together by "
+            f"{preference(scores, held_out, c, trained, best):.1f}, more than the margin. ")
+    if verdict != "effect" or runner is None:
+        return text + (f"{a.kind} {a.label} is not named ({verdict})." if verdict != "effect"
+                       else f"{a.kind} {a.label} named. The held-out modes took part in naming "
+                       "it, so its gap on them is no blind check.")
+    return text + (f"{a.kind} {a.label} beats its rivals on all the modes by {lead:.1f} "
+                   f"({fits[runner].candidate.label} the closest): named. The held-out modes "
+                   "took part in naming it, so its gap on them is no blind check.")
 
 
 def _suspension(configurations, refs, hung, settings: DiagnoseSettings, problem: Problem,

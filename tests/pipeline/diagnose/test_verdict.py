@@ -135,6 +135,36 @@ def test_past_a_veto_the_next_fit_is_named_only_when_the_held_out_modes_support_
     assert near[3] == pytest.approx(200.0 - LN, rel=1e-12)
 
 
+def test_held_out_modes_that_reverse_the_training_ranking_name_the_other_fit():
+    """Training scores (c = max(1, 370 / 397) = 1, p = 3): joint 370, mass 400, taper 450,
+    "none" 600. Three held-out modes of 10 entries (limit 29.588, all kept), "none" 20, 25, 28
+    (73), the joint 18, 24, 27 (69: evidence +4, not contradicted), the taper as "none".
+    A mass at 8, 10, 12 (30) gains 39 on the joint in the held-out modes, less its 30 in
+    training: 9, within the margin, so the joint is named (gain). A mass at 5, 6, 7 (18) gains
+    51 - 30 = 21 > 10, is supported (evidence 55) and beats "none" in training: the held-out
+    modes reverse the ranking; it beats its rivals on all the modes (the joint by 21, the taper
+    by 55 + 50 = 105): named, the joint its runner-up. A spring at 6, 6, 7 (19), training 402,
+    is within 3 of the mass ((19 - 18) + (402 - 400)): ambiguous, the spring its runner-up."""
+    entries = np.array([10, 10, 10])
+    none_modes, joint = np.array([20.0, 25.0, 28.0]), np.array([18.0, 24.0, 27.0])
+    table = [("joint_flexibility", 1, 370.0, 0.0, 3), ("lumped_mass", 2, 400.0, 0.0, 3),
+             ("member_taper", 3, 450.0, 0.0, 3)]
+
+    def verdict(mass, extra=()):
+        modes = [joint, np.array(mass), none_modes] + [np.array(m) for _, m in extra]
+        return decide((600.0, 0.0, 2), table + [row for row, _ in extra], 10.0, _never_near, N,
+                      n_modal=N, held_out=(none_modes, modes, entries))
+
+    assert verdict([8.0, 10.0, 12.0])[::4] == ("effect", "gain")
+    v, best, runner, lead, reason, c = verdict([5.0, 6.0, 7.0])
+    assert (v, best, runner, reason, c) == ("effect", 1, 0, "held_out_reversal", 1.0)
+    assert lead == pytest.approx(21.0, rel=1e-12)
+    spring = (("boundary_stiffness", 4, 402.0, 0.0, 3), [6.0, 6.0, 7.0])
+    v, best, runner, lead, reason, _ = verdict([5.0, 6.0, 7.0], [spring])
+    assert (v, best, runner, reason) == ("ambiguous", 1, 3, "held_out_reversal")
+    assert lead == pytest.approx(3.0, rel=1e-12)
+
+
 def test_a_held_out_mode_neither_model_reproduces_does_not_veto():
     """Mode 2 is a local mode both models pair with the wrong analysis mode (chi^2 3000 and
     5000 > 29.588): summed, the evidence would be (3020 - 5018) / 1 = -1998 (c = 1), a veto;
