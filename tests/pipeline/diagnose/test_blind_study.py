@@ -202,9 +202,9 @@ def test_quick_gap_shrinks_on_the_named_mass(quick_run):
     "cross-validated error rises 1.55 -> 1.65 %), the first split's held-out RMS with it 35/48; "
     "X-56 top-1 46/50 (joints 9/10, masses 10/10, tapers 9/10, boundary 10/10, curvature "
     "8/10), 'none' 10/10, 'outside' named 0/10, gap both drop 27/27 (joints, masses, tapers) "
-    "and 13/18 (boundary, curvature; 15/18 cross-validated, re-scored offline; rerun, joint, "
-    "mass and taper seeds 5-9 and the cases the held-out reversal touches: the 18 named right "
-    "18/18 cross-validated); wing box (MYSTRAN "
+    "and 13/18 (boundary, curvature; 15/18 cross-validated, re-scored offline; run again, "
+    "joint, mass and taper seeds 0-9 and boundary seeds 0 and 6: the 30 named right 30/30 "
+    "cross-validated); wing box (MYSTRAN "
     "truths) top-1 18/20 (masses 10/10, support springs 8/10), location 18/18, 'none' 10/10, "
     "gap both drop 17/18 (18/18 cross-validated, re-scored offline)"))
 def test_full_blind_study(tmp_path):
