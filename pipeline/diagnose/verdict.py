@@ -306,12 +306,12 @@ def _reversed(best, runner, lead, scores, none_score, evidence, held_out, c, mar
     ``effect`` for it (``gain``), unless the held-out modes reverse the training ranking
     (``held_out_reversal``, :func:`decide`'s notes)."""
     n = len(scores)
-    reversing = [j for j in range(n) if j != best and evidence[j] > margin
-                 and scores[j] + margin < none_score
-                 and preference(scores, held_out, c, best, j) > margin]
+    over_best = {j: preference(scores, held_out, c, best, j) for j in range(n)
+                 if j != best and evidence[j] > margin and scores[j] + margin < none_score}
+    reversing = {j: p for j, p in over_best.items() if p > margin}
     if not reversing:
         return "effect", best, runner, lead, "gain", c
-    alt = max(reversing, key=lambda j: preference(scores, held_out, c, best, j))
+    alt = max(reversing, key=reversing.get)
     leads = {k: preference(scores, held_out, c, k, alt) for k in rivals(alt, range(n))}
     alt_runner = min(leads, key=leads.get) if leads else None
     alt_lead = leads[alt_runner] if leads else float("inf")

@@ -388,13 +388,12 @@ def _reversal_note(k: int, fits, best: int, runner, lead: float, scored, n_data:
             f"{a.label} by {scores[best] - scores[trained]:.1f}, the held-out modes prefer the "
             f"latter by {held:.1f} (on the modes either reproduces): together by "
             f"{preference(scores, held_out, c, trained, best):.1f}, more than the margin. ")
-    if verdict != "effect" or runner is None:
-        return text + (f"{a.kind} {a.label} is not named ({verdict})." if verdict != "effect"
-                       else f"{a.kind} {a.label} named. The held-out modes took part in naming "
-                       "it, so its gap on them is no blind check.")
-    return text + (f"{a.kind} {a.label} beats its rivals on all the modes by {lead:.1f} "
-                   f"({fits[runner].candidate.label} the closest): named. The held-out modes "
-                   "took part in naming it, so its gap on them is no blind check.")
+    if verdict != "effect":
+        return text + f"{a.kind} {a.label} is not named ({verdict})."
+    closest = "" if runner is None else (f" beats its rivals on all the modes by {lead:.1f} "
+                                         f"({fits[runner].candidate.label} the closest):")
+    return text + (f"{a.kind} {a.label}{closest} named. The held-out modes took part in naming "
+                   "it, so its gap on them is no blind check.")
 
 
 def _suspension(configurations, refs, hung, settings: DiagnoseSettings, problem: Problem,
