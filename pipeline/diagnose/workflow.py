@@ -46,7 +46,7 @@ from threadpoolctl import threadpool_limits
 
 from pipeline.diagnose.calibrate import Problem, calibrate
 from pipeline.diagnose.crossval import cross_validated, cross_validated_note
-from pipeline.diagnose.detail import detailed
+from pipeline.diagnose.detail import detailed, located
 from pipeline.diagnose.effects import candidates, neighbours
 from pipeline.diagnose.gap import (EQUIVALENT_SIGMAS, gap_metrics, held_out_note,
                                    indistinguishable, separating_measurement)
@@ -68,6 +68,28 @@ from pipeline.diagnose.verdict import (SCATTER_SIGMAS, at_bound, decide, prefere
 def _overlaps(a, b) -> bool:
     return bool(set(a.grids) & set(b.grids) or set(a.elements) & set(b.elements)
                 or set(a.properties) & set(b.properties))
+
+
+def _form_record(fit, rich) -> dict:
+    """A joint tried for the named location (:func:`pipeline.diagnose.detail.located`): its label,
+    two-parameter chi^2 and BIC, and those of its detailed form (None when that does not lower
+    the BIC)."""
+    return {"label": fit.candidate.label, "chi2": float(fit.chi2), "bic": float(fit.bic),
+            "detailed_chi2": None if rich is None else float(rich.chi2),
+            "detailed_bic": None if rich is None else float(rich.bic)}
+
+
+def _located_note(k: int, tried, fit) -> str:
+    """The note of a round whose named joint was compared with its neighbours."""
+    named = tried[0][0].candidate
+    forms = "; ".join(f"{f.candidate.label} {f.chi2:.1f}"
+                      + (f" -> {r.chi2:.1f}" if r is not None else "") for f, r in tried)
+    text = (f"round {k + 1}: {named.kind} {named.label} and its neighbours, each refitted and in "
+            f"the form of least BIC (chi^2 with two parameters -> with one compliance per "
+            f"CBUSH component): {forms}; ")
+    if fit is tried[0][0]:
+        return text + f"{named.label} stays."
+    return text + f"{fit.candidate.label} fits best and is named instead."
 
 
 def _prefer_one_side(problem: Problem, theta, effects, rows, fits, none, n_data: int,
@@ -322,8 +344,13 @@ def diagnose(configurations, settings: DiagnoseSettings = DiagnoseSettings(), *,
                               separating_measurement(problem, fits[best], fits[runner]))
             if verdict != "effect":
                 break
-            chosen = fits[best]
-            rich = detailed(problem, effects, chosen, n_data=n_data, jacobian_theta=cal.jacobian)
+            tried = located(problem, effects, fits[best], rows, fits, near, n_data=n_data,
+                            jacobian_theta=cal.jacobian)
+            fit, rich = min(tried, key=lambda pair: (pair[1] or pair[0]).bic)
+            if len(tried) > 1:
+                rounds[-1]["neighbours"] = [_form_record(f, r) for f, r in tried]
+                notes.append(_located_note(k, tried, fit))
+            chosen = fit
             if rich is not None:
                 notes.append(f"round {k + 1}: {chosen.candidate.kind} {chosen.candidate.label} "
                              f"added with one compliance per CBUSH component: chi^2 "
