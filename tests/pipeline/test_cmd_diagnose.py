@@ -311,7 +311,7 @@ EXAMPLE = Path(__file__).parents[2] / "data" / "x56_like" / "case.toml"
 
 @pytest.mark.slow
 def test_example_hidden_effects_are_named(tmp_path, capsys):
-    """``pipeline diagnose data/x56_like/case.toml`` (about 10 minutes) names the suspension,
+    """``pipeline diagnose data/x56_like/case.toml`` (about 14 minutes) names the suspension,
     the cables, the gear legs and the engine mounts, and both gap measures drop."""
     code, _, err = cli(["diagnose", EXAMPLE, "--out", tmp_path / "run", "--json",
                         tmp_path / "verdict.json"], capsys)
