@@ -166,7 +166,12 @@ class DiagnoseResult:
         parameters, as the top-level ``nominal``), else null; ``detailed`` (when the named
         effect was added in its detailed form, :mod:`pipeline.diagnose.detail`: its
         ``parameters``, ``chi2`` and ``bic`` and the named form's ``named_chi2`` and
-        ``named_bic``; the effect's parameters are then the detailed ones).
+        ``named_bic``; the effect's parameters are then the detailed ones); ``neighbours``
+        (when a named joint was compared with its neighbouring joints,
+        :func:`pipeline.diagnose.detail.located`: per joint tried, the named one first, its
+        ``label``, two-parameter ``chi2`` and ``bic``, and its detailed form's
+        ``detailed_chi2`` and ``detailed_bic``, null when that form does not lower its BIC;
+        the joint added is the form of least BIC), else null.
     suspension : mapping or None, the suspension identified from the test's suspension modes
         before the rounds (:mod:`pipeline.diagnose.suspension`; its sites are the first
         ``effects``): ``sites`` (grids per site), ``stiffness`` (per site k_x, k_y, k_z, force /
