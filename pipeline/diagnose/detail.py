@@ -98,6 +98,13 @@ SEARCH_DECADES = 1.0
 SEARCH_POPSIZE, SEARCH_GENERATIONS = 10, 100
 
 
+def _one_site_neighbour(cand, other, near) -> bool:
+    """Whether ``other`` is a candidate of ``cand``'s kind at one site (no mirror pair) next to
+    it."""
+    return (other.kind == cand.kind and other.get("sites") is None
+            and near(cand.location, other.location))
+
+
 def neighbour_refits(problem, effects, named: Refitted, rows, fits, near, *, n_data: int,
                      jacobian_theta) -> list:
     """Refits of a named joint's neighbours that the screening did not pick (module docstring).
@@ -124,9 +131,8 @@ def neighbour_refits(problem, effects, named: Refitted, rows, fits, near, *, n_d
     if cand.kind not in LADDER_KINDS:
         return []
     done = {f.candidate.label for f in fits}
-    pool = [row for row in rows if row.candidate.kind == cand.kind
-            and row.candidate.get("sites") is None                  # one site: no mirror pair
-            and row.candidate.label not in done and near(cand.location, row.candidate.location)]
+    pool = [row for row in rows
+            if row.candidate.label not in done and _one_site_neighbour(cand, row.candidate, near)]
     out = []
     for row in pool[:NEIGHBOUR_REFITS]:
         start = named.values if row.candidate.parameters == cand.parameters else row.values
@@ -177,8 +183,7 @@ def located(problem, effects, named: Refitted, rows, fits, near, *, n_data: int,
     cand = named.candidate
     pool = []
     if cand.kind in DETAILED_KINDS and cand.parameters == ("compliance", "rotation"):
-        pool = [f for f in fits if f is not named and f.candidate.kind == cand.kind
-                and f.candidate.get("sites") is None and near(cand.location, f.candidate.location)]
+        pool = [f for f in fits if f is not named and _one_site_neighbour(cand, f.candidate, near)]
         pool += neighbour_refits(problem, effects, named, rows, fits, near, n_data=n_data,
                                  jacobian_theta=jacobian_theta)
         pool = sorted(pool, key=lambda f: f.chi2)[:NEIGHBOUR_DETAILED]
