@@ -1,4 +1,5 @@
-"""The named effect in more detail: its neighbouring joints, and a joint's six CBUSH components.
+"""The named effect in more detail: its neighbouring joints, a joint's six CBUSH components, and
+a support spring's every free direction.
 
 Neighbouring joints. The two-parameter form names a joint: its kind and its location up to a
 neighbour (a neighbour is not the named fit's rival, :func:`pipeline.diagnose.verdict.decide`).
@@ -58,26 +59,37 @@ compared, 7002's search ended at chi^2 484 (named 616), the held-out frequency e
 19.0 to 6.2 % but the largest cross-orthogonality off-diagonal rising from 0.81 to 0.91; the
 truth's joint, 7003, in its detailed form gives 367, 2.3 % and 0.64 (its true compliances 386).
 
-The six-component joint replaces the named one when it lowers BIC = chi^2 + p ln n (Schwarz
-1978) over the training data: four more parameters must gain more than 4 ln n in chi^2. The
-verdict is the two-parameter fit's; the detail changes what is added to the model (the bulk data
-written, the gap after, the next round's model).
+Support springs. The screening and the naming use a ``boundary_stiffness`` in one direction
+(one parameter, :mod:`pipeline.diagnose.effects`). A real support is rarely stiff in one
+direction only (a tyre, a bungee, a jack pad resist vertical and lateral motion alike), and a
+spring left out in one direction leaves the modes it holds mispaired. The X-56 blind study's
+boundary seeds at 05b55cb: in the six whose truth holds springs in y and z at one grid, the z
+spring alone was named, and in three of them (seeds 3, 7, 9) the largest cross-orthogonality
+off-diagonal did not fall (0.196 -> 0.196, 0.118 -> 0.123, 0.330 -> 0.338). So once a spring is
+named it is fitted again with one stiffness per direction the grid's supports leave free
+(:func:`pipeline.diagnose.effects.every_direction`), from the best of a grid of starts: the named
+stiffness kept, each other direction's at each of :data:`SPRING_STARTS` times it
+(:func:`spring_start`, exact analyses), then the refit below.
+
+The detailed joint or spring replaces the named one when it lowers BIC = chi^2 + p ln n (Schwarz
+1978) over the training data: four more parameters (a joint) or one or two (a spring) must gain
+more than ln n each in chi^2. The verdict is the named form's; the detail changes what is added
+to the model (the bulk data written, the gap after, the next round's model).
 """
 from __future__ import annotations
 
 from dataclasses import replace
+from itertools import product
 
 import numpy as np
 from scipy.optimize import differential_evolution
 
-from pipeline.diagnose.effects import directional
+from pipeline.diagnose.effects import directional, every_direction
 from pipeline.diagnose.evidence import chi_square, evaluate_modes
 from pipeline.diagnose.ladder import reduce_joint
 from pipeline.diagnose.screen import LADDER_KINDS, Refitted, Screened, refit
 from structures.common.errors import InputError, SolverError
 
-#: Kinds that have a detailed form.
-DETAILED_KINDS = ("joint_flexibility",)
 #: Most neighbours of a named joint refitted from its values (module docstring): a joint has
 #: about four variants per RBE2 (the whole joint, each detached side, its mirror pair).
 NEIGHBOUR_REFITS = 4
@@ -96,6 +108,13 @@ SEARCH_DECADES = 1.0
 #: anisotropic joint (perfect data) 15 x 30 stopped at chi^2 62 (40 after the refit) where the
 #: truth has 0; 15 x 60, 30 x 30 and 10 x 100 reach 0.3, 1.2 and 0.0 (all 0.00 after the refit).
 SEARCH_POPSIZE, SEARCH_GENERATIONS = 10, 100
+#: Where a named spring's other directions start, times its stiffness (module docstring): none,
+#: then an octave apart from an eighth to four times (49 exact analyses per configuration for two
+#: other directions). chi^2 is rugged in them (each mode the spring holds crosses others at its
+#: own stiffness): on tests/pipeline/diagnose/test_detail.py's frame grounded in x and z at grid
+#: 2009 (0.25 and 0.35 k_ref, z named at 0.359) the starts (0, 1/4, 1, 4) lead the refit to
+#: chi^2 2583 (x 0.03, y 0.27) of the named 2694; these reach 1.4e-4 (x 0.2500, z 0.3500).
+SPRING_STARTS = (0.0, 0.125, 0.25, 0.5, 1.0, 2.0, 4.0)
 
 
 def _one_site_neighbour(cand, other, near) -> bool:
@@ -182,13 +201,63 @@ def located(problem, effects, named: Refitted, rows, fits, near, *, n_data: int,
     """
     cand = named.candidate
     pool = []
-    if cand.kind in DETAILED_KINDS and cand.parameters == ("compliance", "rotation"):
+    if cand.kind == "joint_flexibility" and has_detail(cand):
         pool = [f for f in fits if f is not named and _one_site_neighbour(cand, f.candidate, near)]
         pool += neighbour_refits(problem, effects, named, rows, fits, near, n_data=n_data,
                                  jacobian_theta=jacobian_theta)
         pool = sorted(pool, key=lambda f: f.chi2)[:NEIGHBOUR_DETAILED]
     return [(f, detailed(problem, effects, f, n_data=n_data, jacobian_theta=jacobian_theta))
             for f in [named] + pool]
+
+
+def has_detail(candidate) -> bool:
+    """Whether ``candidate`` has a detailed form: a joint with two parameters, or a spring in one
+    direction at one grid (module docstring)."""
+    if candidate.kind == "joint_flexibility":
+        return candidate.parameters == ("compliance", "rotation")
+    return (candidate.kind == "boundary_stiffness" and len(candidate.parameters) == 1
+            and candidate.get("sites") is None)
+
+
+def form_text(candidate) -> str:
+    """How a detailed ``candidate`` differs from its named form, for the notes."""
+    if candidate.kind == "boundary_stiffness":
+        return f"as {candidate.label}, a spring in every direction its supports leave free"
+    return "with one compliance per CBUSH component"
+
+
+def spring_start(problem, effects, theta, candidate, values, named: int) -> tuple:
+    """The best start of a spring in every free direction (module docstring).
+
+    Parameters
+    ----------
+    problem : pipeline.diagnose.calibrate.Problem
+    effects : sequence of (Candidate, values) already in the model.
+    theta : (n_theta,) the nominal parameters, held.
+    candidate : Candidate, :func:`pipeline.diagnose.effects.every_direction`'s.
+    values : (n_dir,) its values: the named stiffness in its direction, 0 in the others.
+    named : int, the named direction's position in ``values``.
+
+    Returns
+    -------
+    values : (n_dir,) the start of least chi^2.
+    chi2 : float, its chi^2 (inf when no start can be analysed).
+    """
+    x0 = np.asarray(values, float)
+    others = np.delete(np.arange(x0.size), named)
+    size = max(x0[named], candidate.reference[named])
+    best = (x0, np.inf)
+    for factors in product(SPRING_STARTS, repeat=others.size):
+        x = x0.copy()
+        x[others] = np.minimum(np.array(factors) * size, np.asarray(candidate.upper)[others])
+        try:
+            evs = problem.evaluate(theta, tuple(effects) + ((candidate, x),))
+        except (InputError, SolverError):
+            continue
+        chi2 = chi_square(problem.residual(theta, evs))
+        if chi2 < best[1]:
+            best = (x, chi2)
+    return best
 
 
 def detailed(problem, effects, fit: Refitted, *, n_data: int, jacobian_theta) -> Refitted | None:
@@ -207,13 +276,22 @@ def detailed(problem, effects, fit: Refitted, *, n_data: int, jacobian_theta) ->
     Refitted or None
     """
     cand = fit.candidate
-    if cand.kind not in DETAILED_KINDS or cand.parameters != ("compliance", "rotation"):
+    if not has_detail(cand):
         return None
-    try:
-        rich, values = directional(cand, fit.values)
-    except InputError:
-        return None
-    start, chi2 = search(problem, effects, fit.theta, rich, values)
+    if cand.kind == "boundary_stiffness":
+        rich, values = every_direction(problem.model(0, fit.theta, effects), cand, fit.values)
+        if len(rich.parameters) == 1:
+            return None
+        start, chi2 = spring_start(problem, effects, fit.theta, rich, values,
+                                   rich.parameters.index(cand.parameters[0]))
+        if not np.isfinite(chi2):
+            return None
+    else:
+        try:
+            rich, values = directional(cand, fit.values)
+        except InputError:
+            return None
+        start, chi2 = search(problem, effects, fit.theta, rich, values)
     out = refit(problem, fit.theta, effects, Screened(rich, start, chi2, fit.chi2 - chi2, None),
                 n_data=n_data, jacobian_theta=jacobian_theta)
     return out if out is not None and out.bic < fit.bic else None

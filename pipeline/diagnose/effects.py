@@ -467,6 +467,36 @@ def directional(candidate: Candidate, values) -> tuple[Candidate, np.ndarray]:
     return replace(candidate, detail=tuple(detail.items()), **fields), np.clip(c, lo, hi)
 
 
+def every_direction(model: FEModel, candidate: Candidate, values) -> tuple[Candidate, np.ndarray]:
+    """A ``boundary_stiffness`` candidate in one direction as the same grid's spring in every
+    direction its supports leave free (x, y, z in that order, direction e.g. ``yz``).
+
+    Parameters
+    ----------
+    model : FEModel, the model the candidate was made on (its SPCs and GRID PS).
+    candidate : Candidate, ``boundary_stiffness`` at one grid with one parameter ``k_<d>``.
+    values : (1,) its value.
+
+    Returns
+    -------
+    Candidate with parameters ``k_<d>`` for every free direction d, and its values: the given
+    one in its direction and 0 in the others (the same model as ``values`` give ``candidate``).
+    """
+    x = _check_values(candidate, values)
+    if (candidate.kind != "boundary_stiffness" or len(candidate.parameters) != 1
+            or candidate.get("sites") is not None):
+        raise InputError(f"candidate {candidate.label!r} ({candidate.kind}, parameters "
+                         f"{candidate.parameters}) is not a spring in one direction at one grid. "
+                         "Fix: pass a boundary_stiffness candidate with one parameter k_<d>.")
+    grid = candidate.location.grids[0]
+    mask = int(fixed_masks(model)[model.grids.index([grid])[0]])
+    names = tuple(f"k_{d}" for c, d in enumerate(DIRECTIONS) if not mask >> c & 1)
+    direction = "".join(name[2:] for name in names)
+    out = _candidate(candidate.kind, candidate.location, f"grid {grid} {direction}", names,
+                     (("direction", direction), ("k_ref", candidate.get("k_ref"))))
+    return out, np.where(np.array(names) == candidate.parameters[0], x[0], 0.0)
+
+
 def _taper(model, candidate, x):
     member = candidate.get("member")
     model, rows, xi_mid = remesh(model, member)

@@ -46,7 +46,7 @@ from threadpoolctl import threadpool_limits
 
 from pipeline.diagnose.calibrate import Problem, calibrate
 from pipeline.diagnose.crossval import cross_validated, cross_validated_note
-from pipeline.diagnose.detail import detailed, located
+from pipeline.diagnose.detail import detailed, form_text, located
 from pipeline.diagnose.effects import candidates, neighbours
 from pipeline.diagnose.gap import (EQUIVALENT_SIGMAS, gap_metrics, held_out_note,
                                    indistinguishable, separating_measurement)
@@ -283,7 +283,9 @@ def diagnose(configurations, settings: DiagnoseSettings = DiagnoseSettings(), *,
                 verdict, path = against_path(found, problem, scored, best, n_data, len(cands),
                                               settings.margin)
                 rich = (detailed(problem, effects, fits[best], n_data=n_data,
-                                 jacobian_theta=cal.jacobian) if verdict == "ambiguous" else None)
+                                 jacobian_theta=cal.jacobian)
+                        if verdict == "ambiguous"
+                        and fits[best].candidate.kind == "joint_flexibility" else None)
                 if rich is not None:
                     row = score_rows(problem, [rich])
                     again = against_path(found, problem, (scored[0], scored[1][:best] + row +
@@ -353,7 +355,7 @@ def diagnose(configurations, settings: DiagnoseSettings = DiagnoseSettings(), *,
             chosen = fit
             if rich is not None:
                 notes.append(f"round {k + 1}: {chosen.candidate.kind} {chosen.candidate.label} "
-                             f"added with one compliance per CBUSH component: chi^2 "
+                             f"added {form_text(rich.candidate)}: chi^2 "
                              f"{chosen.chi2:.1f} -> {rich.chi2:.1f}, BIC {chosen.bic:.1f} -> "
                              f"{rich.bic:.1f}.")
                 rounds[-1]["detailed"] = {"parameters": dict(zip(rich.candidate.parameters,
