@@ -271,6 +271,68 @@ def held_out_note(gap_before: dict, gap_after: dict) -> str | None:
             f"{gap_before['frequency_rms']:.2f} -> {gap_after['frequency_rms']:.2f} %.")
 
 
+def largest_offdiag(problem, evaluations) -> tuple:
+    """Where a model's ``max_cross_orthogonality_offdiag`` is.
+
+    Parameters
+    ----------
+    problem : Problem (its ``refs``).
+    evaluations : one Evaluation per configuration.
+
+    Returns
+    -------
+    entry : (value, configuration position, i, j), |S_ij| of test mode i with the analysis mode
+        paired with test mode j (positions in the configuration's test modes), or None without
+        shapes.
+    offdiag : list of (n_test, n_test) |S_ij| with a zero diagonal per configuration (None
+        without shapes).
+    """
+    entry, offdiag = None, []
+    for c, (ref, ev) in enumerate(zip(problem.refs, evaluations)):
+        if not ref.has_shapes:
+            offdiag.append(None)
+            continue
+        s = close_mode_pairing(ref, ev.modes)[1]
+        off = s - np.diag(np.diag(s))
+        offdiag.append(off)
+        i, j = np.unravel_index(np.argmax(off), off.shape)
+        if entry is None or off[i, j] > entry[0]:
+            entry = (float(off[i, j]), c, int(i), int(j))
+    return entry, offdiag
+
+
+def offdiag_note(problem, before, after) -> str | None:
+    """A note naming the largest cross-orthogonality off-diagonal when it does not fall: the
+    entry after and the same entry before, and the entry before when it is another, so that a
+    pair the named effects leave alone shows as such. None when it falls or without shapes.
+
+    Parameters
+    ----------
+    problem : Problem (its ``refs``).
+    before, after : one Evaluation per configuration each, the models of ``gap_before`` and
+        ``gap_after``.
+    """
+    (b, b_off), (a, a_off) = largest_offdiag(problem, before), largest_offdiag(problem, after)
+    if b is None or a[0] < b[0]:
+        return None
+
+    def where(entry):
+        _, c, i, j = entry
+        ref = problem.refs[c]
+        role = ["held out" if not ref.train[k] else "training" for k in (i, j)]
+        return (f"test mode {ref.test_mode[i]} of {ref.name} ({ref.test_frequency[i]:.2f} Hz, "
+                f"{role[0]}) against the analysis mode paired with test mode {ref.test_mode[j]} "
+                f"({ref.test_frequency[j]:.2f} Hz, {role[1]})")
+
+    text = (f"gap: the largest cross-orthogonality off-diagonal does not fall ({b[0]:.3f} -> "
+            f"{a[0]:.3f}). After, it is {where(a)}, which was {b_off[a[1]][a[2], a[3]]:.3f} "
+            "before")
+    if a[1:] == b[1:]:
+        return text + ": the same entry, which the named effects move by " \
+            f"{a[0] - b[0]:+.3f}."
+    return (text + f"; before, it was {where(b)}, {a_off[b[1]][b[2], b[3]]:.3f} after.")
+
+
 #: Two fitted models whose predictions differ by less than this many noise standard deviations
 #: at every paired frequency and at every translational DOF of the model (measured or not) are
 #: one explanation: no measurement of the test's accuracy tells them apart (a spring anywhere

@@ -49,7 +49,7 @@ from pipeline.diagnose.crossval import cross_validated, cross_validated_note
 from pipeline.diagnose.detail import detailed, form_text, located
 from pipeline.diagnose.effects import candidates, neighbours
 from pipeline.diagnose.gap import (EQUIVALENT_SIGMAS, gap_metrics, held_out_note,
-                                   indistinguishable, separating_measurement)
+                                   indistinguishable, offdiag_note, separating_measurement)
 from pipeline.diagnose.loadpath import best_load_path, load_path_measurement
 from pipeline.diagnose.mirror import sites
 from pipeline.diagnose.predictive import held_out_evidence, held_out_modes
@@ -382,6 +382,8 @@ def diagnose(configurations, settings: DiagnoseSettings = DiagnoseSettings(), *,
     n_hung = suspension_effects(suspension)
     verdict = "effect" if len(records) > n_hung else first      # the structure's, not the test's
     if records and (note := held_out_note(gap_before, gap_after)):
+        notes.append(note)
+    if records and (note := offdiag_note(problem, cal.evaluations, none_evs)):
         notes.append(note)
     if records:
         _say(progress, "cross-validating the gap")

@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from pipeline.diagnose.gap import close_groups, close_mode_pairing, gap_metrics, held_out_note
+from pipeline.diagnose.gap import (close_groups, close_mode_pairing, gap_metrics, held_out_note,
+                                   offdiag_note)
 from structures.common.errors import InputError
 
 
@@ -193,3 +194,52 @@ def test_a_mode_the_sensors_hardly_see_does_not_turn_noise_into_cross_orthogonal
     _, cross, _, _ = close_mode_pairing(reference(mixed), modes)
     assert cross[0, 1] == pytest.approx(np.sin(0.3), abs=0.03)
     assert cross[0, 2] == 0.0
+
+
+def _offdiag_case(b_before, b_after, a=0.2):
+    """The three-mode case of test_held_out_cross_orthogonality_and_mac_by_hand as two models:
+    the test shapes fixed (test mode 2, held out, cos(a) e2 + sin(a) e3; test mode 3 cos(b) e3
+    + sin(b) e1 at b = ``b_before``), the analysis modes e1, e2, e3 before and, after, e1, e2 and
+    e3 turned by b_before - b_after towards e1 (so test mode 3's off-diagonal is sin(b_after))."""
+    shapes = np.array([[1.0, 0.0, 0.0], [0.0, np.cos(a), np.sin(a)],
+                       [np.sin(b_before), 0.0, np.cos(b_before)]])
+    f_test = np.array([10.0, 20.0, 30.0])
+    ref = SimpleNamespace(frequency_sigma=np.full(3, 0.01), train=np.array([True, False, True]),
+                          has_shapes=True, sensor_index=np.arange(3), shapes=shapes,
+                          measured_mass={}, name="c", test_frequency=f_test,
+                          test_mode=np.array([7, 8, 9]), shape_sigma=np.full(3, 0.05))
+
+    def model(turn):
+        phi = np.eye(3)
+        phi[[0, 2]] = [[np.cos(turn), 0.0, -np.sin(turn)], [np.sin(turn), 0.0, np.cos(turn)]]
+        modes = xr.Dataset({"shape": (("mode", "dof"), phi), "frequency": ("mode", f_test)},
+                           coords={"mode": [1, 2, 3]})
+        return [SimpleNamespace(modes=modes, props=None)]
+
+    return SimpleNamespace(refs=(ref,)), model(0.0), model(b_before - b_after)
+
+
+def test_offdiag_note_names_the_entry_that_does_not_fall():
+    """Before, the largest off-diagonal is test mode 9 (training) against mode 7's partner,
+    sin(0.5) = 0.479. After a model that turns mode 3 towards mode 1 by 0.4 it is sin(0.1) there
+    and test mode 8 (held out) against mode 9's partner is sin(0.2) cos(0.4) = 0.183: it falls,
+    no note. Turned the other way (0.5 -> 0.6) the same entry rises to sin(0.6) = 0.565: the
+    note names it and its change (+0.085). With the larger angle before at the held-out mode
+    (a = 0.7: sin(0.7) = 0.644) and the training one rising past it (0.5 -> 0.8: sin(0.8) =
+    0.717) the note names both entries, each before and after (the held-out one after:
+    sin(0.7) cos(0.3) = 0.615)."""
+    problem, before, after = _offdiag_case(0.5, 0.1)
+    assert offdiag_note(problem, before, after) is None
+    problem, before, after = _offdiag_case(0.5, 0.6)
+    note = offdiag_note(problem, before, after)
+    assert "does not fall (0.479 -> 0.565)" in note
+    assert "test mode 9 of c (30.00 Hz, training) against the analysis mode paired with test " \
+        "mode 7 (10.00 Hz, training), which was 0.479 before: the same entry" in note
+    assert "+0.085" in note                                # sin(0.6) - sin(0.5) = 0.0852
+    problem, before, after = _offdiag_case(0.5, 0.8, a=0.7)
+    note = offdiag_note(problem, before, after)
+    assert "does not fall (0.644 -> 0.717)" in note
+    assert "test mode 9 of c (30.00 Hz, training) against the analysis mode paired with test " \
+        "mode 7 (10.00 Hz, training), which was 0.479 before; before, it was test mode 8 of c " \
+        "(20.00 Hz, held out) against the analysis mode paired with test mode 9 (30.00 Hz, " \
+        "training), 0.615 after." in note
