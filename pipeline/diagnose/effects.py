@@ -228,6 +228,14 @@ def _candidate(kind, location, label, names, detail=()) -> Candidate:
                      tuple(r[1] for r in ranges), tuple(r[2] for r in ranges), tuple(detail))
 
 
+def spring(grid: int, directions: str, k_ref: float) -> Candidate:
+    """A ``boundary_stiffness`` candidate at ``grid`` with one stiffness ``k_<d>`` per direction
+    d of ``directions`` (some of ``"xyz"``, in that order), each over ``k_ref``."""
+    return _candidate("boundary_stiffness", Location(grids=(grid,)), f"grid {grid} {directions}",
+                      tuple(f"k_{d}" for d in directions),
+                      (("direction", directions), ("k_ref", k_ref)))
+
+
 # ----------------------------------------------------------------------------------- model scans
 def _element_grids(model: FEModel) -> np.ndarray:
     """Grid ids referenced by elements, rigid elements and CONM2s."""
@@ -287,11 +295,8 @@ def candidates(model: FEModel, kinds=KINDS, *, frequency: float | None = None
             f1 = _lowest_elastic_frequency(model) if frequency is None else float(frequency)
             k_ref = props.mass * (2.0 * np.pi * f1) ** 2
             for g, mask in zip(grids.tolist(), fixed.tolist()):
-                for c, d in enumerate(DIRECTIONS):
-                    if mask >> c & 1:
-                        continue
-                    out.append(_candidate(kind, Location(grids=(g,)), f"grid {g} {d}", (f"k_{d}",),
-                                          (("direction", d), ("k_ref", k_ref))))
+                out += [spring(g, d, k_ref) for c, d in enumerate(DIRECTIONS)
+                        if not mask >> c & 1]
         elif kind == "joint_flexibility":
             out += [_candidate(kind, Location(grids=grids_j, elements=(eid,)), label,
                                tuple(PARAMETER_RANGES[kind]), detail)
@@ -490,11 +495,9 @@ def every_direction(model: FEModel, candidate: Candidate, values) -> tuple[Candi
                          "Fix: pass a boundary_stiffness candidate with one parameter k_<d>.")
     grid = candidate.location.grids[0]
     mask = int(fixed_masks(model)[model.grids.index([grid])[0]])
-    names = tuple(f"k_{d}" for c, d in enumerate(DIRECTIONS) if not mask >> c & 1)
-    direction = "".join(name[2:] for name in names)
-    out = _candidate(candidate.kind, candidate.location, f"grid {grid} {direction}", names,
-                     (("direction", direction), ("k_ref", candidate.get("k_ref"))))
-    return out, np.where(np.array(names) == candidate.parameters[0], x[0], 0.0)
+    out = spring(grid, "".join(d for c, d in enumerate(DIRECTIONS) if not mask >> c & 1),
+                 candidate.get("k_ref"))
+    return out, np.where(np.array(out.parameters) == candidate.parameters[0], x[0], 0.0)
 
 
 def _taper(model, candidate, x):

@@ -60,7 +60,7 @@ import scipy.linalg
 import xarray as xr
 from scipy.optimize import least_squares, linear_sum_assignment, nnls
 
-from pipeline.diagnose.effects import DIRECTIONS, Candidate, Location, candidates
+from pipeline.diagnose.effects import Candidate, Location, candidates, spring
 from pipeline.diagnose.grounded import reduce_load, spring_basis
 from pipeline.diagnose.mirror import mirror_grids
 from structures.frames import rigid_offset, skew
@@ -138,7 +138,7 @@ class SuspensionFit:
         k_ref = self.k_ref
         out = []
         for site, k in zip(self.sites, self.stiffness):
-            ones = [_site(g, k_ref) for g in site]
+            ones = [spring(g, "xyz", k_ref) for g in site]
             cand = ones[0]
             if len(ones) == 2:
                 cand = Candidate(cand.kind, Location(grids=site), f"grids {site[0]}+{site[1]} "
@@ -147,13 +147,6 @@ class SuspensionFit:
                                   ("direction", "xyz"), ("k_ref", k_ref)))
             out.append((cand, np.minimum(k / k_ref, cand.upper)))
         return out
-
-
-def _site(grid: int, k_ref: float) -> Candidate:
-    names = tuple(f"k_{d}" for d in DIRECTIONS)
-    return Candidate("boundary_stiffness", Location(grids=(grid,)), f"grid {grid} xyz", names,
-                     (0.0,) * 3, (1.0,) * 3, (0.1,) * 3,
-                     (("direction", "xyz"), ("k_ref", k_ref)))
 
 
 def hypotheses(model, library=None) -> list:
