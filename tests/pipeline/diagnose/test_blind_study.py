@@ -203,11 +203,12 @@ def test_quick_gap_shrinks_on_the_named_mass(quick_run):
     "the first split's held-out RMS with it 36/48; "
     "X-56 top-1 46/50 (joints 9/10, masses 10/10, tapers 9/10, boundary 10/10, curvature "
     "8/10), 'none' 10/10, 'outside' named 0/10, gap both drop 27/27 (joints, masses, tapers) "
-    "and 13/18 (boundary, curvature; 15/18 cross-validated, re-scored offline; run again, "
-    "joint, mass and taper seeds 0-9 and boundary seeds 0 and 6: the 30 named right 30/30 "
-    "cross-validated); wing box (MYSTRAN "
+    "and 13/18 (boundary, curvature; 15/18 cross-validated; run again, joint, mass and taper "
+    "seeds 0-9 and boundary seeds 0-9 at 174141d: the 38 named right 35/38 cross-validated, "
+    "the off-diagonal rising on boundary seeds 3, 7, 9, as it does with the truth's own "
+    "springs); wing box (MYSTRAN "
     "truths) top-1 18/20 (masses 10/10, support springs 8/10), location 18/18, 'none' 10/10, "
-    "gap both drop 17/18 (18/18 cross-validated, re-scored offline)"))
+    "gap both drop 17/18 (18/18 cross-validated, run again at 174141d / f5833f6)"))
 def test_full_blind_study(tmp_path):
     ds = run_study(STRUCTURES, TRUTH_KINDS, range(10), tmp_path, progress=None)
     print(confusion_text(ds))
