@@ -304,7 +304,9 @@ def largest_offdiag(problem, evaluations) -> tuple:
 def offdiag_note(problem, before, after) -> str | None:
     """A note naming the largest cross-orthogonality off-diagonal when it does not fall: the
     entry after and the same entry before, and the entry before when it is another, so that a
-    pair the named effects leave alone shows as such. None when it falls or without shapes.
+    pair the named effects leave alone shows as such. None when it falls, when it is zero after
+    (no significant coordinate couples two test modes: nothing is left to point at), or without
+    shapes.
 
     Parameters
     ----------
@@ -313,7 +315,7 @@ def offdiag_note(problem, before, after) -> str | None:
         ``gap_after``.
     """
     (b, b_off), (a, a_off) = largest_offdiag(problem, before), largest_offdiag(problem, after)
-    if b is None or a[0] < b[0]:
+    if b is None or a[0] < b[0] or a[0] == 0.0:
         return None
 
     def where(entry):

@@ -3,9 +3,12 @@
 References: rigid-body motions written by hand (a translation reads its direction cosine, a
 rotation theta x r); the share of white noise outside a 6-dimensional span, (1 + 6 s^2 / n) /
 (1 + s^2) in expectation; the glider-like frame of the blind study hung on soft grounded springs
-(its six lowest modes are its suspension, solved by our solver).
+(its six lowest modes are its suspension, solved by our solver); the BAH wing's half model
+(tests/data/bah_plane, a public deck), whose constraints leave it two rigid-body motions.
 """
 from __future__ import annotations
+
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -15,10 +18,12 @@ from structures.common.errors import InputError
 from structures.gvt import make_gvt_dataset
 from structures.modal import compute_modes
 from structures.modes import elastic_index
-from structures.suspension import (RIGID_SHARE, rigid_body_readings, rigid_body_share,
-                                   suspension_modes)
+from structures.suspension import (RIGID_SHARE, model_motions, rigid_body_readings,
+                                   rigid_body_share, suspension_modes, without_suspension)
 from plate_decks import plate_deck
 from tests.pipeline.diagnose.truth import frame
+
+DATA = Path(__file__).resolve().parents[1] / "data"
 
 
 def _layout(n_grids: int = 40, seed: int = 0):
@@ -142,3 +147,43 @@ def test_a_clamped_plate_bends_within_the_rigid_span(tmp_path):
     share = rigid_body_share(modes["shape"].values[:1, cols], model.grids.xyz[free],
                              np.full(int(free.sum()), 3))
     assert share[0] > RIGID_SHARE, share
+
+
+def test_a_half_model_is_judged_by_its_own_rigid_body_motions(tmp_path):
+    """The BAH wing (tests/data/bah_plane: the structure cards, SPC1 1246 at the root grid 1 as
+    in its deck) moves as a rigid body in plunge and pitch only. Its first elastic mode, the
+    symmetric wing bending with the fuselage mass (2.45 Hz), read in z at the other 19 grids and
+    in x at seven wing grids, is nearly a roll at those sensors: its share of the six motions is
+    above ``RIGID_SHARE`` (measured 0.94), of plunge and pitch far below (0.43). It is no
+    suspension mode; a plunge-and-pitch motion at the same sensors is one."""
+    inc = (DATA / "bah_plane" / "structure_bah.inc").read_text()
+    deck = tmp_path / "bah.bdf"
+    deck.write_text("SOL 103\nCEND\nSPC = 101\nMETHOD = 1\nBEGIN BULK\n" + inc
+                    + "\nSPC1,101,1246,1\nEIGRL,1,,,8\nENDDATA\n")
+    model = read_model(deck)
+    modes = compute_modes(model, 8)
+    assert modes["rigid_motion"].values[:2].tolist() != ["", ""]
+    assert modes["rigid_motion"].values[2] == ""
+    motions = model_motions(modes, model.grids.xyz[model.grids.index([1])[0]])
+    assert motions.shape == (6, 2)
+    # about the root grid: translations x, y and the rotations about x and z stay zero, plunge
+    # and pitch only
+    np.testing.assert_allclose(motions[[0, 1, 3, 5]], 0.0, atol=1e-9 * np.abs(motions).max())
+    sensors = [(g, 3) for g in range(2, 21)] + [(g, 1) for g in range(7, 14)]
+    key = {(int(g), int(c)): j for j, (g, c) in
+           enumerate(zip(modes["grid"].values, modes["component"].values))}
+    shape = modes["shape"].values[:3, [key[s] for s in sensors]]
+    shape[0] = shape[0] + 0.3 * shape[1]                       # a suspension mode: plunge + pitch
+    xyz = dict(zip(model.grids.ids.tolist(), model.grids.xyz.tolist()))
+    position = np.array([xyz[g] for g, _ in sensors])
+    component = np.array([c for _, c in sensors])
+    six = rigid_body_share(shape, position, component)
+    own = rigid_body_share(shape, position, component,
+                           model_motions(modes, position.mean(axis=0)))
+    assert six[2] > RIGID_SHARE and own[2] < 0.5, (six, own)
+    np.testing.assert_allclose(own[:2], 1.0, rtol=1e-9)
+    f = np.array([0.4, 0.6, float(modes["frequency"].values[2])])
+    gvt = make_gvt_dataset(f, shape, [g for g, _ in sensors], component, mode=[1, 2, 3],
+                           xyz=position, source="bah", units="si")
+    kept, hung = without_suspension(modes, gvt)
+    assert hung["mode"].values.tolist() == [1, 2] and kept["mode"].values.tolist() == [3]

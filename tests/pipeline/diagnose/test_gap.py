@@ -8,7 +8,7 @@ import pytest
 import xarray as xr
 
 from pipeline.diagnose.gap import (close_groups, close_mode_pairing, gap_metrics, held_out_note,
-                                   offdiag_note)
+                                   largest_offdiag, offdiag_note)
 from structures.common.errors import InputError
 
 
@@ -243,3 +243,12 @@ def test_offdiag_note_names_the_entry_that_does_not_fall():
         "mode 7 (10.00 Hz, training), which was 0.479 before; before, it was test mode 8 of c " \
         "(20.00 Hz, held out) against the analysis mode paired with test mode 9 (30.00 Hz, " \
         "training), 0.615 after." in note
+
+
+def test_no_offdiag_note_when_none_is_left():
+    """Test shapes equal to the analysis modes (a = b = 0) leave no off-diagonal in either model,
+    0.000 -> 0.000: nothing to name (the BAH wing's blind probe printed a 'diagonal' entry,
+    test mode 3 against its own partner, before this)."""
+    problem, before, after = _offdiag_case(0.0, 0.0, a=0.0)
+    assert largest_offdiag(problem, after)[0][0] == 0.0
+    assert offdiag_note(problem, before, after) is None
