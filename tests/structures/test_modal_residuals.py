@@ -66,3 +66,30 @@ def test_cylinder_at_the_default_shift_is_solved_again(monkeypatch):
     assert len(calls) == 2
     assert np.all(modal.eigen_residuals(system.K, system.M, lam[6:], phi[:, 6:])
                   < modal.RESIDUAL_TOL)
+
+
+def test_a_missed_rigid_body_mode_is_found_by_a_second_solve(tmp_path):
+    """The free-free Dakota cylinder as the diagnose workflow wrote it after a round (E 9.7828e6,
+    the end mass 1026.35, a mirror pair of CONM2s of 0.1974 with 0.00867 rotary inertia at grids
+    24 and 25): solved for 8 modes, the Lanczos solve found five of its six zero eigenvalues
+    (and so took its first elastic mode for a rigid-body one) until compute_modes solved again
+    with more modes. Independent reference: the 20-mode solve, whose first eight frequencies
+    it must give (1348.36, 1348.72 Hz elastic), and six rigid-body modes."""
+    text = (DATA / "dakota_cylinder" / "modal.bdf").read_text()
+    old_mat, old_mass = ("MAT1     101     1.+7            .35     .1",
+                         "CONM2    501     501             1000.   0.      0.      0.")
+    assert old_mat in text and old_mass in text
+    extra = "".join(f"CONM2,{eid},{grid},,.1973912,0.,0.,0.\n,.0086707,0.,.0086707,0.,0.,"
+                    ".0086707\n" for eid, grid in ((504, 24), (505, 25)))
+    text = (text.replace(old_mat, "MAT1,101,9782830.,,.35,.1")
+            .replace(old_mass, "CONM2,501,501,,1026.35,0.,0.,0.")
+            .replace("ENDDATA", extra + "ENDDATA"))
+    deck = tmp_path / "cylinder.bdf"
+    deck.write_text(text)
+    model = read_model(deck)
+    eight = modal.compute_modes(model, 8)
+    twenty = modal.compute_modes(model, 20)
+    assert int(eight.attrs["rigid_modes"]) == 6
+    np.testing.assert_allclose(eight["frequency"].values[6:],
+                               twenty["frequency"].values[6:8], rtol=1e-9)
+    assert eight["frequency"].values[6] > 1000.0
