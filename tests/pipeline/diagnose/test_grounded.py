@@ -77,8 +77,9 @@ def test_reduced_mass_modes_match_exact_reanalysis(frame_model, label, inertia):
     is no small change.
     Tolerances: frequencies 2e-5 relative (measured 3.8e-6), MAC at the 120 sensors 1 - 1e-6
     for a point mass (measured 1 - 4.2e-7), 1 - 1e-4 with rotary inertia (measured
-    1 - 8.8e-6: the mass's rotations excite more of the truncated modes), the shapes' amplitude (mass normalisation in M(x)) 1e-3 (measured
-    2.5e-4), mass properties 1e-6 (measured 1e-7); the six rigid-body motions kept."""
+    1 - 8.8e-6: the mass's rotations excite more of the truncated modes), the shapes'
+    amplitude (mass normalisation in M(x)) 1e-3 (measured 2.5e-4), mass properties 1e-6
+    (measured 1e-7); the six rigid-body motions kept."""
     model, ref = frame_model
     basis = spring_basis(model, ref.sensor_index, ref.nmodes)
     cand = next(c for c in candidates(model, ("lumped_mass",)) if c.label == label)

@@ -314,3 +314,19 @@ def test_a_fit_that_predicts_the_same_data_is_not_the_runner_up():
     fits[2] = ("lumped_mass", 3209, 395.0, 0.0, 3)
     assert decide((600.0, 0.0, 2), fits, 10.0, _never_near, N, n_modal=N,
                   alike=alike)[0] == "ambiguous"
+
+
+def test_unexplained_when_the_held_out_modes_reject_none():
+    """Training rows that pass (chi^2 400 on 398 dof, limit ~ 494) and held-out rows that do not
+    (two modes, 8 entries each, chi^2 9.5 and 435: a local mode the model lacks, as on the BAH
+    wing with a hidden joint; the 99.9 % limit of 414 rows is ~ 511, the total 844.5): nothing
+    beats "none", and "none" does not fit all the data, so the round is unexplained. With
+    held-out rows at their noise (8 + 8) it stays none."""
+    fits = [("joint_flexibility", 1, 395.0, 0.0, 4)]
+    bad = (np.array([9.5, 435.0]), [np.array([9.0, 130.0])], np.array([8, 8]))
+    verdict, *_, reason, _ = decide((400.0, 0.0, 2), fits, 10.0, _never_near, N, n_modal=N,
+                                    held_out=bad)
+    assert (verdict, reason) == ("unexplained", "no_gain")
+    fine = (np.array([8.0, 8.0]), [np.array([8.0, 8.0])], np.array([8, 8]))
+    assert decide((400.0, 0.0, 2), fits, 10.0, _never_near, N, n_modal=N,
+                  held_out=fine)[0] == "none"
