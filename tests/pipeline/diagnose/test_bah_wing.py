@@ -26,7 +26,7 @@ from structures.common.files import write_json, write_text
 from structures.gvt import make_gvt_dataset, write_uff
 from structures.massprops import mass_properties
 from structures.modal import compute_modes
-from tests.pipeline.diagnose.truth.generate import _case_toml
+from tests.pipeline.diagnose.truth.generate import _case_toml, measured
 from tests.pipeline.diagnose.truth.study import diagnose_case
 from tests.pipeline.diagnose.truth.x56 import measured_mass
 
@@ -51,18 +51,10 @@ def _case(folder: Path, mass: bool, seed: int = 0) -> Path:
     model = read_model(truth)
     modes = compute_modes(model, N_RIGID + N_TEST + 8).isel(
         mode=slice(N_RIGID, N_RIGID + N_TEST))
-    key = {(int(g), int(c)): j for j, (g, c) in
-           enumerate(zip(modes["grid"].values, modes["component"].values))}
-    shape = modes["shape"].values[:, [key[s] for s in SENSORS]]
-    shape *= np.sign(np.take_along_axis(shape, np.abs(shape).argmax(axis=1)[:, None], axis=1))
-    rng = np.random.default_rng(seed)
-    f = modes["frequency"].values * (1.0 + 0.01 * rng.standard_normal(N_TEST))
-    shape = shape + 0.05 * np.sqrt(np.mean(shape ** 2, axis=1, keepdims=True)) * \
-        rng.standard_normal(shape.shape)
+    f, shape, damping = measured(modes, SENSORS, np.random.default_rng(seed), (0.01, 0.05))
     xyz = dict(zip(model.grids.ids.tolist(), model.grids.xyz.tolist()))
     gvt = make_gvt_dataset(f, shape, [g for g, _ in SENSORS], [c for _, c in SENSORS],
-                           mode=np.arange(N_RIGID + 1, N_RIGID + N_TEST + 1),
-                           damping=rng.uniform(0.01, 0.02, N_TEST),
+                           mode=np.arange(N_RIGID + 1, N_RIGID + N_TEST + 1), damping=damping,
                            xyz=[xyz[g] for g, _ in SENSORS], source="bah truth", units="si")
     write_uff(gvt, folder / "gvt_bah.unv", title="BAH wing GVT")
     write_json(measured_mass(mass_properties(model)), folder / "mass_bah.json")

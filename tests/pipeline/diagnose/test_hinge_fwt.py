@@ -24,7 +24,7 @@ from structures.common.nastran import read_pynastran
 from structures.gvt import make_gvt_dataset, write_uff
 from structures.massprops import mass_properties
 from structures.modal import compute_modes
-from tests.pipeline.diagnose.truth.generate import _case_toml
+from tests.pipeline.diagnose.truth.generate import _case_toml, measured
 from tests.pipeline.diagnose.truth.study import diagnose_case
 from tests.pipeline.diagnose.truth.x56 import measured_mass
 
@@ -56,15 +56,10 @@ def _case(folder: Path, hinge: bool, seed: int = 0) -> Path:
     ids = np.unique(modes["grid"].values)
     grids = ids[np.linspace(0, ids.size - 1, N_GRIDS).round().astype(int)]
     sensors = [(int(g), c) for g in grids for c in (1, 2, 3) if (int(g), c) in key]
-    shape = modes["shape"].values[:, [key[s] for s in sensors]]
-    shape *= np.sign(np.take_along_axis(shape, np.abs(shape).argmax(axis=1)[:, None], axis=1))
-    rng = np.random.default_rng(seed)
-    f = modes["frequency"].values * (1.0 + 0.01 * rng.standard_normal(N_TEST))
-    shape = shape + 0.05 * np.sqrt(np.mean(shape ** 2, axis=1, keepdims=True)) * \
-        rng.standard_normal(shape.shape)
+    f, shape, damping = measured(modes, sensors, np.random.default_rng(seed), (0.01, 0.05))
     xyz = dict(zip(model.grids.ids.tolist(), model.grids.xyz.tolist()))
     gvt = make_gvt_dataset(f, shape, [g for g, _ in sensors], [c for _, c in sensors],
-                           mode=np.arange(1, N_TEST + 1), damping=rng.uniform(0.01, 0.02, N_TEST),
+                           mode=np.arange(1, N_TEST + 1), damping=damping,
                            xyz=[xyz[g] for g, _ in sensors], source="windy_fwt truth",
                            units="si")
     write_uff(gvt, folder / "gvt_fwt.unv", title="WINDY FWT GVT")

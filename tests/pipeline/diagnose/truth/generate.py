@@ -126,7 +126,7 @@ def _suspended(modes: xr.Dataset, st: Structure) -> bool:
     return bool(f[st.n_rigid - 1] < SUSPENSION_RATIO * f[st.n_rigid])
 
 
-def _measured(modes: xr.Dataset, sensors, rng, noise: tuple) -> tuple:
+def measured(modes: xr.Dataset, sensors, rng, noise: tuple) -> tuple:
     """(frequencies, shapes, damping) of ``modes`` at the sensors as a test gives them: each
     shape's sign fixed (largest entry positive), then frequency and shape noise and damping."""
     key = {(int(g), int(c)): j for j, (g, c) in
@@ -148,11 +148,11 @@ def _gvt(modes: xr.Dataset, st: Structure, analysis_xyz: dict, rng, title: str,
     ``n_rigid`` suspension modes are listed first (modes 1 ..), their noise drawn from
     ``hung_rng`` (the elastic modes' noise is that of the case without a suspension)."""
     sensors, n_test = st.sensors, st.n_test
-    f, shape, zeta = _measured(modes.isel(mode=slice(st.n_rigid, st.n_rigid + n_test)),
+    f, shape, zeta = measured(modes.isel(mode=slice(st.n_rigid, st.n_rigid + n_test)),
                                sensors, rng, noise)
     first = st.n_rigid + 1
     if hung_rng is not None:
-        hung = _measured(modes.isel(mode=slice(0, st.n_rigid)), sensors, hung_rng, noise)
+        hung = measured(modes.isel(mode=slice(0, st.n_rigid)), sensors, hung_rng, noise)
         f, shape, zeta = (np.concatenate([a, b]) for a, b in zip(hung, (f, shape, zeta)))
         first = 1
     return make_gvt_dataset(f, shape, [g for g, _ in sensors], [c for _, c in sensors],
