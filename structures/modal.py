@@ -462,14 +462,20 @@ def _check_rigid_count(model, lam: np.ndarray, nr: int) -> None:
 
 
 def _check_mechanisms(model, system, lam, phi, scale):
+    """A zero-frequency mode that is no rigid-body motion raises. The comparison leaves out the
+    DOFs AUTOSPC holds (as :func:`rigid_body_modes` does): a rigid rotation turns the rotations of
+    a grid that only rods or solids reach, which stay zero in every mode (the BAH wing with a
+    grid on three rods was a 'mechanism' until then)."""
     zero = np.abs(lam) <= 1e-12 * scale
     if not np.any(zero):
         return
-    rb = rigid_body_basis(model, system)
-    q, _ = np.linalg.qr(rb)
+    keep = np.ones(system.T.shape[0], dtype=bool)
+    keep[system.autospc] = False
+    q, _ = np.linalg.qr(rigid_body_basis(model, system)[keep])
     for j in np.flatnonzero(zero):
         u = system.T @ phi[:, j]
-        resid = u - q @ (q.T @ u)
+        resid = np.zeros_like(u)
+        resid[keep] = u[keep] - q @ (q.T @ u[keep])
         if np.linalg.norm(resid) > 1e-4 * np.linalg.norm(u):
             # A constrained model has no rigid-body motion to remove: the mode itself shows where
             # the mechanism is (the residual would spread it over the clamped grids).

@@ -83,7 +83,8 @@ def rigid_body_readings(position, component, reference=None) -> np.ndarray:
 
 def model_motions(fe_modes: xr.Dataset, reference) -> np.ndarray | None:
     """C: the model's rigid-body modes as rigid-body motions about ``reference`` (module
-    docstring), least squares on their shapes at every grid DOF.
+    docstring), least squares on their shapes at every grid DOF that moves in some mode (a DOF
+    zero in all of them is held: an SPC, or a rotation AUTOSPC holds at a grid only rods reach).
 
     Parameters
     ----------
@@ -100,9 +101,10 @@ def model_motions(fe_modes: xr.Dataset, reference) -> np.ndarray | None:
     rigid = rigid_index(fe_modes)
     if not rigid.size or not all(k in fe_modes.coords for k in ("x", "y", "z", "component")):
         return None
-    position = np.stack([fe_modes[k].values for k in ("x", "y", "z")], axis=1)
-    rows = rigid_body_readings(position, fe_modes["component"].values, reference)
-    shapes = fe_modes["shape"].values[rigid].T                           # (n_dof, n_r)
+    free = np.any(fe_modes["shape"].values != 0.0, axis=0)
+    position = np.stack([fe_modes[k].values[free] for k in ("x", "y", "z")], axis=1)
+    rows = rigid_body_readings(position, fe_modes["component"].values[free], reference)
+    shapes = fe_modes["shape"].values[rigid][:, free].T                  # (n_free, n_r)
     motions = np.linalg.lstsq(rows, shapes, rcond=None)[0]
     miss = np.linalg.norm(rows @ motions - shapes, axis=0) / np.linalg.norm(shapes, axis=0)
     return motions if np.all(miss <= MOTION_TOLERANCE) else None

