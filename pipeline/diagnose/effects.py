@@ -13,8 +13,7 @@ scale of the model (so that bounds do not depend on units):
     not vanish at a point mass, as it would in r). Bounds mass [0, 0.10], inertia [0, 0.01]
     (r up to L / 10). One candidate per grid that carries structure (referenced by an element,
     a rigid element or a CONM2) and whose translations are not all constrained. The screening
-    samples the mass at inertia 0 (a point mass) and at the reference inertia, and the refit
-    frees the inertia.
+    samples the mass at inertia 0 (a point mass) and the refit frees the inertia.
     *Spread* (:func:`spread_sites`): the same mass spread in equal shares over a grid and the
     free grids one element layer around it (rigid elements included; label ``grid g spread
     over a, b, ...``), each share a CONM2 with its share of the inertia: a mass distributed

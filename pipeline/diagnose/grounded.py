@@ -55,10 +55,6 @@ on the tail, chi^2 44615 without it) the secant through 2 % ranked the right gri
 elsewhere and a joint; the modes move through each other as the mass grows. The rigid-body motions
 are the current model's (a point mass restrains none); the mass properties follow from the
 rigid-body mass matrix, M0(x) = M0 + mu D_g^T D_g (D_g the grid's rigid-body translations).
-With its rotary inertia held at a value iota (the candidate's ``inertia``, (r / L)^2: a moment
-mu iota L^2 about each basic axis, :mod:`pipeline.diagnose.effects`), E also holds the grid's
-three basic rotations times L sqrt(iota) (rank six; a spread mass's shares likewise), and
-M0(x) gains mu iota L^2 on its rotational diagonal: the same form, so the same basis serves.
 
 The changed model's rigid-body motions are those of the current model that do not move d
 (:func:`structures.modal.rigid_body_modes` on the current assembly with the spring added: the
@@ -208,13 +204,13 @@ class ReducedMass:
     ----------
     k0 : (m + q, m + q) Psi^T K Psi = diag(Lambda, R^T K R) (q = 3, or 6 for a mirror pair).
     u : (m + q, q) left singular vectors of W = Psi^T E, E the a-set columns of the grids'
-        basic translations (and rotations, with rotary inertia).
+        basic translations.
     s2 : (q,) the squared singular values of W.
     m_ref : float, mass per unit size (consistent units).
     sensor : (n_dof, m + q) sensor displacements of the basis vectors.
     n_rigid : int, rigid-body modes (the current model's).
     m0 : (6, 6) rigid-body mass matrix of the current model about ``props.reference_point``.
-    unit : (6, 6) rigid-body mass matrix of the added masses per unit mu.
+    unit : (6, 6) rigid-body mass matrix of the added point masses per unit mu.
     props : MassProperties of the current model.
     nmodes : int
     template : xarray.Dataset, the modes Dataset :meth:`modes` fills in.
@@ -351,7 +347,7 @@ def _template(nmodes: int, rigid) -> xr.Dataset:
                       coords={"rigid_motion": ("mode", np.array(names, dtype=str))})
 
 
-def reduce_mass(basis: SpringBasis, candidate, inertia: float = 0.0) -> ReducedMass:
+def reduce_mass(basis: SpringBasis, candidate) -> ReducedMass:
     """The ``lumped_mass`` candidate (one grid, or a mirror pair's two; a spread mass's grids
     with their equal shares) on the basis's Ritz basis.
 
@@ -359,8 +355,6 @@ def reduce_mass(basis: SpringBasis, candidate, inertia: float = 0.0) -> ReducedM
     ----------
     basis : SpringBasis of the model the candidate is applied to.
     candidate : Candidate, ``lumped_mass``.
-    inertia : float, its ``inertia`` parameter iota, held at this value over the sizes (module
-        docstring); 0 a point mass.
 
     Returns
     -------
@@ -371,15 +365,12 @@ def reduce_mass(basis: SpringBasis, candidate, inertia: float = 0.0) -> ReducedM
     rows = model.grids.index([g for site in sites(candidate) for g in site.location.grids])
     share = np.array([1.0 / len(site.location.grids) for site in sites(candidate)
                       for _ in site.location.grids])                      # a spread's shares
-    turn = float(candidate.get("length")) * np.sqrt(inertia)              # L sqrt(iota)
-    comps = [(c, 1.0) for c in range(3)] + ([(c, turn) for c in range(3, 6)] if inertia else [])
-    e = np.column_stack([np.sqrt(w) * f * np.asarray(basic[6 * int(g) + c].toarray()).ravel()
-                         for g, w in zip(rows, share) for c, f in comps])  # (na, 3 q or 6 q)
+    e = np.column_stack([np.sqrt(w) * np.asarray(basic[6 * int(g) + c].toarray()).ravel()
+                         for g, w in zip(rows, share) for c in range(3)])  # (na, 3 q)
     psi, k0 = _ritz(basis, e)
     props = basis.props
     d = rigid_offset(model.grids.xyz[rows] - props.reference_point)[:, :3, :]   # (q, 3, 6)
     unit = np.einsum("g,gai,gaj->ij", share, d, d)
-    unit[3:, 3:] += turn ** 2 * float(np.sum(share)) * np.eye(3)       # mu iota L^2 per axis
     rigid = basis.rigid
     n = min(basis.nmodes, psi.shape[1])
     u, s, _ = np.linalg.svd(psi.T @ e, full_matrices=False)

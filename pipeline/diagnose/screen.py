@@ -40,12 +40,7 @@ every configuration (:mod:`pipeline.diagnose.evidence`). The routes:
   secants; the 114 mirror pairs add about as much again). ``lumped_mass`` likewise (M(x) is a
   rank-three change, rank six for a pair; the mass's own mode falls through the measured ones as
   it grows): its rungs on the same bases (:func:`pipeline.diagnose.grounded.reduce_mass`,
-  frequencies within 4e-6 of exact reanalysis up to 10 % of the model's mass), twice: as a
-  point mass and with the reference rotary inertia (:data:`MASS_INERTIAS`), the better ladder
-  its result. A point mass cannot show a missing moment of inertia: on a free cylinder whose
-  end mass, a CONM2 without inertia on an RBE2 ring, really has one (the Dakota cylinder,
-  ``tests/data/dakota_cylinder``), a point mass at that grid is a uniform scale of the model's
-  mass, which the calibration already holds, and the right grid ranked 668th of 2374.
+  frequencies within 4e-6 of exact reanalysis up to 10 % of the model's mass).
 
 - *quadratic* (:data:`QUADRATIC_KINDS`, a member's bow: its stiffness changes to second order,
   its couplings to first, so no secant is right at more than one size; a member's taper: its
@@ -94,10 +89,6 @@ LADDER_KINDS = ("joint_flexibility",)
 #: Kinds screened on a ladder of sizes on the Ritz basis of :mod:`pipeline.diagnose.grounded`
 #: (a rank-q change of K or of M at fixed grids).
 RITZ_KINDS = ("boundary_stiffness", "lumped_mass")
-#: The rotary inertias at which a mass's ladder is run, as multiples of its ``inertia``
-#: parameter's reference (r = L / 50, :data:`pipeline.diagnose.effects.PARAMETER_RANGES`): a
-#: point mass and one with its rotary inertia.
-MASS_INERTIAS = (0.0, 1.0)
 #: Kinds screened with the quadratic model of :mod:`pipeline.diagnose.quadratic`, and its
 #: sampling scheme: a member's bow (stiffness ~ bow^2, couplings ~ bow; the effects.py
 #: docstring; its quadrant fixes the signs) and a member's taper (I ~ s^4, either sign).
@@ -250,18 +241,13 @@ def signatures(problem: Problem, theta, effects, evaluations, candidates, *, pro
     def ritz_ladder(cand):
         """A grounded spring's or a mass's rungs (:func:`pipeline.diagnose.grounded.ladder_sizes`)
         on the Ritz bases."""
-        if cand.kind != "lumped_mass":
+        if cand.kind == "lumped_mass":
+            reds = [reduce_mass(b, cand) for b in ritz_bases()]
+        else:
             reds = [reduce_spring(b, cand, cand.upper[0] * SPRING_LADDER[0])
                     for b in ritz_bases()]
-            return _ladder(cand, r0, residual, lambda size: on_bases(reds, size),
-                           sizes=ladder_sizes(reds, cand.upper[0]))
-        ladders = []
-        for inertia in MASS_INERTIAS:
-            value = inertia * cand.reference[1]
-            reds = [reduce_mass(b, cand, value) for b in ritz_bases()]
-            ladders.append(_ladder(cand, r0, residual, lambda size: on_bases(reds, size),
-                                   sizes=ladder_sizes(reds, cand.upper[0]), rest=(value,)))
-        return min(ladders, key=lambda ladder: ladder[2][1])
+        return _ladder(cand, r0, residual, lambda size: on_bases(reds, size),
+                       sizes=ladder_sizes(reds, cand.upper[0]))
 
     def one_sided(cand):
         return cand.kind in LADDER_KINDS and cand.get("dependent") is not None
@@ -308,17 +294,15 @@ def signatures(problem: Problem, theta, effects, evaluations, candidates, *, pro
     return r0, out, skipped
 
 
-def _first(cand, size: float, rest=()) -> np.ndarray:
-    """(npar,) parameters of a ladder rung: its first parameter at ``size``, the next at
-    ``rest``, the others at 0 (a joint's ``rotation``: the reference ratio; a mass's
-    ``inertia``: a point mass)."""
-    return np.r_[size, rest, np.zeros(len(cand.parameters) - 1 - len(rest))]
+def _first(cand, size: float) -> np.ndarray:
+    """(npar,) parameters of a ladder rung: its first parameter at ``size``, the others at 0
+    (a joint's ``rotation``: the reference ratio)."""
+    return np.r_[size, np.zeros(len(cand.parameters) - 1)]
 
 
-def _ladder(cand, r0, residual, approximate=None, sizes=None, rest=()) -> tuple:
+def _ladder(cand, r0, residual, approximate=None, sizes=None) -> tuple:
     """(Candidate, secant S, (x*, chi2*)) of a candidate sampled on :data:`LADDER` along its
-    first parameter, the next at ``rest``, the others at 0 (:func:`_first`; sizes whose model
-    cannot be analysed are passed over).
+    first parameter, the others at 0 (sizes whose model cannot be analysed are passed over).
     ``approximate`` (size -> residual, :mod:`pipeline.diagnose.ladder`) samples the rungs; x* is
     then analysed again exactly, and the exact ladder runs instead when that fails. ``sizes``
     (a grounded spring's rungs, :func:`pipeline.diagnose.grounded.ladder_sizes`) replaces the
@@ -330,7 +314,7 @@ def _ladder(cand, r0, residual, approximate=None, sizes=None, rest=()) -> tuple:
         nonlocal best, failure
         try:
             r = approximate(size) if approximate is not None else \
-                residual(cand, _first(cand, size, rest))
+                residual(cand, _first(cand, size))
         except (InputError, SolverError) as exc:
             failure = exc
             return
@@ -347,12 +331,12 @@ def _ladder(cand, r0, residual, approximate=None, sizes=None, rest=()) -> tuple:
     size = best[0]
     if approximate is not None and sizes is None:
         try:
-            r = residual(cand, _first(cand, size, rest))
+            r = residual(cand, _first(cand, size))
         except (InputError, SolverError):
-            return _ladder(cand, r0, residual, rest=rest)
+            return _ladder(cand, r0, residual)
         best = (size, r, chi_square(r))
     size, r, chi2 = best
-    return cand, secant(r0, r, _first(cand, size, rest)), (_first(cand, size, rest), chi2)
+    return cand, secant(r0, r, _first(cand, size)), (_first(cand, size), chi2)
 
 
 def screen(r0, signed) -> list:

@@ -176,11 +176,9 @@ def test_quick_blind_subset(quick_run, kind):
 
 def test_quick_gap_shrinks_on_the_named_mass(quick_run):
     """Frame lumped_mass seed 0 (truth 2.8 % of the mass spread over grids 3008, 3009, 3209), one
-    round: 2.10 % named spread over grid 3009 and its neighbours 3008, 3010, 3109, 3209 (inertia
-    2.1e-4, a radius of gyration of L / 69; screened with its reference inertia since 793230f,
-    before which it was 1.62 % at grid 3209); measured held-out RMS frequency error 10.24 ->
-    1.28 % (the truth's own 0.65 %), largest cross-orthogonality off-diagonal 0.613 -> 0.133
-    (the truth's 0.000)."""
+    round: 1.62 % named at grid 3209 (inertia 1.0e-4, a radius of gyration of L / 100);
+    measured held-out RMS frequency error 10.24 -> 1.88 % (the truth's own 0.65 %), largest
+    cross-orthogonality off-diagonal 0.613 -> 0.207 (the truth's 0.000)."""
     ds, result = quick_run("lumped_mass")
     before, after = result["gap_before"], result["gap_after"]
     # the truth's own gap (its models against the data drawn from them): the noise's, 1 %
