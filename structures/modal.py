@@ -300,6 +300,13 @@ def _m_orthonormal(m, v: np.ndarray, against: np.ndarray | None = None) -> np.nd
     return v
 
 
+def _not_autospc(system: AssembledSystem) -> np.ndarray:
+    """(ng,) bool: the g-set DOFs AUTOSPC does not hold (a rigid motion need not vanish there)."""
+    keep = np.ones(system.T.shape[0], dtype=bool)
+    keep[system.autospc] = False
+    return keep
+
+
 def rigid_body_modes(model: FEModel, system: AssembledSystem) -> tuple[np.ndarray, list[str]]:
     """Exact rigid-body modes of a free or partly free model, from the geometry.
 
@@ -336,8 +343,7 @@ def rigid_body_modes(model: FEModel, system: AssembledSystem) -> tuple[np.ndarra
     span = np.ptp(model.grids.xyz, axis=0).max() or 1.0
     rb = rb * np.r_[np.ones(3), np.full(3, 1.0 / span)]   # rotations scaled to the model's size
     ra = rb[system.a_dofs]
-    keep = np.ones(rb.shape[0], dtype=bool)
-    keep[system.autospc] = False
+    keep = _not_autospc(system)
     free = _null_rows((rb - system.T @ ra)[keep], 1e-9)   # rb's entries are O(1)
     v = ra @ free
     if v.shape[1] == 0:
@@ -469,8 +475,7 @@ def _check_mechanisms(model, system, lam, phi, scale):
     zero = np.abs(lam) <= 1e-12 * scale
     if not np.any(zero):
         return
-    keep = np.ones(system.T.shape[0], dtype=bool)
-    keep[system.autospc] = False
+    keep = _not_autospc(system)
     q, _ = np.linalg.qr(rigid_body_basis(model, system)[keep])
     for j in np.flatnonzero(zero):
         u = system.T @ phi[:, j]
