@@ -53,7 +53,7 @@ def _elastic(path: Path) -> np.ndarray:
 
 
 def test_names_of_the_contract():
-    assert STRUCTURES == ("x56", "frame", "wingbox")
+    assert STRUCTURES == ("x56", "frame", "wingbox", "windy")
     assert TRUTH_KINDS == ("lumped_mass", "joint_flexibility", "member_taper", "member_curvature",
                            "boundary_stiffness", "none", "outside")
 

@@ -6,7 +6,8 @@ way (``effects.py``), richer than the workflow's library.
 
 ``make_case(structure, kind, seed, out) -> Path`` writes a case (``generate.py``) for
 ``STRUCTURES`` = ("x56": the shipped example, "frame": a glider-like frame, ``frame.py``,
-"wingbox": the public Goland wing box whose truth MYSTRAN solves, ``wingbox.py``) and
+"wingbox": the public Goland wing box whose truth MYSTRAN solves, ``wingbox.py``, "windy":
+the public WINDY wind-tunnel wing, a stick model, ``windy.py``) and
 ``TRUTH_KINDS`` = the library's kinds + ("none", "outside") (``STRUCTURE_KINDS``: those each
 structure can hold).
 """

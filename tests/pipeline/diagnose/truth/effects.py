@@ -54,7 +54,8 @@ SIZE = {"lumped_mass": "added mass / total mass", "joint_flexibility":
         "local joint frequency / first elastic frequency",
         "member_taper": "1 - tip / root section size", "member_curvature": "bow / member length",
         "boundary_stiffness": "sum of k / (total mass (2 pi f_1)^2)",
-        "outside": "E A of the brace / E A of the stiffest bar at its ends", "none": "0"}
+        "outside": "E A of the brace / E A of the stiffest bar at its ends (of the model, for a "
+        "brace between grids no bar reaches)", "none": "0"}
 
 
 @dataclass(frozen=True)
@@ -96,8 +97,10 @@ def topology(bdf) -> Topology:
         if r.type == "RBE2":
             rigid[eid] = (int(r.gn), tuple(int(g) for g in r.Gmi))
             eg[eid] = (int(r.gn), *rigid[eid][1])
-        elif r.type in ("RBAR", "RBE3"):
-            eg[eid] = tuple(int(g) for g in r.node_ids if g)
+        elif r.type == "RBAR":
+            eg[eid] = (int(r.ga), int(r.gb))
+        elif r.type == "RBE3":
+            eg[eid] = (int(r.refgrid), *(int(g) for gs in r.Gijs for g in gs))
     xyz = {int(n): np.asarray(bdf.nodes[n].get_position(), float) for n in bdf.nodes}
     pts = np.array(list(xyz.values()))
     conm2 = [m for m in bdf.masses.values() if m.type == "CONM2"]
@@ -158,7 +161,8 @@ def hang(bdf, springs) -> None:
 
 
 def _fixed(bdf) -> frozenset:
-    """Grids whose three translations GRID PS or an SPC1 constrains (every SPC1 of the deck)."""
+    """Grids whose three translations GRID PS, an SPC1 or an SPC constrains (every SPC1 and SPC
+    of the deck; an SPC's enforced value is 0 on the decks of the study)."""
     held = defaultdict(set)
     for nid, node in bdf.nodes.items():
         held[int(nid)].update(str(node.ps or ""))
@@ -167,6 +171,9 @@ def _fixed(bdf) -> frozenset:
             if spc.type == "SPC1":
                 for nid in spc.node_ids:
                     held[int(nid)].update(str(spc.components))
+            elif spc.type == "SPC":
+                for nid, comps in zip(spc.node_ids, spc.components):
+                    held[int(nid)].update(str(comps))
     return frozenset(g for g, comps in held.items() if {"1", "2", "3"} <= comps)
 
 
@@ -257,7 +264,8 @@ def _bar_ea(bdf, eid: int) -> float:
     return bdf.materials[p.mid].e * p.A
 
 
-def draw(kind: str, bdf, topo: Topology, rng: np.random.Generator, f1: float) -> Effect:
+def draw(kind: str, bdf, topo: Topology, rng: np.random.Generator, f1: float,
+         brace_grids=None) -> Effect:
     """Draw an effect of ``kind`` on the analysis deck ``bdf`` (its ``topology``).
 
     Parameters
@@ -267,6 +275,9 @@ def draw(kind: str, bdf, topo: Topology, rng: np.random.Generator, f1: float) ->
     topo : Topology of ``bdf``
     rng : numpy Generator
     f1 : first elastic frequency of the truth without the effect [Hz] (bungee scale)
+    brace_grids : sequence of int, optional
+        The grids an ``outside`` brace may join (default: the CBARs' grids; a stick model's bar
+        grids lie on one line, where a massless brace changes no bending or torsion mode).
     """
     grids = topo.structural_grids()
     if kind == "none":
@@ -327,12 +338,16 @@ def draw(kind: str, bdf, topo: Topology, rng: np.random.Generator, f1: float) ->
         return Effect(kind, grids=(g,), size=float(sum(fr)),
                       params={"grid": g, "springs": [(c, f * scale) for c, f in zip(dirs, fr)]})
     if kind == "outside":
-        bar_grids = sorted({g for e in topo.bars for g in topo.bars[e][1:]})
-        far = _graph_distance(topo, bar_grids)
-        pairs = [(a, b) for a in bar_grids for b in bar_grids if a < b and far[(a, b)] >= 3
+        ends = sorted({g for e in topo.bars for g in topo.bars[e][1:]} if brace_grids is None
+                      else brace_grids)
+        far = _graph_distance(topo, ends)
+        pairs = [(a, b) for a in ends for b in ends if a < b and far[(a, b)] >= 3
                  and np.linalg.norm(topo.xyz[a] - topo.xyz[b]) <= 0.25 * topo.size]
         a, b = pairs[int(rng.integers(len(pairs)))]
-        ea = max(_bar_ea(bdf, e) for g in (a, b) for e in topo.grid_elements[g] if e in topo.bars)
+        ea = max(_bar_ea(bdf, e) for e in topo.bars)
+        if brace_grids is None:
+            ea = max(_bar_ea(bdf, e) for g in (a, b) for e in topo.grid_elements[g]
+                     if e in topo.bars)
         frac = _loguniform(rng, 0.05, 1.0)
         return Effect(kind, grids=(a, b), size=frac, params={"ends": (a, b), "EA": frac * ea})
     raise ValueError(f"unknown truth kind {kind!r}")
@@ -401,8 +416,9 @@ def apply(bdf, effect: Effect) -> None:
             bdf.add_celas2(eid + i, k, [p["grid"], 0], c1=c, c2=0)
     elif kind == "outside":
         pid, eid = _next(bdf.properties), _next([*bdf.elements, *bdf.rigid_elements])
-        mid = min(bdf.materials)
-        bdf.add_prod(pid, mid, p["EA"] / bdf.materials[mid].e)
+        mat, mid = bdf.materials[min(bdf.materials)], _next(bdf.materials)
+        bdf.add_mat1(mid, mat.e, mat.g, mat.nu, rho=0.0)       # a brace without mass
+        bdf.add_prod(pid, mid, p["EA"] / mat.e)
         bdf.add_crod(eid, pid, list(p["ends"]))
     else:
         raise ValueError(f"unknown truth kind {kind!r}")

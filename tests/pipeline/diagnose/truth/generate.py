@@ -8,8 +8,8 @@ first configuration by ``SHIFT_RANGE`` (a few %: visible above 1 % noise, not a 
 aircraft); the draw closest to the range is kept when none falls in it.
 
 The GVT follows ``data/x56_like/truth/make_truth.py``: the truth's elastic modes 7 .. 6 + N_TEST
-(1 .. N_TEST on the clamped wing box; solved by our solver, on the wing box by MYSTRAN,
-``wingbox.mystran_modes``) at the 120 sensors (analysis grid ids and positions), each shape's
+(1 .. N_TEST on the clamped wing box and WINDY wing; solved by our solver, on the wing box by
+MYSTRAN, ``wingbox.mystran_modes``) at the 120 sensors (analysis grid ids and positions), each shape's
 sign fixed
 (largest entry positive), then frequencies x (1 + 1 % N(0, 1)), shapes + N(0, (5 % of the mode's
 RMS)^2) per DOF (``noise``: other levels scale the same draws), damping zeta uniform 1-2 %;
@@ -39,16 +39,17 @@ from structures.gvt import make_gvt_dataset, write_uff
 from structures.massprops import mass_properties
 from structures.modal import compute_modes
 
-from . import effects, frame, wingbox, x56
+from . import effects, frame, windy, wingbox, x56
 
 #: The library's kinds (the contract's ``KINDS``, spelled out: the generator never imports the
 #: workflow).
 KINDS = ("lumped_mass", "joint_flexibility", "member_taper", "member_curvature",
          "boundary_stiffness")
 TRUTH_KINDS = KINDS + ("none", "outside")
-STRUCTURES = ("x56", "frame", "wingbox")
+STRUCTURES = ("x56", "frame", "wingbox", "windy")
 #: The truth kinds each structure can hold.
-STRUCTURE_KINDS = {"x56": TRUTH_KINDS, "frame": TRUTH_KINDS, "wingbox": wingbox.KINDS}
+STRUCTURE_KINDS = {"x56": TRUTH_KINDS, "frame": TRUTH_KINDS, "wingbox": wingbox.KINDS,
+                   "windy": windy.KINDS}
 #: Rigid-body modes of the free-free structures (the frame, the X-56).
 N_RIGID = 6
 SHIFT_RANGE = (0.03, 0.15)
@@ -74,6 +75,7 @@ class Structure:
     decks: dict                  # configuration -> analysis deck
     starts: dict                 # configuration -> the truth's starting deck
     solve: Callable              # (truth deck, number of modes) -> modes Dataset
+    brace_grids: tuple | None = None    # grids an outside brace may join (None: the bars')
 
 
 def _our_modes(path: Path, nmodes: int) -> xr.Dataset:
@@ -91,6 +93,11 @@ def _structure(structure: str, folder: Path, work: Path) -> Structure:
         deck = wingbox.write_wingbox(folder)
         return Structure(wingbox.UNITS, wingbox.N_TEST, wingbox.N_RIGID, wingbox.sensors(),
                          {"wingbox": deck}, {"wingbox": deck}, wingbox.mystran_modes)
+    if structure == "windy":
+        deck = windy.write_windy(folder)
+        return Structure(windy.UNITS, windy.N_TEST, windy.N_RIGID, windy.sensors(),
+                         {"windy": deck}, {"windy": windy.truth_start(deck, work)}, _our_modes,
+                         windy.brace_grids())
     decks = x56.write_analysis(folder)
     starts = {c: x56.write_structure(work, c) for c in x56.CONFIGURATIONS}
     return Structure(x56.UNITS, x56.N_TEST, N_RIGID, x56.sensors(), decks, starts, _our_modes)
@@ -227,8 +234,8 @@ def make_case(structure: str, kind: str, seed: int, out, *, decks=None,
     if len(noise) != 2 or not all(0.0 <= v < 1.0 for v in noise):
         raise InputError(f"noise {noise}: give (frequency, shape) standard deviations as "
                          "fractions in [0, 1).")
-    if suspension and structure == "wingbox":
-        raise InputError("suspension: the wing box is clamped; valid for: frame, x56.")
+    if suspension and structure in ("wingbox", "windy"):
+        raise InputError(f"suspension: the {structure} is clamped; valid for: frame, x56.")
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     streams = (int(seed), STRUCTURES.index(structure), TRUTH_KINDS.index(kind))
@@ -254,7 +261,8 @@ def make_case(structure: str, kind: str, seed: int, out, *, decks=None,
         if kind != "none":
             best = None
             for _ in range(ATTEMPTS):
-                effect = effects.draw(kind, analysis, topo, rng, float(f_base[0]))
+                effect = effects.draw(kind, analysis, topo, rng, float(f_base[0]),
+                                      st.brace_grids)
                 modes = _truth_modes(starts[first], work, effect, scatter, st, springs)
                 s = _shift(f_base, modes[0], st) if _suspended(modes[0], st) else np.inf
                 miss = max(SHIFT_RANGE[0] - s, s - SHIFT_RANGE[1], 0.0)

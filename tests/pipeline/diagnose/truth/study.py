@@ -22,7 +22,7 @@ Scores (issue 14, "Must show"):
   nothing): ``gap_shrinks_cross_validated`` counts a case when that RMS and the largest
   off-diagonal both drop.
 
-Run ``python -m tests.pipeline.diagnose.truth.study [--structures frame x56 wingbox]
+Run ``python -m tests.pipeline.diagnose.truth.study [--structures frame x56 wingbox windy]
 [--kinds ...] [--seeds 10] [--first-seed 0] [--noise 0.01 0.05] [--frequency-only]
 [--suspension] [--out DIR]`` from the repository root (``--noise``: the test's frequency and
 shape noise, :func:`make_case`; the workflow is not told it; ``--frequency-only``: the workflow
