@@ -77,11 +77,12 @@ scale of the model (so that bounds do not depend on units):
 ``member_curvature`` of a member, parameters ``bow_1``, ``bow_2``
     A parabolic bow: the member's middle rises by bow_1 L along each element's y axis (plane 1)
     and bow_2 L along its z axis (plane 2), L the member's length, the arc
-    w(xi) = 4 bow L xi (1 - xi) (:func:`pipeline.diagnose.members.remesh`): the member's grids
-    reach it by end offsets added to WA/WB, and a member of fewer than
+    w(xi) = 4 bow L xi (1 - xi) (:func:`pipeline.diagnose.members.remesh`): the member's
+    interior grids move onto it with what they carry (masses, rigid elements' independent
+    grids, sensors), its end grids stay, and a member of fewer than
     :data:`~pipeline.diagnose.members.MIN_SEGMENTS` elements is split in that many straight
-    pieces joined at new grids on the arc (one offset straight element cannot bow: its axial
-    load path stays straight). Bending then couples with axial and torsion, and the member's
+    pieces joined at new grids on the arc (one straight element cannot bow: its axial load
+    path stays straight). Bending then couples with axial and torsion, and the member's
     axial stiffness falls with the square of the bow. Bounds [-0.15, 0.15], as two candidates
     per member: bow_1 >= 0 with bow_2 >= 0 (label ``bow +y +z``) or bow_2 <= 0 (``bow +y -z``).
     The member's stiffness changes to second order in the bow (the axial softening ~ bow^2 of

@@ -259,17 +259,18 @@ def remesh(model: FEModel, member: Member, bow=(0.0, 0.0)):
     """The member on a parabolic arc, in at least :data:`MIN_SEGMENTS` straight elements.
 
     The arc runs through P(xi) = chord point + 4 xi (1 - xi) L (bow_1 y + bow_2 z), y, z the
-    axes of each element's chord, L the member's length: the member's own grids keep their
-    position and reach the arc by end offsets (added to WA / WB in the end's offset frame: the
-    grid's displacement frame, or basic for an end flagged 'B' as
-    :func:`structures.assembly.line_offsets` reads it); an element of a member with
-    ne < MIN_SEGMENTS elements is split in ceil(MIN_SEGMENTS / ne) elements at equal steps of xi, joined at new grids on the arc (basic
-    frame), with the element's property, its basic orientation vector and no offsets or pin
-    flags at the new grids. The first piece keeps the element's id, the others get new ids. A
-    member split before keeps its pieces and its new grids move by the arc (bows add). Without
-    bow, a split member of straight uniform elements has the original stiffness between its grids
-    (static condensation of the new grids is exact for cubic beam elements) and its structural
-    mass spread over the new grids.
+    axes of each element's chord, L the member's length: the member's interior grids move onto
+    it (a grid joining two elements by the mean of their two arcs, the same point on a straight
+    member), and with them what they carry (CONM2s, the independent grids of rigid elements,
+    sensors), as the points of a real curved member and what hangs on them lie on its curve;
+    its end grids (xi = 0, 1) stay. Element offsets are kept as they are. An element of a member
+    with ne < MIN_SEGMENTS elements is split in ceil(MIN_SEGMENTS / ne) elements at equal steps
+    of xi, joined at new grids on the arc (basic frame), with the element's property, its basic
+    orientation vector and no offsets or pin flags at the new grids. The first piece keeps the
+    element's id, the others get new ids. A member split before keeps its pieces and its grids
+    move by the arc (bows add). Without bow, a split member of straight uniform elements has the
+    original stiffness between its grids (static condensation of the new grids is exact for
+    cubic beam elements) and its structural mass spread over the new grids.
 
     Parameters
     ----------
@@ -307,28 +308,17 @@ def remesh(model: FEModel, member: Member, bow=(0.0, 0.0)):
     axes, _ = beam_axes(a, b, v)
     lateral = bow[0] * axes[:, 1] + bow[1] * axes[:, 2]                    # (ne, 3)
     shift = 4.0 * member.length * (xi * (1.0 - xi))[:, :, None] * lateral[:, None, :]
-    offt = data["offt"].astype("<U3")
-    for i in range(ne):
-        for end, row, key in ((0, first[i], "wa"), (1, last[i], "wb")):
-            flag = list(offt[row])
-            if flag[1 + end] == "O":                 # zero (line_offsets): now in G
-                flag[1 + end] = "G"
-            offt[row] = "".join(flag)
-            step = shift[i, -end]                    # basic, as line_offsets reads a 'B' end
-            if flag[1 + end] == "G":                 # u_cd = cd_axes^T u_basic
-                step = model.grids.cd_axes[gi[i, end]].T @ step
-            data[key][row] = data[key][row] + step
-    data["offt"] = offt
+    rows, at = np.unique(gi.ravel(), return_inverse=True)      # the member's grids, each end
+    step = np.zeros((rows.size, 3))
+    np.add.at(step, at, shift[:, [0, -1]].reshape(-1, 3))
+    moved = model.grids.xyz.copy()
+    moved[rows] += step / np.bincount(at)[:, None]              # the end grids: shift 0
+    if done:
+        inner = np.array([es.nodes[p[1:], 0] for p in pieces])             # (ne, per - 1)
+        moved[model.grids.index(inner.ravel())] += shift[:, 1:-1].reshape(-1, 3)
+    model = replace(model, grids=replace(model.grids, xyz=moved))
     if done or per == 1:
-        if done:
-            inner = np.array([es.nodes[p[1:], 0] for p in pieces])             # (ne, per - 1)
-            rows = model.grids.index(inner.ravel())
-            moved = model.grids.xyz.copy()
-            moved[rows] += shift[:, 1:-1].reshape(-1, 3)
-            model = replace(model, grids=replace(model.grids, xyz=moved))
-        elements = dict(model.elements)
-        elements[es.card] = replace(es, data=data)
-        return replace(model, elements=elements), np.concatenate(pieces), mids
+        return model, np.concatenate(pieces), mids
     data["v"][first], data["g0"][first] = v, 0
     data["offt"][first] = ["B" + f[1:] for f in data["offt"][first]]
     inner = a[:, None] + t[None, 1:-1, None] * (b - a)[:, None] + shift[:, 1:-1]   # (ne, per-1, 3)

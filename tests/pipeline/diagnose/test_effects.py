@@ -17,7 +17,7 @@ from pipeline.diagnose.effects import (KINDS, Candidate, Location, apply_effect,
 from pipeline.diagnose.effect_deck import model_changes, write_patched_deck
 from pipeline.diagnose.mirror import mirror_grids
 from pipeline.diagnose.members import find_members
-from structures.assembly import assemble, assemble_g, line_offsets
+from structures.assembly import assemble, assemble_g
 from structures.bdf import read_model
 from structures.bulk_text import card
 from structures.common.errors import InputError
@@ -326,35 +326,37 @@ def test_a_split_member_keeps_its_pieces_and_bows_add(tmp_path):
 
 
 @pytest.mark.parametrize("ends", ["GG", "BB"])
-def test_bow_offsets_of_grids_in_a_rotated_displacement_frame(tmp_path, ends):
+def test_bow_moves_the_grids_in_a_rotated_displacement_frame(tmp_path, ends):
     """Eight CBARs along x on grids whose CD frame is turned 30 deg about z, bowed by b in
-    plane 1 (basic y): every end offset, read in basic by line_offsets, is the parabola's
-    (0, 4 b L xi (1 - xi), 0) at the end's xi = k / 8, whether the offsets are in the grid's CD
-    frame ('G', stored as R^T times that) or in basic ('B', read as given by line_offsets; the
-    reader accepts only G / O end flags, so that one is set on the model)."""
-    length, bow, turn = 4.0, 0.05, np.radians(30.0)
+    plane 1 (basic y): every grid moves to the parabola's (x, 4 b L xi (1 - xi), 0) at its xi =
+    k / 8 (basic, whatever the CD frame), the end grids stay, and the end offsets and flags are
+    left as they were ('G' or 'B'; the reader accepts only G / O end flags, so the 'B' one is set
+    on the model). A CONM2 on the middle grid moves with it: the model's CG moves by b L m_c / m
+    in y, by hand (the bars are massless)."""
+    length, bow, turn, m_c = 4.0, 0.05, np.radians(30.0), 2.0
     cards = [("CORD2R", 5, None, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, np.cos(turn), np.sin(turn), 0.0)]
     cards += [("GRID", i + 1, None, length * i / 8, 0.0, 0.0, 5, 123456 if i == 0 else None)
               for i in range(9)]
     cards += [("CBAR", 100 + i, 7, i + 1, i + 2, 0.0, 1.0, 0.0, "BGG") for i in range(8)]
-    cards += [("PBAR", 7, 1, 3.0, 0.7, 1.3, 1.0), ("MAT1", 1, 2.0e5, None, 0.3, 0.0)]
+    cards += [("PBAR", 7, 1, 3.0, 0.7, 1.3, 1.0), ("MAT1", 1, 2.0e5, None, 0.3, 0.0),
+              ("CONM2", 900, 5, None, m_c), ("CONM2", 901, 9, None, 3.0)]
     model = read_model(_deck(tmp_path, "turned.bdf", cards))
     es = model.elements["CBAR"]
     data = {**es.data, "offt": np.array(["B" + ends] * 8)}
     model = replace(model, elements={"CBAR": replace(es, data=data)})
     cand = _pick(candidates(model, ["member_curvature"]), "member_curvature", "+y +z")
-    bowed = apply_effect(model, cand, [bow, 0.0]).elements["CBAR"]
+    bent = apply_effect(model, cand, [bow, 0.0])
+    bowed = bent.elements["CBAR"]
     assert bowed.data["offt"].tolist() == ["B" + ends] * 8
-    _, wa, wb = line_offsets(model, bowed, model.grids.index(bowed.nodes), model.filename)
+    for key in ("wa", "wb"):
+        np.testing.assert_array_equal(bowed.data[key], es.data[key])
     xi = np.arange(9) / 8
-    rise = np.zeros((9, 3))
-    rise[:, 1] = 4.0 * bow * length * xi * (1.0 - xi)
-    np.testing.assert_allclose(wa, rise[:-1], atol=1e-15)
-    np.testing.assert_allclose(wb, rise[1:], atol=1e-15)
-    turned = np.array([[np.cos(turn), np.sin(turn), 0.0], [-np.sin(turn), np.cos(turn), 0.0],
-                       [0.0, 0.0, 1.0]])                          # rows: the CD axes in basic
-    stored = rise[:-1] @ turned.T if ends == "GG" else rise[:-1]
-    np.testing.assert_allclose(bowed.data["wa"], stored, atol=1e-7)
+    expected = np.column_stack([length * xi, 4.0 * bow * length * xi * (1.0 - xi),
+                                np.zeros(9)])
+    np.testing.assert_allclose(bent.grids.xyz[bent.grids.index(np.arange(1, 10))], expected,
+                               atol=1e-15)
+    shift = mass_properties(bent).cg - mass_properties(model).cg
+    np.testing.assert_allclose(shift, [0.0, bow * length * m_c / (m_c + 3.0), 0.0], atol=1e-14)
 
 
 # ------------------------------------------------------------------------------- rigid joints
