@@ -12,7 +12,7 @@ configuration of a structure. Nuisance scatter (``scatter``) is applied before t
 | member_taper | a member (CBAR chain of one PBAR, or one CBAR) re-meshed in 4-8 segments, section size r from ``root`` (0.95-1.15) down to ``root * tip`` (tip/root 0.5-0.8), A ~ r^2, I1, I2, J ~ r^4 |
 | member_curvature | the member re-meshed in 4-8 segments, its grids bowed sideways by ``bow * L * sin(pi s)`` (bow 5-15 %) in a random direction normal to it |
 | boundary_stiffness | grounded CELAS2 (a bungee) at a grid in z, y, x or y and z |
-| outside | a missing load path: a CROD brace between two grids three or more elements apart |
+| outside | a missing load path: a massless CROD brace between two grids three or more elements apart (bar grids, or the structure's ``brace_grids``) |
 | none | nothing |
 
 Stiffness scales (the draw multiplies them by log-uniform factors; ``make_case`` re-draws until

@@ -9,11 +9,10 @@ aircraft); the draw closest to the range is kept when none falls in it.
 
 The GVT follows ``data/x56_like/truth/make_truth.py``: the truth's elastic modes 7 .. 6 + N_TEST
 (1 .. N_TEST on the clamped wing box and WINDY wing; solved by our solver, on the wing box by
-MYSTRAN, ``wingbox.mystran_modes``) at the 120 sensors (analysis grid ids and positions), each shape's
-sign fixed
-(largest entry positive), then frequencies x (1 + 1 % N(0, 1)), shapes + N(0, (5 % of the mode's
-RMS)^2) per DOF (``noise``: other levels scale the same draws), damping zeta uniform 1-2 %;
-UFF 15 + 55. The weighing is the truth's exact
+MYSTRAN, ``wingbox.mystran_modes``) at the 120 sensors (analysis grid ids and positions), each
+shape's sign fixed (largest entry positive), then frequencies x (1 + 1 % N(0, 1)), shapes +
+N(0, (5 % of the mode's RMS)^2) per DOF (``noise``: other levels scale the same draws), damping
+zeta uniform 1-2 %; UFF 15 + 55. The weighing is the truth's exact
 weight, CG and inertia about the CG (``make_truth.measured_mass``).
 
 Random streams: the scatter ``numpy.random.default_rng((seed, structure))`` (the same aircraft for

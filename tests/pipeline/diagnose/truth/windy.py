@@ -18,9 +18,9 @@ and changes no mode) and the hinge is the slow hinge test's (tests/pipeline/diag
 test_hinge_fwt.py), so no joint. The spar's grids lie on one line, where a brace (the
 ``outside`` kind, massless) would change no bending or torsion mode: braces join the rib points
 (``brace_grids``: the rib RBE2s' dependent grids, fore and aft of the spar), as a fairing or a
-skin panel carrying load between two ribs would. The GVT: ``N_TEST`` modes at all three translations of 40 of
-the free grids (120 DOFs, evenly over the ids; the clamped grid and the RBE3 mass points left
-out).
+skin panel carrying load between two ribs would. The GVT: ``N_TEST`` modes at all three
+translations of 40 of the free grids (120 DOFs, evenly over the ids; the clamped grid and the
+RBE3 mass points left out).
 """
 from __future__ import annotations
 
