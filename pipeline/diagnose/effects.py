@@ -83,16 +83,18 @@ scale of the model (so that bounds do not depend on units):
     :data:`~pipeline.diagnose.members.MIN_SEGMENTS` elements is split in that many straight
     pieces joined at new grids on the arc (one straight element cannot bow: its axial load
     path stays straight). Bending then couples with axial and torsion, and the member's
-    axial stiffness falls with the square of the bow. Bounds [-0.15, 0.15], as two candidates
-    per member: bow_1 >= 0 with bow_2 >= 0 (label ``bow +y +z``) or bow_2 <= 0 (``bow +y -z``).
+    axial stiffness falls with the square of the bow. Bounds [-0.15, 0.15], as four candidates
+    per member, one per quadrant: bow_1 >= 0 or <= 0 with bow_2 >= 0 or <= 0 (labels
+    ``bow +y +z``, ``bow +y -z``, ``bow -y +z``, ``bow -y -z``).
     The member's stiffness changes to second order in the bow (the axial softening ~ bow^2 of
     :mod:`pipeline.diagnose.members`) and only its couplings to first order, so the response
     is nearly even in the bow: a linear signature through 0 would predict the opposite change
     for the opposite bow, and within one quadrant a secant at one size is wrong at every other
-    (the screening's second-order model, :mod:`pipeline.diagnose.quadratic`). The other two
-    quadrants (bow_1 < 0) are the same bows turned over (their even part is the same, their
-    couplings change sign: on the frame's tail member opposite bows' exact chi^2 differ by at
-    most 5 %).
+    (the screening's second-order model, :mod:`pipeline.diagnose.quadratic`). Opposite bows
+    are not the same bow turned over: their couplings change sign, and the grids and what they
+    carry move to opposite sides (on the WINDY blind study's spar, its rib masses on its grids,
+    the five of ten bows with a downward component were ``unexplained`` or named a mass when
+    only the quadrants bow_1 >= 0 were offered, and named right with all four).
 ``boundary_stiffness`` at a grid in direction x, y or z, parameter ``k_<direction>``
     A grounded CELAS2 of stiffness k times m_total (2 pi f_1)^2, f_1 the model's lowest elastic
     frequency and m_total its total mass (consistent units): at k = 1 the spring alone would carry
@@ -312,12 +314,15 @@ def candidates(model: FEModel, kinds=KINDS, *, frequency: float | None = None
                 if kind == "member_taper":
                     out.append(_candidate(kind, location, label, tuple(names), (("member", m),)))
                     continue
-                for side in (1.0, -1.0):
-                    cand = _candidate(kind, location, f"{label} bow +y {'+-'[side < 0]}z",
+                for s1, s2 in ((1.0, 1.0), (1.0, -1.0), (-1.0, 1.0), (-1.0, -1.0)):
+                    cand = _candidate(kind, location,
+                                      f"{label} bow {'+-'[s1 < 0]}y {'+-'[s2 < 0]}z",
                                       tuple(names), (("member", m),))
-                    out.append(replace(cand, lower=(0.0, min(0.0, side * cand.upper[1])),
-                                       upper=(cand.upper[0], max(0.0, side * cand.upper[1])),
-                                       reference=(cand.reference[0], side * cand.reference[1])))
+                    up = cand.upper
+                    out.append(replace(cand, lower=(min(0.0, s1 * up[0]), min(0.0, s2 * up[1])),
+                                       upper=(max(0.0, s1 * up[0]), max(0.0, s2 * up[1])),
+                                       reference=(s1 * cand.reference[0],
+                                                  s2 * cand.reference[1])))
     return tuple(out) + mirror_pairs(model, out)
 
 

@@ -55,9 +55,9 @@ GRID = 25
 #: Fractions of the ray from 0 to the candidate's bounds sampled by the exact line search.
 RAY = tuple(np.arange(1, 7) / 6.0)
 #: Candidates of each kind (best model fits first) given the exact line search
-#: (:func:`line_searches`): a member's two quadrant candidates for the two best members, or a
-#: pair's.
-LINE_SEARCH_TOP = 4
+#: (:func:`line_searches`), by the kind's sampling scheme: the four best tapers ("centred"), or
+#: a bow's four quadrant candidates for the two best members or pairs ("one_sided").
+LINE_SEARCH_TOP = {"centred": 4, "one_sided": 8}
 #: Sampling schemes of :func:`sample_points` (module docstring).
 SCHEMES = ("one_sided", "centred")
 
@@ -260,7 +260,8 @@ def line_searches(out, r0, residual, kinds) -> None:
                                     kinds[cand.kind])
             if np.any(x):
                 fits[cand.kind].append((chi2, i, x))
-    chosen = [f for kind in kinds for f in sorted(fits[kind], key=lambda f: f[0])[:LINE_SEARCH_TOP]]
+    chosen = [f for kind in kinds
+              for f in sorted(fits[kind], key=lambda f: f[0])[:LINE_SEARCH_TOP[kinds[kind]]]]
     current = float(np.sum(np.square(r0)))
     for _, i, x in chosen:
         cand = out[i][0]

@@ -50,7 +50,7 @@ every configuration (:mod:`pipeline.diagnose.evidence`). The routes:
   h_k, 2 h_k and h_k + h_l for a bow, +-2 h_k and 2 h_k + 2 h_l for a taper (the first-order
   eigenvalue perturbation would miss the (phi_k^T dK_1 phi_j)^2 / (lambda_j - lambda_k) term of
   the couplings, the same order in the bow as the stiffness change; samples shared by a
-  member's two quadrant candidates), fitted within the sampled span; the
+  member's four quadrant candidates), fitted within the sampled span; the
   :data:`pipeline.diagnose.quadratic.LINE_SEARCH_TOP` best of each kind then get an exact line
   search to their bounds (:func:`pipeline.diagnose.quadratic.line_search`), whose best size and
   exact chi^2 are their screening result.

@@ -337,7 +337,7 @@ def test_quadratic_bow_model_matches_reanalysis_of_a_bowed_member(bowed_tail):
 
 
 def test_screening_recovers_a_bowed_members_bow(bowed_tail):
-    """The screening of the bowed member's two quadrant candidates (quadratic model, exact line
+    """The screening of the bowed member's four quadrant candidates (quadratic model, exact line
     search) puts the right quadrant first, its bow within 0.01 of the truth (0.09, 0.06) and its
     exact chi^2 below 5 % of the unbowed model's (measured (0.088, 0.068), 8.3 of 255 with the
     residual whitened for the correlated scatter; (0.091, 0.066), 5.3 of 272 with independent
