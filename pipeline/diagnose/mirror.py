@@ -130,7 +130,7 @@ def mirror_pairs(model: FEModel, candidates) -> tuple:
 
 def _key(cand, image):
     """(kind, grids, direction) of the candidate's site, or of its mirror image with ``image``
-    (None when a grid has no image). The two bow quadrants of a member share its key."""
+    (None when a grid has no image). The four bow quadrants of a member share its key."""
     grids = cand.location.grids
     if image is not None:
         if any(g not in image for g in grids):
