@@ -32,8 +32,8 @@ from structures.massprops import mass_properties
 from structures.modal import RESIDUAL_TOL, compute_modes, eigen_residuals, solve_eigen
 from structures.nastran_results import read_f06_eigenvalues
 from structures.rigid import element_constraints
-from structures.sections import section_fields
 from test_mystran import needs_mystran, run_mystran
+from tests.pipeline.diagnose.truth.windy import as_bars
 
 DATA = Path(__file__).resolve().parents[1] / "data"
 RTOL = 5e-3
@@ -266,8 +266,8 @@ def test_windy_fwt_sections_and_mass_by_hand():
 def _fwt_mystran_deck(folder: Path) -> Path:
     """The WINDY deck as MYSTRAN 18 reads it, in one file (SOL 103, DISP(PLOT), MPC = 1).
 
-    Equivalent rewrites: PBEAML -> PBAR with the same section (:func:`structures.sections.
-    section_fields`), CBEAM -> CBAR (no warping, no taper), the coincident hinge grids 208/209
+    Equivalent rewrites: PBEAML -> PBAR with the same section and CBEAM -> CBAR (no warping, no
+    taper: :func:`tests.pipeline.diagnose.truth.windy.as_bars`), the coincident hinge grids 208/209
     (tied 123456 by RBE2 300, same CD) merged, PLOTEL/DMI/output PARAMs dropped. MYSTRAN's RBE3
     ignores rotational independent components (measured on a cantilever with an RBE3 on three
     grids: its frequencies are the same with C = 123 and C = 123456, ours differ by up to 0.5 %),
@@ -282,16 +282,7 @@ def _fwt_mystran_deck(folder: Path) -> Path:
     model = read_model(DATA / FWT)
     bdf = BDF(debug=None)
     bdf.read_bdf(str(DATA / FWT), xref=False)
-    for pid, prop in list(bdf.properties.items()):
-        if prop.type == "PBEAML":
-            f = section_fields("PBEAML", pid, prop.mid, prop.beam_type, prop.dim, prop.xxb,
-                               prop.nsm)
-            del bdf.properties[pid]
-            bdf.add_pbar(pid, f["MID"], A=f["A"], i1=f["I1"], i2=f["I2"], i12=f["I12"], j=f["J"])
-    for eid, elem in list(bdf.elements.items()):
-        if elem.type == "CBEAM":
-            del bdf.elements[eid]
-            bdf.add_cbar(eid, elem.pid, [elem.ga, elem.gb], list(elem.x), None)
+    as_bars(bdf)
     merged = {209: 208}
     del bdf.rigid_elements[300], bdf.nodes[209]
     bdf.elements[2190].ga = 208

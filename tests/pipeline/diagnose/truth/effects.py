@@ -344,10 +344,9 @@ def draw(kind: str, bdf, topo: Topology, rng: np.random.Generator, f1: float,
         pairs = [(a, b) for a in ends for b in ends if a < b and far[(a, b)] >= 3
                  and np.linalg.norm(topo.xyz[a] - topo.xyz[b]) <= 0.25 * topo.size]
         a, b = pairs[int(rng.integers(len(pairs)))]
-        ea = max(_bar_ea(bdf, e) for e in topo.bars)
-        if brace_grids is None:
-            ea = max(_bar_ea(bdf, e) for g in (a, b) for e in topo.grid_elements[g]
-                     if e in topo.bars)
+        near = topo.bars if brace_grids is not None else \
+            [e for g in (a, b) for e in topo.grid_elements[g] if e in topo.bars]
+        ea = max(_bar_ea(bdf, e) for e in near)
         frac = _loguniform(rng, 0.05, 1.0)
         return Effect(kind, grids=(a, b), size=frac, params={"ends": (a, b), "EA": frac * ea})
     raise ValueError(f"unknown truth kind {kind!r}")

@@ -57,10 +57,10 @@ def write_windy(folder: Path) -> Path:
     return path
 
 
-def truth_start(analysis: Path, folder: Path) -> Path:
-    """The truth's starting deck ``windy_bar.bdf`` in ``folder``: the analysis deck with each
-    PBEAML as the PBAR of its section and each CBEAM as a CBAR (same ids, ends and x)."""
-    bdf = read_pynastran(analysis)
+def as_bars(bdf) -> None:
+    """In place: each PBEAML of a parsed deck as the PBAR of its section
+    (:func:`structures.sections.section_fields`) and each CBEAM as a CBAR (same ids, ends and
+    orientation vector x; no warping, taper or offsets on this deck)."""
     for pid, prop in list(bdf.properties.items()):
         if prop.type == "PBEAML":
             f = section_fields("PBEAML", pid, prop.mid, prop.beam_type, prop.dim, prop.xxb,
@@ -72,6 +72,13 @@ def truth_start(analysis: Path, folder: Path) -> Path:
         if elem.type == "CBEAM":
             del bdf.elements[eid]
             bdf.add_cbar(eid, elem.pid, [elem.ga, elem.gb], list(elem.x), None)
+
+
+def truth_start(analysis: Path, folder: Path) -> Path:
+    """The truth's starting deck ``windy_bar.bdf`` in ``folder``: the analysis deck
+    :func:`as_bars`."""
+    bdf = read_pynastran(analysis)
+    as_bars(bdf)
     path = Path(folder) / "windy_bar.bdf"
     bdf.write_bdf(str(path), enddata=True, size=16)
     return path
