@@ -61,10 +61,13 @@ def diagnose_section(run_dir, labels: UnitLabels) -> str:
            f"<p>Verdict: <b>{html.escape(str(record['verdict']))}</b>.</p>")
     effects = record.get("effects") or []
     if effects:
-        out += table(("round", "kind", "location", "parameters", "adds (deck units)"), [
+        out += table(("round", "kind", "location", "parameters", "adds (deck units)",
+                      "also fits within the margin"), [
             (i, e["kind"], _location(e.get("location")),
              ", ".join(f"{k} = {_value(v)}" for k, v in (e.get("parameters") or {}).items()),
-             ", ".join(f"{k} = {_value(v)}" for k, v in (e.get("quantities") or {}).items()))
+             ", ".join(f"{k} = {_value(v)}" for k, v in (e.get("quantities") or {}).items()),
+             "; ".join(f"{o['label']} (+{_value(o['score'])})" for o in e.get("elsewhere") or [])
+             or "-")
             for i, e in enumerate(effects, 1)], table_id="diagnose-effects")
     else:
         out += note("No effect was named, so the model is unchanged.")

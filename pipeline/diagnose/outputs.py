@@ -202,6 +202,9 @@ def verdict_summary(record: dict, velocity: str = "model units", top: int = 5) -
                         else ""))
         if effect.get("quantities"):
             lines.append(f"    adds (deck units): {_parameters(effect['quantities'])}")
+        if effect.get("elsewhere"):
+            lines.append("    site uncertain, also fits within the margin: " + "; ".join(
+                f"{e['label']} (+{_number(e['score'], '.1f')})" for e in effect["elsewhere"]))
     candidates = list(record.get("candidates") or [])[:top]
     if candidates:
         lines.append(f"candidates (best {len(candidates)} of {len(record['candidates'])}, score: "

@@ -41,11 +41,14 @@ class EffectRecord(NamedTuple):
     """A named effect: the candidate, its fitted parameter values (npar,) and its score: the
     lead of :func:`pipeline.diagnose.verdict.decide` in its round, the lower of the runner-up's
     and "none"'s scores minus the effect's, each score chi^2 / c + p ln n (c the round's
-    dispersion; "none"'s less 2 ln of the candidates screened, its prior odds)."""
+    dispersion; "none"'s less 2 ln of the candidates screened, its prior odds). ``elsewhere``
+    lists the fits of its kind at other sites that score within the margin of it
+    (:func:`pipeline.diagnose.rounds.sites_elsewhere`): its site is then uncertain."""
 
     candidate: object
     values: np.ndarray
     score: float
+    elsewhere: tuple = ()
 
 
 class CandidateScore(NamedTuple):
@@ -65,7 +68,7 @@ class CandidateScore(NamedTuple):
     refitted: bool
 
 
-def _location_dict(location) -> dict:
+def location_dict(location) -> dict:
     if location is None:
         return {"grids": [], "elements": [], "properties": []}
     return location.as_dict() if hasattr(location, "as_dict") else dict(location)
@@ -77,8 +80,8 @@ def suspension_effects(suspension: Mapping | None) -> int:
 
 
 def effect_json(record: EffectRecord) -> dict:
-    """{"kind", "location", "parameters", "quantities", "label", "score", "sites"} of a named
-    effect.
+    """{"kind", "location", "parameters", "quantities", "label", "score", "sites",
+    "elsewhere"} of a named effect.
 
     ``parameters`` are relative to scales of the model of the effect's round
     (:mod:`pipeline.diagnose.effects`); ``quantities`` is what they add to the model in deck units
@@ -87,17 +90,20 @@ def effect_json(record: EffectRecord) -> dict:
     ``quantities``: one for a one-sided effect, two for a mirror pair
     (:mod:`pipeline.diagnose.mirror`; ``location`` is then the union of both and ``parameters``
     and ``quantities`` the first site's: a pair of masses adds ``parameters["mass"]`` at each,
-    twice in all).
+    twice in all). ``elsewhere`` lists the fits of its kind at other sites that the data do not
+    tell from it (each ``kind``, ``label``, ``location`` and ``score`` above the effect's, below
+    the margin): empty when its site is as certain as its kind.
     """
     cand = record.candidate
     per_site = quantities(cand, record.values)
-    return {"kind": cand.kind, "location": _location_dict(cand.location),
+    return {"kind": cand.kind, "location": location_dict(cand.location),
             "parameters": {name: float(v) for name, v in zip(cand.parameters, record.values)},
             "quantities": per_site[0], "label": cand.label, "score": float(record.score),
-            "sites": [{"location": _location_dict(site.location),
+            "sites": [{"location": location_dict(site.location),
                        "parameters": {name: float(v) for name, v in zip(site.parameters, x)},
                        "quantities": q}
-                      for (site, x), q in zip(site_values(cand, record.values), per_site)]}
+                      for (site, x), q in zip(site_values(cand, record.values), per_site)],
+            "elsewhere": [dict(e) for e in record.elsewhere]}
 
 
 def _clean(value):
@@ -208,7 +214,7 @@ class DiagnoseResult:
             "effect": (effects[n_hung] if len(effects) > n_hung and self.verdict == "effect"
                        else None),
             "effects": effects,
-            "candidates": [{"kind": c.kind, "location": _location_dict(c.location),
+            "candidates": [{"kind": c.kind, "location": location_dict(c.location),
                             "score": c.score, "label": c.label, "refitted": c.refitted}
                            for c in self.candidates],
             "gap_before": dict(self.gap_before), "gap_after": dict(self.gap_after),

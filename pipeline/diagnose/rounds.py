@@ -14,9 +14,10 @@ from pipeline.diagnose.calibrate import Problem
 from pipeline.diagnose.evidence import bic, chi_square
 from pipeline.diagnose.loadpath import outscores
 from pipeline.diagnose.predictive import held_out_evidence, kept_modes
-from pipeline.diagnose.result import CandidateScore
+from pipeline.diagnose.result import CandidateScore, location_dict
 from pipeline.diagnose.screen import Refitted
-from pipeline.diagnose.verdict import round_scores
+from pipeline.diagnose.gap import separating_measurement
+from pipeline.diagnose.verdict import elsewhere, round_scores
 
 def chi2_split(problem: Problem, fit) -> tuple:
     """(chi2_modal, chi2_stated) of a refit: its training residual's modal rows and the rest
@@ -132,3 +133,42 @@ def round_record(k: int, verdict: str, fits, best, runner, none, held_out, n_dat
                 "grids": list(path[0].grids), "stiffness": path[0].stiffness,
                 "chi2": chi_square(path[0].residual), "n_pairs": path[0].n_pairs,
                 "score": path[1], "named_score": path[2]}}
+
+
+def sites_elsewhere(problem: Problem, fits, best: int, scored, n_data: int, n_candidates: int,
+                    margin: float, near, alike) -> tuple:
+    """The fits of the named one's kind at other sites that score within the margin of it
+    (:func:`pipeline.diagnose.verdict.elsewhere`: the data name the kind, not the site) and a
+    note saying so.
+
+    Parameters
+    ----------
+    problem : Problem
+    fits : sequence of Refitted, the round's refits; ``best`` the named one.
+    scored : (the "none" row, the fits' rows, n_modal) as :func:`pipeline.diagnose.verdict.decide`
+        took them.
+    n_data, n_candidates : int, as for :func:`pipeline.diagnose.verdict.round_scores`.
+    margin : float
+    near, alike : as for :func:`pipeline.diagnose.verdict.elsewhere`.
+
+    Returns
+    -------
+    sites : tuple of dict, {"kind", "label", "location", "score"} of each, best first; ``score``
+        its score minus the named fit's (below ``margin``).
+    note : str or None, what that means for the verdict, with the measurement that would
+        separate the closest of them from the named fit
+        (:func:`pipeline.diagnose.gap.separating_measurement`); None without them.
+    """
+    scores = round_scores(scored[0], scored[1], n_data, n_candidates, n_modal=scored[2])[0]
+    close = elsewhere(scored[1], scores, best, margin, near, alike)
+    sites = tuple({"kind": fits[j].candidate.kind, "label": fits[j].candidate.label,
+                   "location": location_dict(fits[j].candidate.location),
+                   "score": float(scores[j] - scores[best])} for j in close)
+    if not close:
+        return sites, None
+    cand = fits[best].candidate
+    return sites, (f"{cand.kind} {cand.label} beats every other kind and 'none' by the margin "
+                   f"{margin:g} but not its own kind at "
+                   + ", ".join(f"{e['label']} (+{e['score']:.1f})" for e in sites)
+                   + ": the kind is named, its site uncertain; "
+                   + separating_measurement(problem, fits[best], fits[close[0]]))

@@ -8,8 +8,7 @@ candidates whose size exceeds what the nominal scatter could do by itself
 (:func:`within_scatter`):
 
 - ``effect``: the best refitted candidate beats "none" (the model with its nominal parameters
-  refitted) and the runner-up (the best candidate of another kind or at a location that is not
-  its neighbour, :func:`pipeline.diagnose.effects.neighbours`) by ``settings.margin``, and the
+  refitted) and the runner-up (the best candidate of another kind) by ``settings.margin``, and the
   held-out modes do not contradict it by more than the margin
   (:func:`pipeline.diagnose.predictive.held_out_evidence`: on the modes that "none" or the fit
   reproduces; a mode neither reproduces is a mis-paired one and is left out), or, when they
@@ -20,6 +19,12 @@ candidates whose size exceeds what the nominal scatter could do by itself
   the modes by the margin (else ``ambiguous``);
 - ``ambiguous``: it beats "none" but not the runner-up (a fit that predicts the same data as
   the best at every frequency and DOF, ``alike``, is the same explanation, not a rival);
+A fit of the best's kind elsewhere is no rival of the verdict: it competes for the site, not the
+kind. When one scores within the margin of the best away from its neighbours
+(:func:`elsewhere`), the effect is named with its site uncertain and those sites listed beside it
+(a grounded spring on the 1-cm spar of the WINDY wing fits at sites 15 cm apart within 1-5 in
+BIC while beating every other kind by 30-80: the data tell the kind, not the spar station).
+
 - ``none``: no candidate beats "none" and "none" passes the goodness-of-fit test;
 - ``unexplained``: no candidate beats "none" and "none" fails the goodness-of-fit test, or the
   best beats both but the held-out modes contradict it (a fit that compensates on the training
@@ -143,7 +148,7 @@ def round_scores(none_fit, fits, n_data: int, n_candidates: int = 1, *, n_modal:
     return scores, float(none_score), float(c)
 
 
-def decide(none_fit, fits, margin: float, near, n_data: int, n_candidates: int = 1, *,
+def decide(none_fit, fits, margin: float, n_data: int, n_candidates: int = 1, *,
            n_modal: int, held_out=None, alike=None) -> tuple:
     """Verdict of one round from its score table.
 
@@ -153,8 +158,6 @@ def decide(none_fit, fits, margin: float, near, n_data: int, n_candidates: int =
     fits : sequence of (kind, location, chi2_modal, chi2_stated, n_params)
         Refitted candidates (:func:`round_scores`).
     margin : float
-    near : callable(location_a, location_b) -> bool
-        True when b is a's neighbour (one element layer).
     n_data : int, training residuals (all rows).
     n_candidates : int, candidates screened (the prior odds of "none" against each one).
     n_modal : int, modal rows among the training residuals.
@@ -171,8 +174,7 @@ def decide(none_fit, fits, margin: float, near, n_data: int, n_candidates: int =
     -------
     verdict : str
     best : int or None, index into ``fits``.
-    runner : int or None, index of the runner-up (another kind or a location that is not a
-        neighbour of the best's).
+    runner : int or None, index of the runner-up (the best fit of another kind).
     lead : float, score of the better of "none" and the runner-up minus the best's (nan without
         fits).
     reason : str, why: ``"gain"`` (the best beats "none" and the runner-up, no veto: effect),
@@ -218,8 +220,8 @@ def decide(none_fit, fits, margin: float, near, n_data: int, n_candidates: int =
     cases) the totals were 27-97 % of their limits.
 
     A mirror pair (:mod:`pipeline.diagnose.mirror`) and either of its sites alone are the same
-    kind at overlapping locations, so neither is the other's runner-up: whether one side or both
-    is named is decided by the score alone (same parameter count), not by the margin.
+    kind, so neither is the other's runner-up: whether one side or both is named is decided by
+    the score alone (same parameter count), not by the margin.
 
     "none" and "some effect" are given equal prior probability, shared equally by the
     ``n_candidates`` candidates, so the prior odds of "none" against one candidate are
@@ -247,8 +249,8 @@ def decide(none_fit, fits, margin: float, near, n_data: int, n_candidates: int =
     "none" in training by the margin, the preference of all the modes for j over the best is
     P = E_j,best - (score_j - score_best), E_j,best the held-out evidence for j against the
     best on the modes either reproduces (:func:`preference`). When some P exceeds the margin,
-    the fit of largest P is named when its preference over each of its rivals (another kind or a
-    location not its neighbour, as for the runner-up) exceeds the margin too, else the round is
+    the fit of largest P is named when its preference over each of its rivals (another kind, as
+    for the runner-up) exceeds the margin too, else the round is
     ``ambiguous`` between it and its closest rival. The X-56 blind study's mass seed 7, a mass
     spread over the three grids of an engine pylon: the engine mount's joint fits the training
     modes 175 better than a mass spread over two of them, the held-out modes prefer that mass by
@@ -270,10 +272,8 @@ def decide(none_fit, fits, margin: float, near, n_data: int, n_candidates: int =
     best = int(np.argmin(scores))
 
     def rivals(i, pool) -> list:
-        """The fits of ``pool`` of another kind than fit i or at a location that is not its
-        neighbour, that do not predict its data."""
-        kind, loc = fits[i][0], fits[i][1]
-        return [j for j in pool if j != i and (fits[j][0] != kind or not near(loc, fits[j][1]))
+        """The fits of ``pool`` of another kind than fit i that do not predict its data."""
+        return [j for j in pool if fits[j][0] != fits[i][0]
                 and not (alike is not None and alike(i, j))]
 
     def runner_up(i, pool):
@@ -303,6 +303,27 @@ def decide(none_fit, fits, margin: float, near, n_data: int, n_candidates: int =
     if alt_lead > margin and evidence[alt] > margin:
         return "effect", alt, alt_runner, alt_lead, "past_veto", c
     return "unexplained", best, runner, lead, "held_out", c
+
+
+def elsewhere(fits, scores, best: int, margin: float, near, alike=None) -> list[int]:
+    """The fits of the named one's kind away from its site that the data do not tell from it: not
+    its neighbours, not predicting its data (those stand for it), scoring within ``margin`` of it,
+    best first (:func:`decide`: they make the site uncertain, not the kind).
+
+    Parameters
+    ----------
+    fits : sequence of (kind, location, ...) rows, as :func:`decide` takes them.
+    scores : (len(fits),) the round's scores (:func:`round_scores`).
+    best : int, the named fit.
+    margin : float
+    near : callable(location_a, location_b) -> bool, True when b is a's neighbour.
+    alike : callable(i, j) -> bool, optional, True when fits i and j predict the same data.
+    """
+    kind, site = fits[best][0], fits[best][1]
+    close = [j for j in range(len(fits)) if j != best and fits[j][0] == kind
+             and not near(site, fits[j][1]) and not (alike is not None and alike(best, j))
+             and scores[j] < scores[best] + margin]
+    return sorted(close, key=lambda j: scores[j])
 
 
 def preference(scores, held_out, c: float, i: int, j: int) -> float:

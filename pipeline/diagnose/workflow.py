@@ -56,7 +56,7 @@ from pipeline.diagnose.predictive import held_out_evidence, held_out_modes
 from pipeline.diagnose.preflight import DiagnoseSettings, check_inputs, checked
 from pipeline.diagnose.result import DiagnoseResult, EffectRecord, suspension_effects
 from pipeline.diagnose.rounds import (against_path, chi2_split, none_fit, ranking_table,
-                                      round_record, score_rows)
+                                      round_record, score_rows, sites_elsewhere)
 from pipeline.diagnose.screen import (bound_release, pick_for_refit, polish, refit, screen,
                                       signatures)
 from pipeline.diagnose.suspension import FIT_LIMIT, hung_data, identify
@@ -246,7 +246,7 @@ def diagnose(configurations, settings: DiagnoseSettings = DiagnoseSettings(), *,
                       int(problem.modal_rows().sum()))
             alike = cache(lambda i, j: indistinguishable(problem, fits[i], fits[j]))
             verdict, best, runner, lead, reason, c = decide(
-                scored[0], scored[1], settings.margin, near, n_data, len(cands),
+                scored[0], scored[1], settings.margin, n_data, len(cands),
                 n_modal=scored[2], held_out=(modes_none, modes, entries), alike=alike)
             same = [] if best is None else [fits[i].candidate.label for i in range(len(fits))
                                             if i != best and alike(best, i)]
@@ -302,9 +302,16 @@ def diagnose(configurations, settings: DiagnoseSettings = DiagnoseSettings(), *,
                         verdict, path = again
                         fits[best] = rich
                         modes[best] = held_out_modes(problem, rich.evaluations)[0]
+            spread, note = (sites_elsewhere(problem, fits, best,
+                                            (scored[0], score_rows(problem, fits), scored[2]),
+                                            n_data, len(cands), settings.margin, near, alike)
+                            if verdict == "effect" else ((), None))
             rounds.append(round_record(k, verdict, fits, best, runner, none,
                                         (modes_none, modes, entries), n_data, scored + (c,),
                                         path, same, reason=reason, margin=settings.margin))
+            rounds[-1]["elsewhere"] = list(spread)
+            if note:
+                notes.append(f"round {k + 1}: {note}")
             if path is not None and verdict in ("unexplained", "ambiguous"):
                 cand = fits[best].candidate
                 a, b = path[0].grids
@@ -376,7 +383,7 @@ def diagnose(configurations, settings: DiagnoseSettings = DiagnoseSettings(), *,
                 chosen = polished
             gap_after = rounds[-1]["gap"] = gap_metrics(problem, chosen.evaluations)
             rounds[-1]["nominal"] = {n: float(t) for n, t in zip(problem.names, chosen.theta)}
-            records.append(EffectRecord(chosen.candidate, chosen.values, lead))
+            records.append(EffectRecord(chosen.candidate, chosen.values, lead, spread))
             effects.append((chosen.candidate, chosen.values))
             theta, none_evs = chosen.theta, chosen.evaluations
     n_hung = suspension_effects(suspension)

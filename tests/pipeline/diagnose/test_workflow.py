@@ -27,9 +27,6 @@ from structures.gvt import make_gvt_dataset
 from structures.suspension import rigid_body_readings
 from tests.pipeline.diagnose.truth import make_case
 
-def _never_near(a, b):
-    return False
-
 
 @pytest.mark.parametrize("field, value", [("kinds", ("bogus",)), ("max_effects", 0),
                                           ("holdout", 1), ("refit", 0),
@@ -210,7 +207,7 @@ def test_published_ranking_is_the_one_that_decided():
     _, best, runner, lead, _, disp = decide(
         (450.0, 90.0, 2), [(x.candidate.kind, x.candidate.location, m, st, x.n_params)
                            for x, (m, st) in zip(refits, ((261.0, 9.0), (240.0, 90.0)))],
-        10.0, _never_near, 100, 10, n_modal=90)
+        10.0, 100, 10, n_modal=90)
     assert (best, runner) == (0, 1) and lead == pytest.approx(table[2].score, rel=1e-12)
     assert disp == pytest.approx(3.0, rel=1e-12)
 
@@ -261,7 +258,7 @@ def test_round_record_judges_held_out_modes_on_the_training_dispersion():
                                             np.array([8.0, 5000.0, 10.0])], np.array([10, 10, 10]))
     none_row, rows = (1980.0, 20.0, 2), [("lumped_mass", 1, 774.0, 20.0, 3),
                                         ("lumped_mass", 2, 1000.0, 0.0, 3)]
-    *_, c = decide(none_row, rows, 10.0, _never_near, 400, n_modal=390, held_out=held)
+    *_, c = decide(none_row, rows, 10.0, 400, n_modal=390, held_out=held)
     record = round_record(0, "effect", [fit("A", 794.0), fit("B", 1000.0)], 0, 1, none, held,
                            400, (none_row, rows, 390, c))
     assert record["dispersion"] == pytest.approx(2.0, rel=1e-12)
