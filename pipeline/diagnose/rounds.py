@@ -19,6 +19,9 @@ from pipeline.diagnose.screen import Refitted
 from pipeline.diagnose.gap import separating_measurement
 from pipeline.diagnose.verdict import elsewhere, round_scores
 
+#: Sites of an uncertain site's note listed by name (the JSON lists all).
+SHOWN = 6
+
 def chi2_split(problem: Problem, fit) -> tuple:
     """(chi2_modal, chi2_stated) of a refit: its training residual's modal rows and the rest
     (:meth:`pipeline.diagnose.calibrate.Problem.modal_rows`); they sum to ``fit.chi2``."""
@@ -34,18 +37,18 @@ def score_rows(problem: Problem, refits) -> list:
             for f in refits]
 
 
-def ranking_table(problem: Problem, r0, rows, refits, none, n_data: int, n_candidates: int) -> tuple:
-    """The first round's ranked candidates by the scores
-    :func:`pipeline.diagnose.verdict.decide` compared
-    (:func:`~pipeline.diagnose.verdict.round_scores`: refitted ones from their refit, the rest from their linearised
-    residual r0 + S x (:class:`pipeline.diagnose.screen.Screened`: S x is the residual's change
-    at x for every kind) with the same modal dispersion c, "none" with its prior odds), minus
-    the best."""
+def ranked(problem: Problem, r0, rows, refits, none, n_data: int, n_candidates: int) -> list:
+    """(score, candidate or None for "none", refitted) of every screened candidate and "none",
+    best first, by the scores :func:`pipeline.diagnose.verdict.decide` compared
+    (:func:`~pipeline.diagnose.verdict.round_scores`: refitted ones from their refit, the rest
+    from their linearised residual r0 + S x (:class:`pipeline.diagnose.screen.Screened`: S x is
+    the residual's change at x for every kind) with the same modal dispersion c, "none" with its
+    prior odds)."""
     modal = problem.modal_rows()
     scores, none_score, c = round_scores((*chi2_split(problem, none), none.n_params),
                                          score_rows(problem, refits), n_data, n_candidates,
                                          n_modal=int(modal.sum()))
-    scored = [(b, fit.candidate, True) for b, fit in zip(scores, refits)]
+    scored = [(float(b), fit.candidate, True) for b, fit in zip(scores, refits)]
     done = {id(fit.candidate) for fit in refits}
     for row in rows:
         if id(row.candidate) not in done:
@@ -54,7 +57,12 @@ def ranking_table(problem: Problem, r0, rows, refits, none, n_data: int, n_candi
             scored.append((chi_square(r[modal]) / c + chi_square(r[~modal]) + p * np.log(n_data),
                            row.candidate, False))
     scored.append((none_score, None, True))
-    scored.sort(key=lambda s: s[0])
+    return sorted(scored, key=lambda s: s[0])
+
+
+def ranking_table(problem: Problem, r0, rows, refits, none, n_data: int, n_candidates: int) -> tuple:
+    """The first round's ranked candidates (:func:`ranked`), scores minus the best's."""
+    scored = ranked(problem, r0, rows, refits, none, n_data, n_candidates)
     best = scored[0][0]
     return tuple(CandidateScore(c.kind if c else "none", c.location.as_dict() if c else
                                 {"grids": [], "elements": [], "properties": []}, float(b - best),
@@ -135,40 +143,54 @@ def round_record(k: int, verdict: str, fits, best, runner, none, held_out, n_dat
                 "score": path[1], "named_score": path[2]}}
 
 
-def sites_elsewhere(problem: Problem, fits, best: int, scored, n_data: int, n_candidates: int,
-                    margin: float, near, alike) -> tuple:
-    """The fits of the named one's kind at other sites that score within the margin of it
+def sites_elsewhere(problem: Problem, r0, rows, fits, best: int, none, n_data: int,
+                    n_candidates: int, margin: float, near, alike) -> tuple:
+    """The candidates of the named fit's kind at other sites that score within the margin of it
     (:func:`pipeline.diagnose.verdict.elsewhere`: the data name the kind, not the site) and a
     note saying so.
+
+    Every screened candidate is judged (:func:`ranked`: the refitted ones by their refit, the
+    rest by their linearised fit), so that the list shows how far the site is uncertain, not
+    only the few refitted.
 
     Parameters
     ----------
     problem : Problem
+    r0, rows : the round's residual and screening (:func:`ranked`).
     fits : sequence of Refitted, the round's refits; ``best`` the named one.
-    scored : (the "none" row, the fits' rows, n_modal) as :func:`pipeline.diagnose.verdict.decide`
-        took them.
+    none : Refitted, the model without a further effect.
     n_data, n_candidates : int, as for :func:`pipeline.diagnose.verdict.round_scores`.
     margin : float
-    near, alike : as for :func:`pipeline.diagnose.verdict.elsewhere`.
+    near : callable(location_a, location_b) -> bool, True when b is a's neighbour.
+    alike : callable(i, j) -> bool, True when fits i and j predict the same data.
 
     Returns
     -------
-    sites : tuple of dict, {"kind", "label", "location", "score"} of each, best first; ``score``
-        its score minus the named fit's (below ``margin``).
+    sites : tuple of dict, {"kind", "label", "location", "score", "refitted"} of each, best
+        first; ``score`` its score minus the named fit's (below ``margin``).
     note : str or None, what that means for the verdict, with the measurement that would
-        separate the closest of them from the named fit
+        separate the closest refitted one from the named fit
         (:func:`pipeline.diagnose.gap.separating_measurement`); None without them.
     """
-    scores = round_scores(scored[0], scored[1], n_data, n_candidates, n_modal=scored[2])[0]
-    close = elsewhere(scored[1], scores, best, margin, near, alike)
-    sites = tuple({"kind": fits[j].candidate.kind, "label": fits[j].candidate.label,
-                   "location": location_dict(fits[j].candidate.location),
-                   "score": float(scores[j] - scores[best])} for j in close)
-    if not close:
+    scored = ranked(problem, r0, rows, fits, none, n_data, n_candidates)
+    named = fits[best].candidate
+    refitted = {id(f.candidate): i for i, f in enumerate(fits)}
+    at = next(i for i, (_, c, _) in enumerate(scored) if c is named)
+    close = elsewhere([(c.kind if c else "none", c.location if c else None, b)
+                       for b, c, _ in scored], at, margin, near,
+                      lambda j: id(scored[j][1]) in refitted
+                      and alike(best, refitted[id(scored[j][1])]))
+    sites = tuple({"kind": scored[j][1].kind, "label": scored[j][1].label,
+                   "location": location_dict(scored[j][1].location),
+                   "score": float(scored[j][0] - scored[at][0]), "refitted": scored[j][2]}
+                  for j in close)
+    if not sites:
         return sites, None
-    cand = fits[best].candidate
-    return sites, (f"{cand.kind} {cand.label} beats every other kind and 'none' by the margin "
-                   f"{margin:g} but not its own kind at "
-                   + ", ".join(f"{e['label']} (+{e['score']:.1f})" for e in sites)
-                   + ": the kind is named, its site uncertain; "
-                   + separating_measurement(problem, fits[best], fits[close[0]]))
+    shown = ", ".join(f"{e['label']} (+{e['score']:.1f})" for e in sites[:SHOWN])
+    more = f" and {len(sites) - SHOWN} more" if len(sites) > SHOWN else ""
+    rival = next((refitted[id(scored[j][1])] for j in close if scored[j][2]), None)
+    return sites, (f"{named.kind} {named.label} beats every other kind and 'none' by the margin "
+                   f"{margin:g} but not its own kind at {shown}{more}: the kind is named, its "
+                   "site uncertain"
+                   + ("" if rival is None else
+                      "; " + separating_measurement(problem, fits[best], fits[rival])))

@@ -305,25 +305,25 @@ def decide(none_fit, fits, margin: float, n_data: int, n_candidates: int = 1, *,
     return "unexplained", best, runner, lead, "held_out", c
 
 
-def elsewhere(fits, scores, best: int, margin: float, near, alike=None) -> list[int]:
-    """The fits of the named one's kind away from its site that the data do not tell from it: not
-    its neighbours, not predicting its data (those stand for it), scoring within ``margin`` of it,
-    best first (:func:`decide`: they make the site uncertain, not the kind).
+def elsewhere(entries, named: int, margin: float, near, alike=None) -> list[int]:
+    """The candidates of the named one's kind away from its site that the data do not tell from
+    it: not its neighbours, not predicting its data (those stand for it), scoring within
+    ``margin`` of it, best first (:func:`decide`: they make the site uncertain, not the kind).
 
     Parameters
     ----------
-    fits : sequence of (kind, location, ...) rows, as :func:`decide` takes them.
-    scores : (len(fits),) the round's scores (:func:`round_scores`).
-    best : int, the named fit.
+    entries : sequence of (kind, location, score), the round's candidates with their scores
+        (:func:`round_scores`).
+    named : int, the named one's index into ``entries``.
     margin : float
     near : callable(location_a, location_b) -> bool, True when b is a's neighbour.
-    alike : callable(i, j) -> bool, optional, True when fits i and j predict the same data.
+    alike : callable(j) -> bool, optional, True when entry j predicts the named one's data.
     """
-    kind, site = fits[best][0], fits[best][1]
-    close = [j for j in range(len(fits)) if j != best and fits[j][0] == kind
-             and not near(site, fits[j][1]) and not (alike is not None and alike(best, j))
-             and scores[j] < scores[best] + margin]
-    return sorted(close, key=lambda j: scores[j])
+    kind, site, score = entries[named]
+    close = [j for j, (k, loc, s) in enumerate(entries) if j != named and k == kind
+             and s < score + margin and not near(site, loc)
+             and not (alike is not None and alike(j))]
+    return sorted(close, key=lambda j: entries[j][2])
 
 
 def preference(scores, held_out, c: float, i: int, j: int) -> float:

@@ -302,9 +302,8 @@ def diagnose(configurations, settings: DiagnoseSettings = DiagnoseSettings(), *,
                         verdict, path = again
                         fits[best] = rich
                         modes[best] = held_out_modes(problem, rich.evaluations)[0]
-            spread, note = (sites_elsewhere(problem, fits, best,
-                                            (scored[0], score_rows(problem, fits), scored[2]),
-                                            n_data, len(cands), settings.margin, near, alike)
+            spread, note = (sites_elsewhere(problem, r0, rows, fits, best, none, n_data,
+                                            len(cands), settings.margin, near, alike)
                             if verdict == "effect" else ((), None))
             rounds.append(round_record(k, verdict, fits, best, runner, none,
                                         (modes_none, modes, entries), n_data, scored + (c,),

@@ -59,10 +59,13 @@ def test_the_own_kind_elsewhere_makes_the_site_uncertain_not_the_kind():
     assert (verdict, best, runner, reason) == ("effect", 0, 2, "gain")
     assert lead == pytest.approx(30.0, rel=1e-12)
     scores = round_scores((600.0, 0.0, 2), fits, N, n_modal=N)[0]
-    assert elsewhere(fits, scores, 0, 10.0, _never_near) == [1]
-    assert elsewhere(fits, scores, 0, 10.0, lambda a, b: True) == []      # a neighbour
-    assert elsewhere(fits, scores, 0, 10.0, _never_near, lambda i, j: True) == []   # alike
-    assert elsewhere(fits, scores, 0, 4.0, _never_near) == []               # 5 behind
+    entries = [(kind, loc, b) for (kind, loc, *_), b in zip(fits, scores)]
+    assert elsewhere(entries, 0, 10.0, _never_near) == [1]
+    assert elsewhere(entries, 0, 10.0, lambda a, b: True) == []           # a neighbour
+    assert elsewhere(entries, 0, 10.0, _never_near, lambda j: True) == []  # alike
+    assert elsewhere(entries, 0, 4.0, _never_near) == []                    # 5 behind
+    # named past a veto or by a reversal, a better-scoring site of its kind is listed too
+    assert elsewhere(entries, 1, 10.0, _never_near) == [0]
     fits = [("lumped_mass", 1, 390.0, 0.0, 3), ("boundary_stiffness", 1, 392.0, 0.0, 3)]
     assert decide((600.0, 0.0, 2), fits, 10.0, N, n_modal=N)[::4] == ("ambiguous", "runner_up")
 
@@ -308,9 +311,10 @@ def test_a_fit_that_predicts_the_same_data_is_not_the_runner_up():
     # without ``alike`` the spring at 6002 is the own kind elsewhere: named, its site uncertain
     assert decide((600.0, 0.0, 2), fits, 10.0, N, n_modal=N)[0] == "effect"
     scores = round_scores((600.0, 0.0, 2), fits, N, n_modal=N)[0]
-    assert elsewhere(fits, scores, 0, 10.0, _never_near) == [1]
+    entries = [(kind, loc, b) for (kind, loc, *_), b in zip(fits, scores)]
+    assert elsewhere(entries, 0, 10.0, _never_near) == [1]
     alike = lambda i, j: {i, j} == {0, 1}  # noqa: E731
-    assert elsewhere(fits, scores, 0, 10.0, _never_near, alike) == []
+    assert elsewhere(entries, 0, 10.0, _never_near, lambda j: alike(0, j)) == []
     verdict, best, runner, lead, reason, _ = decide((600.0, 0.0, 2), fits, 10.0, N,
                                                     n_modal=N, alike=alike)
     assert (verdict, best, runner, reason) == ("effect", 0, 2, "gain")

@@ -212,6 +212,48 @@ def test_published_ranking_is_the_one_that_decided():
     assert disp == pytest.approx(3.0, rel=1e-12)
 
 
+def test_sites_of_the_named_kind_within_the_margin_are_listed_with_their_scores():
+    """The same stand-in rows as the published ranking: the named spring at grid 1 (refitted,
+    modal chi^2 261, weighing 9: c = 3, score 87 + 9 + 3 ln 100), springs linearised at grid 5
+    (modal 270: (270 - 261) / 3 = 3 behind, listed), at grid 2 (264: 1 behind, but its
+    neighbour) and at grid 7 (300: 13 behind, past the margin 10), a refitted mass at grid 9
+    (another kind, never listed). Nothing refitted is listed, so the note names no separating
+    measurement; with a margin of 2 nothing is listed."""
+    from pipeline.diagnose.rounds import sites_elsewhere
+
+    def cand(kind, grid):
+        return Candidate(kind, Location(grids=(grid,)), f"{kind} {grid}", ("x",), (0.0,), (1.0,),
+                         (0.1,))
+
+    named, mass = cand("boundary_stiffness", 1), cand("lumped_mass", 9)
+    problem = _split_problem()
+    fits = [SimpleNamespace(candidate=named, theta=None, evaluations=_rows(261.0, 9.0),
+                            n_params=3),
+            SimpleNamespace(candidate=mass, theta=None, evaluations=_rows(300.0, 9.0),
+                            n_params=3)]
+    r0 = _rows(450.0, 90.0)
+    rows = []
+    for grid, chi2 in ((5, 270.0), (2, 264.0), (7, 300.0)):
+        step = _rows(chi2, 9.0) - r0
+        rows.append(SimpleNamespace(candidate=cand("boundary_stiffness", grid),
+                                    signature=step[:, None], values=np.array([1.0])))
+    none = SimpleNamespace(theta=None, evaluations=r0, n_params=2)
+
+    def near(a, b):
+        return {a.grids[0], b.grids[0]} <= {1, 2}
+
+    spread, note = sites_elsewhere(problem, r0, rows, fits, 0, none, 100, 10, 10.0, near,
+                                   lambda i, j: False)
+    assert [(e["label"], e["refitted"], e["location"]["grids"]) for e in spread] == [
+        ("boundary_stiffness 5", False, [5])]
+    assert spread[0]["score"] == pytest.approx((270.0 - 261.0) / 3.0, rel=1e-12)
+    assert note == ("boundary_stiffness boundary_stiffness 1 beats every other kind and 'none' "
+                    "by the margin 10 but not its own kind at boundary_stiffness 5 (+3.0): the "
+                    "kind is named, its site uncertain")
+    assert sites_elsewhere(problem, r0, rows, fits, 0, none, 100, 10, 2.0, near,
+                           lambda i, j: False) == ((), None)
+
+
 def test_chi2_split_separates_the_modal_rows():
     """Two configurations: one with shapes (3 modes, modes 1 and 3 training, 2 kept shape
     coordinates each, 2 weighed quantities), one frequency-only (2 modes, mode 2 training, no
