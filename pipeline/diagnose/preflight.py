@@ -78,7 +78,8 @@ class DiagnoseSettings:
     frequency_noise : test frequency standard deviation (fraction).
     shape_noise : test shape noise per DOF relative to the shape's RMS; None: estimated.
     holdout : every holdout-th paired mode (frequency order) of each configuration is held out.
-    margin : BIC margin to name one candidate over the runner-up and over "none".
+    margin : BIC margin to name one candidate over "none" and the best of another kind (a site
+        of its own kind within it makes the site uncertain, not the verdict).
     refit : candidates refitted after the screening.
     nmodes : analysis modes (None: 2 x elastic test modes + 6: suspension modes not counted).
     model_scatter : relative scatter of the nominal section and mass properties that the few
