@@ -60,7 +60,8 @@ def ranked(problem: Problem, r0, rows, refits, none, n_data: int, n_candidates: 
     return sorted(scored, key=lambda s: s[0])
 
 
-def ranking_table(problem: Problem, r0, rows, refits, none, n_data: int, n_candidates: int) -> tuple:
+def ranking_table(problem: Problem, r0, rows, refits, none, n_data: int,
+                  n_candidates: int) -> tuple:
     """The first round's ranked candidates (:func:`ranked`), scores minus the best's."""
     scored = ranked(problem, r0, rows, refits, none, n_data, n_candidates)
     best = scored[0][0]

@@ -19,18 +19,19 @@ candidates whose size exceeds what the nominal scatter could do by itself
   the modes by the margin (else ``ambiguous``);
 - ``ambiguous``: it beats "none" but not the runner-up (a fit that predicts the same data as
   the best at every frequency and DOF, ``alike``, is the same explanation, not a rival);
-A fit of the best's kind elsewhere is no rival of the verdict: it competes for the site, not the
-kind. When one scores within the margin of the best away from its neighbours
-(:func:`elsewhere`), the effect is named with its site uncertain and those sites listed beside it
-(a grounded spring on the 1-cm spar of the WINDY wing fits at sites 15 cm apart within 1-5 in
-BIC while beating every other kind by 30-80: the data tell the kind, not the spar station).
-
 - ``none``: no candidate beats "none" and "none" passes the goodness-of-fit test;
 - ``unexplained``: no candidate beats "none" and "none" fails the goodness-of-fit test, or the
   best beats both but the held-out modes contradict it (a fit that compensates on the training
   modes for something the library cannot represent) and no fit qualifies past the veto.
 A clear BIC gain is tested before the goodness of fit: an omnibus chi^2 test over hundreds of
 shape entries is blind to an effect that moves a few frequencies, which the BIC sees.
+
+A fit of the best's kind elsewhere is no rival of the verdict: it competes for the site, not the
+kind. When one scores within the margin of the best away from its neighbours
+(:func:`elsewhere`), the effect is named with its site uncertain and those sites are listed
+beside it (a grounded spring on the 1-cm spar of the WINDY wing fits at sites 15 cm apart within
+1-5 in BIC while beating every other kind by 30-80: the data tell the kind, not the spar
+station).
 """
 from __future__ import annotations
 
