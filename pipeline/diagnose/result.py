@@ -91,8 +91,9 @@ def effect_json(record: EffectRecord) -> dict:
     (:mod:`pipeline.diagnose.mirror`; ``location`` is then the union of both and ``parameters``
     and ``quantities`` the first site's: a pair of masses adds ``parameters["mass"]`` at each,
     twice in all). ``elsewhere`` lists the fits of its kind at other sites that the data do not
-    tell from it (each ``kind``, ``label``, ``location`` and ``score`` above the effect's, below
-    the margin): empty when its site is as certain as its kind.
+    tell from it (each ``kind``, ``label``, ``location``, ``score`` above the effect's, below the
+    margin, and ``refitted``: False when scored by its linearised fit): empty when its site is as
+    certain as its kind.
     """
     cand = record.candidate
     per_site = quantities(cand, record.values)
