@@ -145,7 +145,7 @@ def round_record(k: int, verdict: str, fits, best, runner, none, held_out, n_dat
 
 
 def sites_elsewhere(problem: Problem, r0, rows, fits, best: int, none, n_data: int,
-                    n_candidates: int, margin: float, near, alike) -> tuple:
+                    n_candidates: int, margin: float, near, set_aside) -> tuple:
     """The candidates of the named fit's kind at other sites that score within the margin of it
     (:func:`pipeline.diagnose.verdict.elsewhere`: the data name the kind, not the site) and a
     note saying so.
@@ -163,7 +163,9 @@ def sites_elsewhere(problem: Problem, r0, rows, fits, best: int, none, n_data: i
     n_data, n_candidates : int, as for :func:`pipeline.diagnose.verdict.round_scores`.
     margin : float
     near : callable(location_a, location_b) -> bool, True when b is a's neighbour.
-    alike : callable(i, j) -> bool, True when fits i and j predict the same data.
+    set_aside : callable(j) -> bool, True when refit j is no other site to list: it predicts
+        the named fit's data (the same explanation) or the held-out modes contradict it (a
+        compensation, not an alternative).
 
     Returns
     -------
@@ -180,7 +182,7 @@ def sites_elsewhere(problem: Problem, r0, rows, fits, best: int, none, n_data: i
     close = elsewhere([(c.kind if c else "none", c.location if c else None, b)
                        for b, c, _ in scored], at, margin, near,
                       lambda j: id(scored[j][1]) in refitted
-                      and alike(best, refitted[id(scored[j][1])]))
+                      and set_aside(refitted[id(scored[j][1])]))
     sites = tuple({"kind": scored[j][1].kind, "label": scored[j][1].label,
                    "location": location_dict(scored[j][1].location),
                    "score": float(scored[j][0] - scored[at][0]), "refitted": scored[j][2]}

@@ -302,9 +302,10 @@ def diagnose(configurations, settings: DiagnoseSettings = DiagnoseSettings(), *,
                         verdict, path = again
                         fits[best] = rich
                         modes[best] = held_out_modes(problem, rich.evaluations)[0]
-            spread, note = (sites_elsewhere(problem, r0, rows, fits, best, none, n_data,
-                                            len(cands), settings.margin, near, alike)
-                            if verdict == "effect" else ((), None))
+            spread, note = (sites_elsewhere(
+                problem, r0, rows, fits, best, none, n_data, len(cands), settings.margin, near,
+                lambda j: alike(best, j) or held_out_evidence(modes_none, modes[j], entries, c)
+                < -settings.margin) if verdict == "effect" else ((), None))
             rounds.append(round_record(k, verdict, fits, best, runner, none,
                                         (modes_none, modes, entries), n_data, scored + (c,),
                                         path, same, reason=reason, margin=settings.margin))

@@ -217,8 +217,10 @@ def test_sites_of_the_named_kind_within_the_margin_are_listed_with_their_scores(
     modal chi^2 261, weighing 9: c = 3, score 87 + 9 + 3 ln 100), springs linearised at grid 5
     (modal 270: (270 - 261) / 3 = 3 behind, listed), at grid 2 (264: 1 behind, but its
     neighbour) and at grid 7 (300: 13 behind, past the margin 10), a refitted mass at grid 9
-    (another kind, never listed). Nothing refitted is listed, so the note names no separating
-    measurement; with a margin of 2 nothing is listed."""
+    (another kind, never listed), and a refitted spring at grid 6 (modal 267: 2 behind) that
+    ``set_aside`` leaves out (it predicts the named fit's data, or the held-out modes contradict
+    it). Nothing refitted is listed, so the note names no separating measurement; with a margin
+    of 1 nothing is listed."""
     from pipeline.diagnose.rounds import sites_elsewhere
 
     def cand(kind, grid):
@@ -230,7 +232,9 @@ def test_sites_of_the_named_kind_within_the_margin_are_listed_with_their_scores(
     fits = [SimpleNamespace(candidate=named, theta=None, evaluations=_rows(261.0, 9.0),
                             n_params=3),
             SimpleNamespace(candidate=mass, theta=None, evaluations=_rows(300.0, 9.0),
-                            n_params=3)]
+                            n_params=3),
+            SimpleNamespace(candidate=cand("boundary_stiffness", 6), theta=None,
+                            evaluations=_rows(267.0, 9.0), n_params=3)]
     r0 = _rows(450.0, 90.0)
     rows = []
     for grid, chi2 in ((5, 270.0), (2, 264.0), (7, 300.0)):
@@ -242,16 +246,23 @@ def test_sites_of_the_named_kind_within_the_margin_are_listed_with_their_scores(
     def near(a, b):
         return {a.grids[0], b.grids[0]} <= {1, 2}
 
+    asked = []
+
+    def set_aside(j):
+        asked.append(j)
+        return j == 2
+
     spread, note = sites_elsewhere(problem, r0, rows, fits, 0, none, 100, 10, 10.0, near,
-                                   lambda i, j: False)
+                                   set_aside)
+    assert asked == [2]                                  # only refits are asked about
     assert [(e["label"], e["refitted"], e["location"]["grids"]) for e in spread] == [
         ("boundary_stiffness 5", False, [5])]
     assert spread[0]["score"] == pytest.approx((270.0 - 261.0) / 3.0, rel=1e-12)
     assert note == ("boundary_stiffness boundary_stiffness 1 beats every other kind and 'none' "
                     "by the margin 10 but not its own kind at boundary_stiffness 5 (+3.0): the "
                     "kind is named, its site uncertain")
-    assert sites_elsewhere(problem, r0, rows, fits, 0, none, 100, 10, 2.0, near,
-                           lambda i, j: False) == ((), None)
+    assert sites_elsewhere(problem, r0, rows, fits, 0, none, 100, 10, 1.0, near,
+                           set_aside) == ((), None)
 
 
 def test_chi2_split_separates_the_modal_rows():
