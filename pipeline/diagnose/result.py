@@ -42,7 +42,7 @@ class EffectRecord(NamedTuple):
     lead of :func:`pipeline.diagnose.verdict.decide` in its round, the lower of the runner-up's
     and "none"'s scores minus the effect's, each score chi^2 / c + p ln n (c the round's
     dispersion; "none"'s less 2 ln of the candidates screened, its prior odds). ``elsewhere``
-    lists the fits of its kind at other sites that score within the margin of it
+    lists the candidates of its kind at other sites that score within the margin of it
     (:func:`pipeline.diagnose.rounds.sites_elsewhere`): its site is then uncertain."""
 
     candidate: object
@@ -90,10 +90,10 @@ def effect_json(record: EffectRecord) -> dict:
     ``quantities``: one for a one-sided effect, two for a mirror pair
     (:mod:`pipeline.diagnose.mirror`; ``location`` is then the union of both and ``parameters``
     and ``quantities`` the first site's: a pair of masses adds ``parameters["mass"]`` at each,
-    twice in all). ``elsewhere`` lists the fits of its kind at other sites that the data do not
-    tell from it (each ``kind``, ``label``, ``location``, ``score`` above the effect's, below the
-    margin, and ``refitted``: False when scored by its linearised fit): empty when its site is as
-    certain as its kind.
+    twice in all). ``elsewhere`` lists the candidates of its kind at other sites that the data
+    do not tell from it (each ``kind``, ``label``, ``location``, ``score`` above the effect's,
+    below the margin, and ``refitted``: False when scored by its linearised fit): empty when its
+    site is as certain as its kind.
     """
     cand = record.candidate
     per_site = quantities(cand, record.values)

@@ -2,9 +2,10 @@
 
 The scores of refitted candidates as :func:`pipeline.diagnose.verdict.decide` takes them
 (:func:`chi2_split`, :func:`score_rows`), the "none" fit of a round (:func:`none_fit`), the
-named effect set against the best load path (:func:`against_path`), the first round's ranked
-candidates (:func:`ranking_table`, the JSON ``candidates``) and each round's JSON record
-(:func:`round_record`, the JSON ``rounds``).
+named effect set against the best load path (:func:`against_path`), every screened candidate
+ranked (:func:`ranked`: the first round's :func:`ranking_table`, the JSON ``candidates``, and
+the sites of the named kind that make its site uncertain, :func:`sites_elsewhere`) and each
+round's JSON record (:func:`round_record`, the JSON ``rounds``).
 """
 from __future__ import annotations
 
@@ -12,15 +13,16 @@ import numpy as np
 
 from pipeline.diagnose.calibrate import Problem
 from pipeline.diagnose.evidence import bic, chi_square
+from pipeline.diagnose.gap import separating_measurement
 from pipeline.diagnose.loadpath import outscores
 from pipeline.diagnose.predictive import held_out_evidence, kept_modes
 from pipeline.diagnose.result import CandidateScore, location_dict
 from pipeline.diagnose.screen import Refitted
-from pipeline.diagnose.gap import separating_measurement
 from pipeline.diagnose.verdict import elsewhere, round_scores
 
 #: Sites of an uncertain site's note listed by name (the JSON lists all).
 SHOWN = 6
+
 
 def chi2_split(problem: Problem, fit) -> tuple:
     """(chi2_modal, chi2_stated) of a refit: its training residual's modal rows and the rest
@@ -65,9 +67,8 @@ def ranking_table(problem: Problem, r0, rows, refits, none, n_data: int,
     """The first round's ranked candidates (:func:`ranked`), scores minus the best's."""
     scored = ranked(problem, r0, rows, refits, none, n_data, n_candidates)
     best = scored[0][0]
-    return tuple(CandidateScore(c.kind if c else "none", c.location.as_dict() if c else
-                                {"grids": [], "elements": [], "properties": []}, float(b - best),
-                                c.label if c else "nothing missing", refitted)
+    return tuple(CandidateScore(c.kind if c else "none", location_dict(c.location if c else None),
+                                float(b - best), c.label if c else "nothing missing", refitted)
                  for b, c, refitted in scored)
 
 
@@ -94,8 +95,8 @@ def against_path(found, problem: Problem, scored, best: int, n_data: int, n_cand
 
 
 def round_record(k: int, verdict: str, fits, best, runner, none, held_out, n_data: int,
-                  scored, path=None, alike=(), *, reason: str = "", margin: float = np.inf
-                  ) -> dict:
+                  scored, path=None, alike=(), *, reason: str = "", margin: float = np.inf,
+                  elsewhere_sites=()) -> dict:
     """The JSON record of round k (:class:`pipeline.diagnose.result.DiagnoseResult` ``rounds``).
 
     ``held_out`` is (modes_none, per fit modes, entries) of
@@ -106,7 +107,8 @@ def round_record(k: int, verdict: str, fits, best, runner, none, held_out, n_dat
     the round named nothing; ``alike`` the labels of the fits that predict the same data as the
     best (:func:`pipeline.diagnose.gap.indistinguishable`); ``reason`` as
     :func:`pipeline.diagnose.verdict.decide` gave it; ``vetoed`` lists the fits whose held-out
-    evidence is below -``margin``.
+    evidence is below -``margin``; ``elsewhere_sites`` are the named effect's uncertain sites
+    (:func:`sites_elsewhere`), its ``elsewhere``.
     """
     modes_none, modes, entries = held_out
     none_row, rows, n_modal, c = scored
@@ -137,6 +139,7 @@ def round_record(k: int, verdict: str, fits, best, runner, none, held_out, n_dat
             "best": entry(best),
             "runner_up": entry(runner),
             "alike": list(alike),
+            "elsewhere": list(elsewhere_sites),
             "fits": fitted,
             "load_path": None if path is None else {
                 "grids": list(path[0].grids), "stiffness": path[0].stiffness,

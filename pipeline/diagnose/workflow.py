@@ -308,8 +308,8 @@ def diagnose(configurations, settings: DiagnoseSettings = DiagnoseSettings(), *,
                 < -settings.margin) if verdict == "effect" else ((), None))
             rounds.append(round_record(k, verdict, fits, best, runner, none,
                                         (modes_none, modes, entries), n_data, scored + (c,),
-                                        path, same, reason=reason, margin=settings.margin))
-            rounds[-1]["elsewhere"] = list(spread)
+                                        path, same, reason=reason, margin=settings.margin,
+                                        elsewhere_sites=spread))
             if note:
                 notes.append(f"round {k + 1}: {note}")
             if path is not None and verdict in ("unexplained", "ambiguous"):
