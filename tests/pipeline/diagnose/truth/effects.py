@@ -13,6 +13,7 @@ configuration of a structure. Nuisance scatter (``scatter``) is applied before t
 | member_curvature | the member re-meshed in 4-8 segments, its grids bowed sideways by ``bow * L * sin(pi s)`` (bow 5-15 %) in a random direction normal to it |
 | boundary_stiffness | grounded CELAS2 (a bungee) at a grid in z, y, x or y and z |
 | outside | a missing load path: a massless CROD brace between two grids three or more elements apart (bar grids, or the structure's ``brace_grids``) |
+| outside (``panel``) | a panel whose stiffness is wrong (a disbond, damage): 1-3 shell elements sharing an edge, none at a fixed grid, E and G times 0.03-0.5 (copies of their PSHELL and MAT1), the mass unchanged |
 | none | nothing |
 
 Stiffness scales (the draw multiplies them by log-uniform factors; ``make_case`` re-draws until
@@ -55,7 +56,13 @@ SIZE = {"lumped_mass": "added mass / total mass", "joint_flexibility":
         "member_taper": "1 - tip / root section size", "member_curvature": "bow / member length",
         "boundary_stiffness": "sum of k / (total mass (2 pi f_1)^2)",
         "outside": "E A of the brace / E A of the stiffest bar at its ends (of the model, for a "
-        "brace between grids no bar reaches)", "none": "0"}
+        "brace between grids no bar reaches); a panel's: 1 - its E / the model's",
+        "none": "0"}
+
+#: The forms of an ``outside`` effect (``draw``'s ``outside``).
+OUTSIDE = ("brace", "panel")
+#: Shell elements a soft panel is made of.
+_SHELL = ("CQUAD4", "CTRIA3")
 
 
 @dataclass(frozen=True)
@@ -186,7 +193,7 @@ def neighbours(topo: Topology, grids, elements) -> tuple[list[int], list[int]]:
     core = set(grids) | {g for e in elements for g in topo.element_grids.get(e, ())}
     ge = topo.grid_elements
     els = set(elements) | {e for g in core for e in ge.get(g, ())}
-    out = core | {g for e in els for g in topo.element_grids[e]}
+    out = core | {g for e in els for g in topo.element_grids.get(e, ())}
     return sorted(out), sorted(els)
 
 
@@ -265,7 +272,7 @@ def _bar_ea(bdf, eid: int) -> float:
 
 
 def draw(kind: str, bdf, topo: Topology, rng: np.random.Generator, f1: float,
-         brace_grids=None) -> Effect:
+         brace_grids=None, outside: str = "brace") -> Effect:
     """Draw an effect of ``kind`` on the analysis deck ``bdf`` (its ``topology``).
 
     Parameters
@@ -278,7 +285,11 @@ def draw(kind: str, bdf, topo: Topology, rng: np.random.Generator, f1: float,
     brace_grids : sequence of int, optional
         The grids an ``outside`` brace may join (default: the CBARs' grids; a stick model's bar
         grids lie on one line, where a massless brace changes no bending or torsion mode).
+    outside : one of ``OUTSIDE``, the form of an ``outside`` effect: a missing load path
+        (``brace``) or a soft panel of a shell structure (``panel``).
     """
+    if outside not in OUTSIDE:
+        raise ValueError(f"outside {outside!r}; valid: {', '.join(OUTSIDE)}")
     grids = topo.structural_grids()
     if kind == "none":
         return Effect("none")
@@ -337,6 +348,8 @@ def draw(kind: str, bdf, topo: Topology, rng: np.random.Generator, f1: float,
         fr = [_loguniform(rng, 0.05, 1.0) for _ in dirs]
         return Effect(kind, grids=(g,), size=float(sum(fr)),
                       params={"grid": g, "springs": [(c, f * scale) for c, f in zip(dirs, fr)]})
+    if kind == "outside" and outside == "panel":
+        return _draw_panel(bdf, topo, rng)
     if kind == "outside":
         ends = sorted({g for e in topo.bars for g in topo.bars[e][1:]} if brace_grids is None
                       else brace_grids)
@@ -350,6 +363,27 @@ def draw(kind: str, bdf, topo: Topology, rng: np.random.Generator, f1: float,
         frac = _loguniform(rng, 0.05, 1.0)
         return Effect(kind, grids=(a, b), size=frac, params={"ends": (a, b), "EA": frac * ea})
     raise ValueError(f"unknown truth kind {kind!r}")
+
+
+def _draw_panel(bdf, topo: Topology, rng: np.random.Generator) -> Effect:
+    """A soft panel (module table): a shell element at no fixed grid, grown by up to two more
+    sharing an edge (two grids) with it, their stiffness times 0.03-0.5 (log-uniform)."""
+    shells = {int(e): frozenset(int(g) for g in el.node_ids)
+              for e, el in sorted(bdf.elements.items())
+              if el.type in _SHELL and not set(el.node_ids) & topo.fixed}
+    if not shells:
+        raise ValueError("a soft panel needs shell elements away from the fixed grids")
+    patch = [int(rng.choice(sorted(shells)))]
+    for _ in range(int(rng.integers(0, 3))):
+        grids = set().union(*(shells[e] for e in patch))
+        edge = [e for e in shells if e not in patch and len(shells[e] & grids) >= 2]
+        if edge:
+            patch.append(int(rng.choice(edge)))
+    factor = _loguniform(rng, 0.03, 0.5)
+    grids = tuple(sorted(set().union(*(shells[e] for e in patch))))
+    pids = tuple(sorted({int(bdf.elements[e].pid) for e in patch}))
+    return Effect("outside", grids=grids, elements=tuple(sorted(patch)), properties=pids,
+                  size=1.0 - factor, params={"panel": sorted(patch), "factor": factor})
 
 
 def _graph_distance(topo: Topology, grids: list[int]) -> dict:
@@ -413,6 +447,8 @@ def apply(bdf, effect: Effect) -> None:
         eid = _next([*bdf.elements, *bdf.rigid_elements])
         for i, (c, k) in enumerate(p["springs"]):
             bdf.add_celas2(eid + i, k, [p["grid"], 0], c1=c, c2=0)
+    elif kind == "outside" and "panel" in p:
+        _soften(bdf, p["panel"], p["factor"])
     elif kind == "outside":
         pid, eid = _next(bdf.properties), _next([*bdf.elements, *bdf.rigid_elements])
         mat, mid = bdf.materials[min(bdf.materials)], _next(bdf.materials)
@@ -421,6 +457,29 @@ def apply(bdf, effect: Effect) -> None:
         bdf.add_crod(eid, pid, list(p["ends"]))
     else:
         raise ValueError(f"unknown truth kind {kind!r}")
+
+
+def _soften(bdf, panel, factor: float) -> None:
+    """The shell elements ``panel`` on copies of their PSHELL and its MAT1s with E and G times
+    ``factor`` (rho, nu and the thickness kept: the mass unchanged)."""
+    pid, mid = _next(bdf.properties), _next(bdf.materials)
+    copies = {}
+    for eid in panel:
+        el = bdf.elements[eid]
+        if el.pid not in copies:
+            old = bdf.properties[el.pid]
+            mids = {}
+            for name in ("mid1", "mid2", "mid3", "mid4"):
+                m = getattr(old, name)
+                if m and m not in mids:
+                    mat = bdf.materials[m]
+                    bdf.add_mat1(mid, mat.e * factor, mat.g * factor, mat.nu, rho=mat.rho)
+                    mids[m], mid = mid, mid + 1
+            bdf.add_pshell(pid, mid1=mids.get(old.mid1), t=old.t, mid2=mids.get(old.mid2),
+                           twelveIt3=old.twelveIt3, mid3=mids.get(old.mid3), tst=old.tst,
+                           nsm=old.nsm, z1=old.z1, z2=old.z2, mid4=mids.get(old.mid4))
+            copies[el.pid], pid = pid, pid + 1
+        el.pid = copies[el.pid]
 
 
 def _spring_joint(bdf, rid: int, k, detach) -> None:

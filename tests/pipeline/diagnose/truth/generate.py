@@ -75,6 +75,7 @@ class Structure:
     starts: dict                 # configuration -> the truth's starting deck
     solve: Callable              # (truth deck, number of modes) -> modes Dataset
     brace_grids: tuple | None = None    # grids an outside brace may join (None: the bars')
+    outside: str = "brace"              # the form of its outside effect (``effects.OUTSIDE``)
 
 
 def _our_modes(path: Path, nmodes: int) -> xr.Dataset:
@@ -91,7 +92,8 @@ def _structure(structure: str, folder: Path, work: Path) -> Structure:
     if structure == "wingbox":
         deck = wingbox.write_wingbox(folder)
         return Structure(wingbox.UNITS, wingbox.N_TEST, wingbox.N_RIGID, wingbox.sensors(),
-                         {"wingbox": deck}, {"wingbox": deck}, wingbox.mystran_modes)
+                         {"wingbox": deck}, {"wingbox": deck}, wingbox.mystran_modes,
+                         outside=wingbox.OUTSIDE)
     if structure == "windy":
         deck = windy.write_windy(folder)
         return Structure(windy.UNITS, windy.N_TEST, windy.N_RIGID, windy.sensors(),
@@ -261,7 +263,7 @@ def make_case(structure: str, kind: str, seed: int, out, *, decks=None,
             best = None
             for _ in range(ATTEMPTS):
                 effect = effects.draw(kind, analysis, topo, rng, float(f_base[0]),
-                                      st.brace_grids)
+                                      st.brace_grids, st.outside)
                 modes = _truth_modes(starts[first], work, effect, scatter, st, springs)
                 s = _shift(f_base, modes[0], st) if _suspended(modes[0], st) else np.inf
                 miss = max(SHIFT_RANGE[0] - s, s - SHIFT_RANGE[1], 0.0)

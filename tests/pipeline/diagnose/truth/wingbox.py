@@ -12,8 +12,10 @@ element and its mass lumped; on this deck its first 24 frequencies differ from o
 MYSTRAN takes no grounded CELAS2 (a blank second grid): a bungee is written to a coincident grid
 fixed by GRID PS 123456, the same spring.
 
-Kinds: ``KINDS`` here (a mass, a support spring and none; the deck has no rigid element and no
-CBAR, so no joint, taper or curvature). The nuisance scatter is the generator's
+Kinds: ``KINDS`` here (a mass, a support spring, none and an effect outside the library; the deck
+has no rigid element and no CBAR, so no joint, taper or curvature). The effect outside the library
+is a soft panel (``OUTSIDE``, :func:`effects.draw`): a few skin or spar panels whose stiffness
+is a fraction of the model's, as a disbond or damage makes it, which no library kind is. The nuisance scatter is the generator's
 (``effects.scatter``): every CONM2 (2 %) and the one MAT1's E (1 %, the same for every element);
 the deck has no PBAR. The GVT: ``N_TEST`` modes at all three translations of 40 of the 60 free
 grids (120 DOFs, evenly over the ids).
@@ -35,7 +37,8 @@ UNITS = "si"
 N_TEST = 12
 #: Clamped: no rigid-body mode.
 N_RIGID = 0
-KINDS = ("lumped_mass", "boundary_stiffness", "none")
+KINDS = ("lumped_mass", "boundary_stiffness", "none", "outside")
+OUTSIDE = "panel"
 DECK = Path(__file__).resolve().parents[3] / "data" / "goland_wingbox" / "goland_final_test.bdf"
 #: The root grids the deck clamps (SPC1 123456 of SPCADD 800).
 ROOT = (10000, 10001, 10002, 10003, 10004, 10005)
