@@ -150,7 +150,8 @@ class DiagnoseResult:
         ``held_out``, ``past_veto`` or ``held_out_reversal``, the last two when the held-out
         modes took part in naming (past a veto of the best, or reversing the training
         ranking); before the load path and bound checks, which can
-        still turn an ``effect`` into ``unexplained``), ``vetoed`` (the labels of the fits
+        still turn an ``effect`` into ``unexplained``, and the stability check, which makes it
+        ``unexplained`` with the reason ``unstable``), ``vetoed`` (the labels of the fits
         the held-out modes contradict by more than the margin), ``n_data`` (training
         residuals), ``n_modal`` (the modal ones among them: frequencies and shapes),
         ``dispersion`` (the modal dispersion c of the round's scores and held-out evidence,
@@ -179,7 +180,10 @@ class DiagnoseResult:
         :func:`pipeline.diagnose.detail.located`: per joint tried, the named one first, its
         ``label``, two-parameter ``chi2`` and ``bic``, and its detailed form's
         ``detailed_chi2`` and ``detailed_bic``, null when that form does not lower its BIC;
-        the joint added is the form of least BIC), else null.
+        the joint added is the form of least BIC), else null; ``splits`` (when the round named
+        an effect: the effect refitted on each other split of the paired modes,
+        :func:`pipeline.diagnose.crossval.extend`: its ``shift``, the split's ``gain`` in score
+        for it, > 0 where the split supports it, and the refitted ``parameters``), else absent.
     suspension : mapping or None, the suspension identified from the test's suspension modes
         before the rounds (:mod:`pipeline.diagnose.suspension`; its sites are the first
         ``effects``): ``sites`` (grids per site), ``stiffness`` (per site k_x, k_y, k_z, force /

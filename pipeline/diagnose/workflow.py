@@ -30,7 +30,11 @@ the best load path between two grids, an effect the library does not hold
 (:mod:`pipeline.diagnose.loadpath`), by the margin, as it must beat the runner-up: a load path
 that beats it by the margin makes the round ``unexplained``, one within the margin either way
 ``ambiguous`` (the effect or a load path; sensors at the path's two grids along the line joining
-them separate them, the spring acting on their relative motion).
+them separate them, the spring acting on their relative motion). Last, the named effect is
+refitted on the other splits of the paired modes (:mod:`pipeline.diagnose.crossval`, the refits
+the cross-validated gap is made of): when most splits do not support it
+(:func:`pipeline.diagnose.crossval.stable`), the name rests on which modes were held out and the
+round is ``unexplained`` (reason ``unstable``).
 The overall verdict is ``effect`` when at least one effect was named, else the first round's;
 a suspension identified from the test's suspension modes (:mod:`pipeline.diagnose.suspension`)
 is added before the rounds and reported, but is the test's, not the structure's: it does not
@@ -45,7 +49,8 @@ import numpy as np
 from threadpoolctl import threadpool_limits
 
 from pipeline.diagnose.calibrate import Problem, calibrate
-from pipeline.diagnose.crossval import cross_validated, cross_validated_note
+from pipeline.diagnose.crossval import (cross_validated, cross_validated_note, extend,
+                                        open_splits, stability_note, stable)
 from pipeline.diagnose.detail import detailed, form_text, located
 from pipeline.diagnose.effects import candidates, neighbours
 from pipeline.diagnose.gap import (EQUIVALENT_SIGMAS, gap_metrics, held_out_note,
@@ -205,7 +210,8 @@ def diagnose(configurations, settings: DiagnoseSettings = DiagnoseSettings(), *,
             gap_after = gap_metrics(problem, none_evs)
             suspension = _suspension_record(best, fits, gap_after)
             notes.append(_suspension_note(best, fits, settings.margin))
-        table, separating, first = (), None, None
+        table, separating, first, splits = (), None, None, None
+        n_hung = suspension_effects(suspension)
         for k in range(settings.max_effects):
             _say(progress, f"round {k + 1}: screening")
             model0 = problem.model(0, theta, effects)
@@ -381,28 +387,43 @@ def diagnose(configurations, settings: DiagnoseSettings = DiagnoseSettings(), *,
                                            map(float, polished.values))),
                     "chi2": float(polished.chi2), "fitted_chi2": float(chosen.chi2)}
                 chosen = polished
+            _say(progress, f"round {k + 1}: refitting on the other splits of the modes")
+            if splits is None:
+                splits = open_splits(problem, settings.holdout, effects[:n_hung]) or ()
+            extended = [extend(s, chosen.candidate, chosen.values, c) for s in splits]
+            if splits and None not in extended:
+                supports = [e[1] for e in extended]
+                rounds[-1]["splits"] = [{"shift": e.shift, "gain": e.gain, "parameters": dict(
+                    zip(chosen.candidate.parameters, map(float, e.values)))} for e in supports]
+                if not stable(supports, settings.holdout):
+                    rounds[-1].update(verdict="unexplained", reason="unstable")
+                    first = "unexplained" if k == 0 else first
+                    notes.append(stability_note(k, chosen.candidate, supports, settings.holdout))
+                    break
+                splits = tuple(e[0] for e in extended)
+            else:
+                splits = ()
             gap_after = rounds[-1]["gap"] = gap_metrics(problem, chosen.evaluations)
             rounds[-1]["nominal"] = {n: float(t) for n, t in zip(problem.names, chosen.theta)}
             records.append(EffectRecord(chosen.candidate, chosen.values, lead, spread))
             effects.append((chosen.candidate, chosen.values))
             theta, none_evs = chosen.theta, chosen.evaluations
-    n_hung = suspension_effects(suspension)
     verdict = "effect" if len(records) > n_hung else first      # the structure's, not the test's
     if records and (note := held_out_note(gap_before, gap_after)):
         notes.append(note)
     if records and (note := offdiag_note(problem, cal.evaluations, none_evs)):
         notes.append(note)
-    if records:
+    if records and splits is None:
         _say(progress, "cross-validating the gap")
         with threadpool_limits(limits=1):
-            cv = cross_validated(problem, settings.holdout, gap_before, gap_after,
-                                 effects[:n_hung], effects[n_hung:])
-        if cv is None:
-            notes.append("gap: not cross-validated: a refit on another split of the modes could "
-                         "not be analysed at its start.")
-        else:
-            gap_before, gap_after = {**gap_before, **cv[0]}, {**gap_after, **cv[1]}
-            notes.append(cross_validated_note(gap_before, gap_after, settings.holdout))
+            splits = open_splits(problem, settings.holdout, effects[:n_hung]) or ()
+    if records and not splits:
+        notes.append("gap: not cross-validated: a refit on another split of the modes could "
+                     "not be analysed at its start.")
+    elif records:
+        cv = cross_validated(gap_before, gap_after, splits)
+        gap_before, gap_after = {**gap_before, **cv[0]}, {**gap_after, **cv[1]}
+        notes.append(cross_validated_note(gap_before, gap_after, settings.holdout))
     notes.append(f"diagnose took {time.perf_counter() - t0:.1f} s "
                  f"({len(rounds)} round{'s' if len(rounds) > 1 else ''}).")
     return DiagnoseResult(verdict=verdict, effects=tuple(records), candidates=table,

@@ -148,6 +148,12 @@ def test_hidden_mass_is_named_and_the_gap_shrinks(folder, capsys):
     assert after["frequency_rms_cross_validated"] < 1e-3
     assert before["frequency_rms_cross_validated"] > 1.0
     assert any(n.startswith("gap, cross-validated over 3 splits") for n in record["notes"])
+    # the same refits on the other two splits support the name (gain > 0) with the truth's mass
+    splits = record["rounds"][0]["splits"]
+    assert [s["shift"] for s in splits] == [1, 2] and all(s["gain"] > 0 for s in splits)
+    for s in splits:
+        assert s["parameters"]["mass"] == pytest.approx(
+            record["effect"]["parameters"]["mass"], rel=1e-3)
     # the diagnosed deck carries the truth's mass and gives the truth's (the GVT's) frequencies:
     # the named fit is converged (screen.polish), so to the UFF file's six significant digits
     # (round-off up to 5e-6; 1.4e-6 measured), not to where the ranking refits stop (0.12 %)

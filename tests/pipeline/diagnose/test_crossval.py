@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from pipeline.diagnose.calibrate import Problem
-from pipeline.diagnose.crossval import cross_validated_note, pooled, rotated
+from pipeline.diagnose.crossval import Support, cross_validated_note, pooled, rotated, stable
 from pipeline.diagnose.evidence import build_reference
 from structures.bdf import read_model
 from structures.gvt import make_gvt_dataset
@@ -82,3 +82,18 @@ def test_pooled_by_hand():
     note = cross_validated_note(pooled(gaps[:2]), out, 3)
     # before: sqrt((6 + 7 * 4) / 13) = 1.617 %
     assert "1.62 -> 2.20 % over 20 modes" in note and "0.600 -> 0.600" in note
+
+
+def _supports(*gains):
+    return [Support(i + 1, g, np.zeros(1)) for i, g in enumerate(gains)]
+
+
+@pytest.mark.parametrize("holdout, gains, kept", [
+    (3, (5.0, -1.0), True),          # the naming split and one other: 2 of 3
+    (3, (-9.5, -9.5), False),        # the naming split alone: 1 of 3 (the wing box's seed 1)
+    (3, (0.0, 0.0), False),          # no gain is no support
+    (2, (0.1,), True), (2, (-0.1,), False),
+    (4, (1.0, -1.0, -1.0), False),   # 2 of 4 is no majority
+    (4, (1.0, 1.0, -1.0), True)])
+def test_stable_is_a_majority_of_the_splits(holdout, gains, kept):
+    assert stable(_supports(*gains), holdout) is kept
