@@ -161,3 +161,18 @@ def test_soft_panel_is_outside_the_library(tmp_path):
     ours = compute_modes(read_model(deck), N_TEST)
     np.testing.assert_allclose(theirs["frequency"].values, ours["frequency"].values, rtol=5e-3)
     assert 0.03 <= truth["max_frequency_shift"] <= 0.15
+
+
+@needs_mystran
+@pytest.mark.slow
+def test_soft_panel_named_on_one_split_only_is_unexplained(tmp_path):
+    """Outside seed 1 (a soft panel, about 20 s, ``slow``): the naming split's training modes
+    prefer a lumped mass near the tip, which the other two splits refit to no mass at all: the
+    round is ``unstable`` and the verdict ``unexplained``, no library name."""
+    run_study(["wingbox"], ["outside"], [1], tmp_path, progress=None)
+    result = json.loads((tmp_path / "wingbox" / "outside" / "1" / "diagnose.json").read_text())
+    assert result["verdict"] == "unexplained" and not result["effects"]
+    first = result["rounds"][0]
+    assert (first["reason"], first["best"]["kind"]) == ("unstable", "lumped_mass")
+    assert all(s["gain"] < 0 and s["parameters"]["mass"] < 1e-6 for s in first["splits"])
+    assert any("supported on 1 of 3 splits" in note for note in result["notes"])
