@@ -21,8 +21,9 @@ s = 1 .. holdout - 1 (each configuration's held-out positions moved by s, :func:
   are refitted with it.
 
 The splits are kept through the rounds (:class:`Split`, :func:`open_splits`): when a round names
-an effect, it is added on every other split (:func:`extend`) as it was named, and the same
-refits give the cross-validated gap at the end. With the workflow's own split, every paired mode
+an effect, it is refitted on every other split (:func:`extend`) from its named values and kept
+there when that split's training modes want it (below), and the same refits give the
+cross-validated gap at the end. With the workflow's own split, every paired mode
 is held out exactly once. The pooled measures go into ``gap_before`` and ``gap_after``:
 
 - ``frequency_rms_cross_validated`` [%]: the RMS of paper eq. 18 over every split's held-out
@@ -35,8 +36,12 @@ is held out exactly once. The pooled measures go into ``gap_before`` and ``gap_a
 - ``mac_min_cross_validated``: the smallest of the splits' ``mac_min_held_out``.
 
 What this judges, and what it does not. It judges the effects' *parameters*, fitted without the
-mode being judged. It does not judge their *choice*: the kind and place were named on the first
-split's training modes, and those include the other splits' held-out modes. For a correctly
+mode being judged, and whether each split's training modes want the effect at all: a split
+whose score does not improve with it (gain <= 0, below) goes on without it, as the workflow
+would not have named it there (cross-validation repeats every step of the procedure it judges
+that uses the data, the choice between the effect and no effect included; Hastie, Tibshirani &
+Friedman 2009 sec. 7.10.2). It does not judge their *kind and place*: those were named on the
+first split's training modes, and those include the other splits' held-out modes. For a correctly
 named effect (the blind study's criterion) the choice is right by construction. There the
 cross-validated gap measures what adding the effect does to modes no fit of it saw, on
 ``holdout`` times the modes of the first split. That matters because the relative spread of an
@@ -141,8 +146,9 @@ def extend(split: Split, candidate, values, c: float) -> tuple | None:
 
     Returns
     -------
-    (Split, Support) : the split with the effect, and the split's support for it; None when the
-    refit cannot be analysed at its start.
+    (Split, Support) : the split with the effect where it supports it (gain > 0), else the split
+    as it was (module docstring), and the split's support for it; None when the refit cannot be
+    analysed at its start.
     """
     p, cal = split.problem, split.cal
     fit = continued(p, split.theta, list(split.effects), candidate, values, n_data=cal.n_data,
@@ -151,9 +157,11 @@ def extend(split: Split, candidate, values, c: float) -> tuple | None:
         return None
     gain = (_score(p, split.theta, split.evaluations, c) - _score(p, fit.theta, fit.evaluations, c)
             - len(candidate.parameters) * np.log(cal.n_data))
+    support = Support(split.shift, float(gain), np.asarray(fit.values, float))
+    if gain <= 0.0:
+        return split, support
     return (split._replace(effects=split.effects + ((candidate, fit.values),), theta=fit.theta,
-                           evaluations=fit.evaluations),
-            Support(split.shift, float(gain), np.asarray(fit.values, float)))
+                           evaluations=fit.evaluations), support)
 
 
 def stable(supports, holdout: int) -> bool:

@@ -8,7 +8,11 @@ import numpy as np
 import pytest
 
 from pipeline.diagnose.calibrate import Problem
-from pipeline.diagnose.crossval import Support, cross_validated_note, pooled, rotated, stable
+from types import SimpleNamespace
+
+from pipeline.diagnose import crossval
+from pipeline.diagnose.crossval import (Split, Support, cross_validated_note, extend, pooled,
+                                        rotated, stable)
 from pipeline.diagnose.evidence import build_reference
 from structures.bdf import read_model
 from structures.gvt import make_gvt_dataset
@@ -97,3 +101,38 @@ def _supports(*gains):
     (4, (1.0, 1.0, -1.0), True)])
 def test_stable_is_a_majority_of_the_splits(holdout, gains, kept):
     assert stable(_supports(*gains), holdout) is kept
+
+
+class _Rows:
+    """A problem whose training residual is the evaluations themselves, rows 0-1 modal."""
+
+    def residual(self, theta, evaluations):
+        return np.asarray(evaluations, float)
+
+    def modal_rows(self):
+        return np.array([True, True, False])
+
+
+@pytest.mark.parametrize("after, c, kept", [
+    ((0.0, 0.0, 0.0), 1.0, True),      # gain 3^2 + 4^2 - 1 ln 3 = 23.90
+    ((3.0, 4.0, 0.0), 1.0, False),     # no change: gain -ln 3
+    ((0.0, 0.0, 0.0), 25.0, False),    # modal rows at dispersion 25: gain 1 - ln 3 = -0.10
+    ((3.0, 4.0, 0.5), 25.0, False)])   # a stated row worse
+def test_extend_keeps_the_effect_where_the_split_wants_it(monkeypatch, after, c, kept):
+    """The split's gain by hand (chi2_modal / c + chi2_stated, one parameter at n = 3); a split
+    that does not gain goes on as it was (module docstring), its refit still reported."""
+    fit = SimpleNamespace(theta=np.ones(1), evaluations=np.array(after), values=np.array([0.5]))
+    monkeypatch.setattr(crossval, "continued", lambda *args, **kwargs: fit)
+    split = Split(1, _Rows(), SimpleNamespace(n_data=3, jacobian=None), {}, (), np.zeros(1),
+                  np.array([3.0, 4.0, 0.0]))
+    candidate = SimpleNamespace(parameters=("mass",))
+    out, support = extend(split, candidate, np.array([0.4]), c)
+    before = 25.0 / c
+    gain = before - (after[0] ** 2 + after[1] ** 2) / c - after[2] ** 2 - np.log(3.0)
+    assert support.gain == pytest.approx(gain, rel=1e-12)
+    assert bool(gain > 0) is kept
+    assert support.shift == 1 and support.values.tolist() == [0.5]
+    if kept:
+        assert out.effects == ((candidate, fit.values),) and out.theta.tolist() == [1.0]
+    else:
+        assert out is split
