@@ -17,8 +17,8 @@ has no rigid element and no CBAR, so no joint, taper or curvature). The effect o
 is a soft panel (``OUTSIDE``, :func:`effects.draw`): a few skin or spar panels whose stiffness
 is a fraction of the model's, as a disbond or damage makes it, which no library kind is. The
 nuisance scatter is the generator's (``effects.scatter``): every CONM2 (2 %) and the one MAT1's
-E (1 %, the same for every element); the deck has no PBAR. The GVT: ``N_TEST`` modes at all three translations of 40 of the 60 free
-grids (120 DOFs, evenly over the ids).
+E (1 %, the same for every element); the deck has no PBAR. The GVT: ``N_TEST`` modes at all
+three translations of 40 of the 60 free grids (120 DOFs, evenly over the ids).
 """
 from __future__ import annotations
 
