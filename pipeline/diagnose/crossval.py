@@ -164,16 +164,30 @@ def extend(split: Split, candidate, values, c: float) -> tuple | None:
                            evaluations=fit.evaluations), support)
 
 
+def supporting(supports) -> int:
+    """The splits that support a named effect: the naming split and the others whose gain is
+    > 0."""
+    return 1 + sum(s.gain > 0.0 for s in supports)
+
+
 def stable(supports, holdout: int) -> bool:
-    """True when the naming split and the other splits that support the effect (``supports``,
-    gain > 0) are more than half of the ``holdout`` splits (module docstring)."""
-    return 1 + sum(s.gain > 0.0 for s in supports) > holdout / 2.0
+    """True when the splits :func:`supporting` the effect are more than half of the ``holdout``
+    splits (module docstring)."""
+    return supporting(supports) > holdout / 2.0
+
+
+def support_records(candidate, supports) -> list:
+    """The round record's ``splits``: per other split its ``shift``, ``gain`` and refitted
+    ``parameters`` of ``candidate``."""
+    return [{"shift": s.shift, "gain": s.gain,
+             "parameters": dict(zip(candidate.parameters, map(float, s.values)))}
+            for s in supports]
 
 
 def stability_note(k: int, candidate, supports, holdout: int) -> str:
     """The note of an effect a round named on its own split that most splits do not support."""
     gains = ", ".join(f"{s.gain:+.1f}" for s in supports)
-    n = 1 + sum(s.gain > 0.0 for s in supports)
+    n = supporting(supports)
     return (f"round {k + 1}: {candidate.kind} {candidate.label} fits this split's training modes "
             f"best, but refitted on the other splits of the paired modes (each holding out a "
             f"different one in {holdout} of them) it gains {gains} in score (> 0: that split "

@@ -50,7 +50,7 @@ from threadpoolctl import threadpool_limits
 
 from pipeline.diagnose.calibrate import Problem, calibrate
 from pipeline.diagnose.crossval import (cross_validated, cross_validated_note, extend,
-                                        open_splits, stability_note, stable)
+                                        open_splits, stability_note, stable, support_records)
 from pipeline.diagnose.detail import detailed, form_text, located
 from pipeline.diagnose.effects import candidates, neighbours
 from pipeline.diagnose.gap import (EQUIVALENT_SIGMAS, gap_metrics, held_out_note,
@@ -393,8 +393,7 @@ def diagnose(configurations, settings: DiagnoseSettings = DiagnoseSettings(), *,
             extended = [extend(s, chosen.candidate, chosen.values, c) for s in splits]
             if splits and None not in extended:
                 supports = [e[1] for e in extended]
-                rounds[-1]["splits"] = [{"shift": e.shift, "gain": e.gain, "parameters": dict(
-                    zip(chosen.candidate.parameters, map(float, e.values)))} for e in supports]
+                rounds[-1]["splits"] = support_records(chosen.candidate, supports)
                 if not stable(supports, settings.holdout):
                     rounds[-1].update(verdict="unexplained", reason="unstable")
                     first = "unexplained" if k == 0 else first

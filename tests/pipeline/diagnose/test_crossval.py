@@ -4,13 +4,13 @@ measures by hand. The workflow's use of it, on noise-free data whose effect is e
 tests/pipeline/test_cmd_diagnose.py."""
 from __future__ import annotations
 
+from types import SimpleNamespace
+
 import numpy as np
 import pytest
 
-from pipeline.diagnose.calibrate import Problem
-from types import SimpleNamespace
-
 from pipeline.diagnose import crossval
+from pipeline.diagnose.calibrate import Problem
 from pipeline.diagnose.crossval import (Split, Support, cross_validated_note, extend, pooled,
                                         rotated, stable)
 from pipeline.diagnose.evidence import build_reference
