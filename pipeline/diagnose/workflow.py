@@ -60,13 +60,15 @@ from pipeline.diagnose.mirror import sites
 from pipeline.diagnose.predictive import held_out_evidence, held_out_modes
 from pipeline.diagnose.preflight import DiagnoseSettings, check_inputs, checked
 from pipeline.diagnose.result import DiagnoseResult, EffectRecord, suspension_effects
+from pipeline.diagnose.round_notes import (bound_note, held_out_veto_note, load_path_note,
+                                           located_note, past_veto_note, reversal_note,
+                                           rich_path_note)
 from pipeline.diagnose.rounds import (against_path, chi2_split, none_fit, ranking_table,
                                       round_record, score_rows, sites_elsewhere)
 from pipeline.diagnose.screen import (bound_release, pick_for_refit, polish, refit, screen,
                                       signatures)
 from pipeline.diagnose.suspension import FIT_LIMIT, hung_data, identify
-from pipeline.diagnose.verdict import (SCATTER_SIGMAS, at_bound, decide, preference,
-                                        round_scores, within_scatter)
+from pipeline.diagnose.verdict import SCATTER_SIGMAS, at_bound, decide, round_scores, within_scatter
 
 
 # ------------------------------------------------------------------------------------ diagnose
@@ -82,19 +84,6 @@ def _form_record(fit, rich) -> dict:
     return {"label": fit.candidate.label, "chi2": float(fit.chi2), "bic": float(fit.bic),
             "detailed_chi2": None if rich is None else float(rich.chi2),
             "detailed_bic": None if rich is None else float(rich.bic)}
-
-
-def _located_note(k: int, tried, fit) -> str:
-    """The note of a round whose named joint was compared with its neighbours."""
-    named = tried[0][0].candidate
-    forms = "; ".join(f"{f.candidate.label} {f.chi2:.1f}"
-                      + (f" -> {r.chi2:.1f}" if r is not None else "") for f, r in tried)
-    text = (f"round {k + 1}: {named.kind} {named.label} and its neighbours, each refitted and in "
-            f"the form of least BIC (chi^2 with two parameters -> with one compliance per "
-            f"CBUSH component): {forms}; ")
-    if fit is tried[0][0]:
-        return text + f"{named.label} stays."
-    return text + f"{fit.candidate.label} fits best and is named instead."
 
 
 def _prefer_one_side(problem: Problem, theta, effects, rows, fits, none, n_data: int,
@@ -269,21 +258,10 @@ def diagnose(configurations, settings: DiagnoseSettings = DiagnoseSettings(), *,
                 outward, gain = (bound_release(problem, effects, fits[best],
                                                jacobian_theta=cal.jacobian)
                                  if bound else (False, 0.0))
+                if bound:
+                    notes.append(bound_note(k, cand, bound, outward, gain, c, settings.margin))
                 if bound and outward and gain / c > settings.margin:
                     verdict = "unexplained"
-                    notes.append(f"round {k + 1}: {cand.kind} {cand.label} fits best but "
-                                 f"{', '.join(bound)} sits on its bound and the data want "
-                                 f"more (released, chi^2 falls by {gain:.1f} along the "
-                                 f"unbounded Gauss-Newton step, {gain / c:.1f} after the "
-                                 f"dispersion {c:.2f}): more than the library's range of that "
-                                 "effect; not named (a different or larger effect).")
-                elif bound:
-                    notes.append(f"round {k + 1}: {cand.kind} {cand.label}: "
-                                 f"{', '.join(bound)} sits on its bound, but the data do not "
-                                 "press against it (released, the unbounded Gauss-Newton step "
-                                 + (f"gains {gain:.1f} in chi^2, {gain / c:.1f} after the "
-                                    f"dispersion, below the margin {settings.margin:g})."
-                                    if outward else "moves it inward)."))
             if verdict == "effect":
                 found = best_load_path(problem, theta, effects, none_evs, r0)
                 verdict, path = against_path(found, problem, scored, best, n_data, len(cands),
@@ -297,13 +275,7 @@ def diagnose(configurations, settings: DiagnoseSettings = DiagnoseSettings(), *,
                     again = against_path(found, problem, (scored[0], scored[1][:best] + row +
                                                            scored[1][best + 1:], scored[2]),
                                           best, n_data, len(cands), settings.margin)
-                    notes.append(f"round {k + 1}: {fits[best].candidate.kind} "
-                                 f"{fits[best].candidate.label} against the load path between "
-                                 f"grids {path[0].grids[0]} and {path[0].grids[1]} within the "
-                                 "margin: with one compliance per CBUSH component (chi^2 "
-                                 f"{fits[best].chi2:.1f} -> {rich.chi2:.1f}) it scores "
-                                 f"{again[1][2]:.1f} against the path's {again[1][1]:.1f}"
-                                 + (", named." if again[0] == "effect" else "."))
+                    notes.append(rich_path_note(k, fits[best], rich, path, again))
                     if again[0] == "effect":
                         verdict, path = again
                         fits[best] = rich
@@ -319,37 +291,17 @@ def diagnose(configurations, settings: DiagnoseSettings = DiagnoseSettings(), *,
             if note:
                 notes.append(f"round {k + 1}: {note}")
             if path is not None and verdict in ("unexplained", "ambiguous"):
-                cand = fits[best].candidate
-                a, b = path[0].grids
-                how, end = (("better", ": the effect is outside the library.")
-                            if verdict == "unexplained" else ("as well, within the margin", "."))
-                notes.append(f"round {k + 1}: {cand.kind} {cand.label} is not named: a load "
-                             f"path the library does not hold, a spring between grids {a} and "
-                             f"{b} (k = {path[0].stiffness:.4g}), fits the training data {how} "
-                             f"(score {path[1]:.1f} against {path[2]:.1f}){end}")
+                notes.append(load_path_note(k, fits[best].candidate, path, verdict))
             if reason == "held_out":
-                cand, record = fits[best].candidate, rounds[-1]["best"]
-                kept = np.asarray(record["held_out_modes_kept"])
-                notes.append(f"round {k + 1}: {cand.kind} {cand.label} fits the training modes "
-                             f"(chi^2 {none.chi2:.0f} -> {fits[best].chi2:.0f}) but not the "
-                             f"{int(kept.sum())} held-out modes either model reproduces (chi^2 "
-                             f"{modes_none[kept].sum():.0f} -> {modes[best][kept].sum():.0f}, "
-                             f"evidence {record['held_out_evidence']:.1f}; per mode in the round "
-                             "record): it compensates for something else; not named.")
+                notes.append(held_out_veto_note(k, fits[best].candidate, none, fits[best],
+                                                modes_none, modes[best], rounds[-1]["best"]))
             if reason == "past_veto" and verdict == "effect":
-                cand, named = fits[best].candidate, rounds[-1]["best"]
-                notes.append(f"round {k + 1}: the held-out modes contradict "
-                             f"{'; '.join(rounds[-1]['vetoed'])} (a compensation the training "
-                             "modes prefer); "
-                             f"{cand.kind} {cand.label}, the best fit they do not contradict, "
-                             f"beats the rest by {lead:.1f} and the held-out modes support it "
-                             f"(evidence {named['held_out_evidence']:+.1f}): named. The held-out "
-                             "modes took part in naming it, so its gap on them is no blind "
-                             "check.")
+                notes.append(past_veto_note(k, fits[best].candidate, rounds[-1]["vetoed"], lead,
+                                            rounds[-1]["best"]["held_out_evidence"]))
             if reason == "held_out_reversal":
-                notes.append(_reversal_note(k, fits, best, runner, lead, scored, n_data,
-                                            len(cands), (modes_none, modes, entries), c,
-                                            verdict))
+                notes.append(reversal_note(k, fits, best, runner, lead, scored, n_data,
+                                           len(cands), (modes_none, modes, entries), c,
+                                           verdict))
             if k == 0:
                 first = verdict
                 table = ranking_table(problem, r0, rows, fits, none, n_data, len(cands))
@@ -364,7 +316,7 @@ def diagnose(configurations, settings: DiagnoseSettings = DiagnoseSettings(), *,
             fit, rich = min(tried, key=lambda pair: (pair[1] or pair[0]).bic)
             if len(tried) > 1:
                 rounds[-1]["neighbours"] = [_form_record(f, r) for f, r in tried]
-                notes.append(_located_note(k, tried, fit))
+                notes.append(located_note(k, tried, fit))
             chosen = fit
             if rich is not None:
                 notes.append(f"round {k + 1}: {chosen.candidate.kind} {chosen.candidate.label} "
@@ -432,26 +384,6 @@ def diagnose(configurations, settings: DiagnoseSettings = DiagnoseSettings(), *,
                           rounds=tuple(rounds),
                           calibrated={n: float(t) for n, t in zip(problem.names, cal.theta)},
                           suspension=suspension)
-
-
-def _reversal_note(k: int, fits, best: int, runner, lead: float, scored, n_data: int,
-                   n_candidates: int, held_out, c: float, verdict: str) -> str:
-    """The note of a round whose held-out modes reversed the training ranking
-    (:func:`pipeline.diagnose.verdict.decide`, reason ``held_out_reversal``)."""
-    scores = round_scores(scored[0], scored[1], n_data, n_candidates, n_modal=scored[2])[0]
-    trained = int(np.argmin(scores))
-    b, a = fits[trained].candidate, fits[best].candidate
-    held = held_out_evidence(held_out[1][trained], held_out[1][best], held_out[2], c)
-    text = (f"round {k + 1}: the training modes prefer {b.kind} {b.label} to {a.kind} "
-            f"{a.label} by {scores[best] - scores[trained]:.1f}, the held-out modes prefer the "
-            f"latter by {held:.1f} (on the modes either reproduces): together by "
-            f"{preference(scores, held_out, c, trained, best):.1f}, more than the margin. ")
-    if verdict != "effect":
-        return text + f"{a.kind} {a.label} is not named ({verdict})."
-    closest = "" if runner is None else (f" beats its rivals on all the modes by {lead:.1f} "
-                                         f"({fits[runner].candidate.label} the closest):")
-    return text + (f"{a.kind} {a.label}{closest} named. The held-out modes took part in naming "
-                   "it, so its gap on them is no blind check.")
 
 
 def _suspension(configurations, refs, hung, settings: DiagnoseSettings, problem: Problem,
