@@ -31,7 +31,9 @@ their suspension modes first):
 prints the confusion matrix, the scores and the gap of every correctly named case, writes
 ``DIR/study.nc`` and every case's ``diagnose.json`` and ``score.json``. A study split over
 processes (kinds or seeds per core) is scored as one with ``--score DIR [DIR ...]``
-(:func:`rescore`; no case is run).
+(:func:`rescore`; no case is run). ``--oracle DIR [DIR ...]`` adds, to the cases run there, the
+gap of the truth's own effect on the nominal model (:mod:`.oracle`: what the right answer
+scores; a miss it shares is the data's, not the naming's) and scores them.
 """
 from __future__ import annotations
 
@@ -48,6 +50,7 @@ from structures.common.files import write_dataset, write_text
 
 from .generate import (FREQUENCY_NOISE, KINDS, SHAPE_NOISE, STRUCTURE_KINDS, STRUCTURES,
                        TRUTH_DECKS, TRUTH_KINDS, make_case)
+from .oracle import ORACLE_GAP, add_oracle_gap
 
 #: Columns of the confusion matrix: every kind the workflow can name and its other verdicts.
 NAMED = KINDS + ("none", "ambiguous", "unexplained", "error")
@@ -135,8 +138,11 @@ def add_truth_gap(folder: Path) -> dict:
     return gap
 
 
-def score(truth: dict, result: dict, floor: dict | None = None) -> dict:
-    """Score one verdict against its truth (module docstring)."""
+def score(truth: dict, result: dict, floor: dict | None = None,
+          oracle: dict | None = None) -> dict:
+    """Score one verdict against its truth (module docstring); ``floor`` the truth's own gap
+    (:func:`truth_gap`), ``oracle`` its effect's on the nominal model
+    (:func:`.oracle.oracle_gap`), each None when not computed."""
     effect = result.get("effect") if result.get("verdict") == "effect" else None
     named = effect["kind"] if effect else result.get("verdict", "error")
     hit = False
@@ -149,27 +155,30 @@ def score(truth: dict, result: dict, floor: dict | None = None) -> dict:
         value = (result.get(when) or {}).get(metric)
         return np.nan if value is None else float(value)
 
-    def least(metric):
-        value = (floor or {}).get(metric)
+    def least(metric, of=floor):
+        value = (of or {}).get(metric)
         return np.nan if value is None else float(value)
 
     return {"named": named, "kind_correct": named == truth["kind"], "location_hit": hit,
             "rms_before": gap("gap_before", "frequency_rms_held_out"),
             "rms_after": gap("gap_after", "frequency_rms_held_out"),
             "rms_truth": least("frequency_rms_held_out"),
+            "rms_oracle": least("frequency_rms_held_out", oracle),
             "xo_before": gap("gap_before", "max_cross_orthogonality_offdiag"),
             "xo_after": gap("gap_after", "max_cross_orthogonality_offdiag"),
             "xo_truth": least("max_cross_orthogonality_offdiag"),
+            "xo_oracle": least("max_cross_orthogonality_offdiag", oracle),
             "rms_expected": least("frequency_rms_held_out_expected"),
             "n_held_out": least("n_held_out"),
             "cv_before": gap("gap_before", "frequency_rms_cross_validated"),
             "cv_after": gap("gap_after", "frequency_rms_cross_validated"),
             "cv_truth": least("frequency_rms"),                 # the truth fits nothing
+            "cv_oracle": least("frequency_rms_cross_validated", oracle),
             "cv_expected": gap("gap_before", "frequency_rms_cross_validated_expected")}
 
 
-def _floor(folder: Path) -> dict | None:
-    found = Path(folder) / TRUTH_GAP
+def _floor(folder: Path, name: str = TRUTH_GAP) -> dict | None:
+    found = Path(folder) / name
     return json.loads(found.read_text()) if found.is_file() else None
 
 
@@ -198,7 +207,8 @@ def run_study(structures=STRUCTURES, kinds=TRUTH_KINDS, seeds=range(10), out=Non
         Per ``case``: ``structure``, ``truth_kind``, ``seed``, ``named_kind``, ``kind_correct``,
         ``location_hit``, ``seconds`` (diagnose only), ``frequency_rms_held_out`` and
         ``max_cross_orthogonality_offdiag`` on ``when`` (before, after, truth: the truth's own,
-        NaN without ``truth_gap.json``), ``error``;
+        NaN without ``truth_gap.json``; oracle: the truth's effect on the nominal model, NaN
+        without ``oracle_gap.json``, :mod:`.oracle`), ``error``;
         ``confusion(truth_kind_row, named_kind_column)`` counts; attrs: the scores
         ``top1_kind_accuracy``, ``location_accuracy``, ``none_kept``, ``outside_not_named``,
         ``gap_shrinks`` (fractions, NaN when no case counts) and the numbers of cases.
@@ -267,8 +277,18 @@ def rescore(folders) -> xr.Dataset:
         rows.append({"structure": structure, "truth_kind": kind, "seed": seed,
                      "seconds": row["seconds"], "error": row["error"],
                      **score(json.loads((case / "truth.json").read_text()), result,
-                             _floor(case))})
+                             _floor(case), _floor(case, ORACLE_GAP))})
     return study_dataset(rows)
+
+
+#: The gaps a case is scored on: the workflow's before and after, the truth model's own
+#: (:func:`truth_gap`) and its effect's on the nominal model (:mod:`.oracle`).
+WHEN = ("before", "after", "truth", "oracle")
+
+
+def _when(col: dict, measure: str) -> np.ndarray:
+    """(n_case, len(WHEN)) of a measure's columns ``<measure>_<when>``."""
+    return np.array([col[f"{measure}_{w}"] for w in WHEN], float).T
 
 
 def study_dataset(rows: list[dict]) -> xr.Dataset:
@@ -286,19 +306,16 @@ def study_dataset(rows: list[dict]) -> xr.Dataset:
          "location_hit": ("case", np.array(col["location_hit"], bool)),
          "seconds": ("case", np.array(col["seconds"], float), {"units": "s"}),
          "error": ("case", np.array(col["error"], dtype=str)),
-         "frequency_rms_held_out": (("case", "when"), np.array(
-             [col["rms_before"], col["rms_after"], col["rms_truth"]], float).T, {"units": "%"}),
+         "frequency_rms_held_out": (("case", "when"), _when(col, "rms"), {"units": "%"}),
          "frequency_rms_held_out_expected": ("case", np.array(col["rms_expected"], float),
                                              {"units": "%"}),
          "n_held_out": ("case", np.array(col["n_held_out"], float)),
-         "frequency_rms_cross_validated": (("case", "when"), np.array(
-             [col["cv_before"], col["cv_after"], col["cv_truth"]], float).T, {"units": "%"}),
+         "frequency_rms_cross_validated": (("case", "when"), _when(col, "cv"), {"units": "%"}),
          "frequency_rms_cross_validated_expected": ("case", np.array(col["cv_expected"], float),
                                                     {"units": "%"}),
-         "max_cross_orthogonality_offdiag": (("case", "when"), np.array(
-             [col["xo_before"], col["xo_after"], col["xo_truth"]], float).T),
+         "max_cross_orthogonality_offdiag": (("case", "when"), _when(col, "xo")),
          "confusion": (("truth_kind_row", "named_kind_column"), confusion)},
-        coords={"case": np.arange(len(rows)), "when": ["before", "after", "truth"],
+        coords={"case": np.arange(len(rows)), "when": list(WHEN),
                 "truth_kind_row": list(TRUTH_KINDS), "named_kind_column": list(NAMED)})
     ds.attrs.update(scores(ds))
     return ds
@@ -360,33 +377,48 @@ def gap_text(ds: xr.Dataset) -> str:
     cv_drops = cv[:, 1] < cv[:, 0]
     quiet = rms[:, 0] <= held_out_upper(ds["frequency_rms_held_out_expected"].values,
                                          ds["n_held_out"].values)
+    oracle = cv[:, 3] < cv[:, 0]
+    oracle &= (xo[:, 3] < xo[:, 0]) | np.isnan(xo[:, 0])
+    known = ~np.isnan(cv[:, 3])
     lines = [f"gap of the {int(right.sum())} correctly named cases (held-out RMS frequency error "
              "%, largest cross-orthogonality off-diagonal, cross-validated RMS frequency error "
              "% of every paired mode; before -> after (the truth's own; what noise and scatter "
-             "alone give)):"]
+             "alone give) [the truth's effect on the nominal model, where computed]):"]
     for i in np.flatnonzero(right):
         same = abs(xo[i, 1] - xo[i, 0]) < 0.5e-3                   # equal as printed
         marks = [m for m, ok in (("RMS up", rms_drops[i]),
                                  ("off-diagonal the same" if same else "off-diagonal up",
                                   xo_drops[i]),
                                  ("held-out within noise before", not quiet[i]),
-                                 ("cross-validated RMS not down", cv_drops[i])) if not ok]
+                                 ("cross-validated RMS not down", cv_drops[i]),
+                                 ("the truth's effect misses too", oracle[i] or not known[i]))
+                 if not ok]
+        right_effect = (f" [{xo[i, 3]:.3f} {cv[i, 3]:6.2f}]" if known[i] else "")
         lines.append(f"  {ds['structure'].values[i]:6s} {ds['truth_kind'].values[i]:18s} seed "
                      f"{int(ds['seed'].values[i]):3d}: {rms[i, 0]:6.2f} -> {rms[i, 1]:6.2f} "
                      f"({rms[i, 2]:5.2f}; "
                      f"{float(ds['frequency_rms_held_out_expected'].values[i]):5.2f})  "
                      f"{xo[i, 0]:.3f} -> {xo[i, 1]:.3f} ({xo[i, 2]:.3f})  "
                      f"{cv[i, 0]:6.2f} -> {cv[i, 1]:6.2f} ({cv[i, 2]:5.2f}; "
-                     f"{float(ds['frequency_rms_cross_validated_expected'].values[i]):5.2f})  "
-                     f"{', '.join(marks)}".rstrip())
+                     f"{float(ds['frequency_rms_cross_validated_expected'].values[i]):5.2f})"
+                     f"{right_effect}  {', '.join(marks)}".rstrip())
     both = right & rms_drops & xo_drops
     lines.append(f"drops: RMS {int(np.sum(right & rms_drops))}, off-diagonal "
                  f"{int(np.sum(right & xo_drops))}, both {int(both.sum())} of {int(right.sum())}; "
-                 f"of the {int(np.sum(right & ~both))} others, {int(np.sum(right & ~both & quiet))} "
+                 f"of the {int(np.sum(right & ~both))} others, "
+                 f"{int(np.sum(right & ~both & quiet))} "
                  "start with a held-out error within what noise and scatter alone give "
                  f"({HELD_OUT_SIGMAS:g} standard deviations); cross-validated RMS "
                  f"{int(np.sum(right & cv_drops))}, it and the off-diagonal both "
                  f"{int(np.sum(right & cv_drops & xo_drops))} of {int(right.sum())}")
+    miss = right & ~(cv_drops & xo_drops) & known
+    if np.any(right & known):
+        lines.append(f"the truth's effect on the nominal model (computed for "
+                     f"{int(np.sum(right & known))}): its cross-validated RMS and off-diagonal "
+                     f"both drop in {int(np.sum(right & known & oracle))}; of the "
+                     f"{int(miss.sum())} "
+                     f"cases above where the named effect's do not, it misses too in "
+                     f"{int(np.sum(miss & ~oracle))}")
     return "\n".join(lines)
 
 
@@ -409,6 +441,9 @@ def main(argv=None) -> None:
     parser.add_argument("--score", type=Path, nargs="+", metavar="DIR",
                         help="score the cases already run under these folders (a later folder's "
                              "case replaces an earlier one's) instead of running any")
+    parser.add_argument("--oracle", type=Path, nargs="+", metavar="DIR",
+                        help="write oracle_gap.json (the truth's effect on the nominal model) "
+                             "for the cases under these folders that lack it, then score them")
     parser.add_argument("--truth-gap", type=Path, nargs="+", metavar="DIR",
                         help="write truth_gap.json for the cases under these folders that lack "
                              "it, then score them")
@@ -418,8 +453,14 @@ def main(argv=None) -> None:
             if not (found.parent / TRUTH_GAP).is_file():
                 add_truth_gap(found.parent)
                 print(f"truth gap: {found.parent}")
-    if args.truth_gap:
-        args.score = list(args.score or ()) + list(args.truth_gap)
+    for folder in args.oracle or ():
+        for found in sorted(folder.glob("*/*/*/truth.json")):
+            if (found.parent / "diagnose.json").is_file() and not (found.parent
+                                                                   / ORACLE_GAP).is_file():
+                add_oracle_gap(found.parent)
+                print(f"oracle gap: {found.parent}")
+    if args.truth_gap or args.oracle:
+        args.score = list(args.score or ()) + list(args.truth_gap or ()) + list(args.oracle or ())
     if args.score:
         ds = rescore(args.score)
     else:
