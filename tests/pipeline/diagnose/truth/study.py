@@ -364,6 +364,10 @@ def confusion_text(ds: xr.Dataset) -> str:
     return "\n".join(lines)
 
 
+#: Half the last printed digit of the gap text's measures: an off-diagonal, an RMS error [%].
+RESOLUTION = {"xo": 0.5e-3, "rms": 0.005}
+
+
 def gap_text(ds: xr.Dataset) -> str:
     """The gap of every correctly named case (a library kind named right): held-out RMS
     frequency error [%] and largest cross-orthogonality off-diagonal before -> after, marked
@@ -377,21 +381,24 @@ def gap_text(ds: xr.Dataset) -> str:
     cv_drops = cv[:, 1] < cv[:, 0]
     quiet = rms[:, 0] <= held_out_upper(ds["frequency_rms_held_out_expected"].values,
                                          ds["n_held_out"].values)
-    oracle = cv[:, 3] < cv[:, 0]
-    oracle &= (xo[:, 3] < xo[:, 0]) | np.isnan(xo[:, 0])
+    oracle = (cv[:, 3] < cv[:, 0]) & ((xo[:, 3] < xo[:, 0]) | np.isnan(xo[:, 0]))
     known = ~np.isnan(cv[:, 3])
+    # on a measure the named effect misses, the truth's effect lowers it by no more than the
+    # printed resolution either: the miss is the data's
+    shared = known & ((~cv_drops & (cv[:, 3] > cv[:, 0] - RESOLUTION["rms"]))
+                      | (~xo_drops & (xo[:, 3] > xo[:, 0] - RESOLUTION["xo"])))
     lines = [f"gap of the {int(right.sum())} correctly named cases (held-out RMS frequency error "
              "%, largest cross-orthogonality off-diagonal, cross-validated RMS frequency error "
              "% of every paired mode; before -> after (the truth's own; what noise and scatter "
              "alone give) [the truth's effect on the nominal model, where computed]):"]
     for i in np.flatnonzero(right):
-        same = abs(xo[i, 1] - xo[i, 0]) < 0.5e-3                   # equal as printed
+        same = abs(xo[i, 1] - xo[i, 0]) < RESOLUTION["xo"]          # equal as printed
         marks = [m for m, ok in (("RMS up", rms_drops[i]),
                                  ("off-diagonal the same" if same else "off-diagonal up",
                                   xo_drops[i]),
                                  ("held-out within noise before", not quiet[i]),
                                  ("cross-validated RMS not down", cv_drops[i]),
-                                 ("the truth's effect misses too", oracle[i] or not known[i]))
+                                 ("the truth's effect no better", not shared[i]))
                  if not ok]
         right_effect = (f" [{xo[i, 3]:.3f} {cv[i, 3]:6.2f}]" if known[i] else "")
         lines.append(f"  {ds['structure'].values[i]:6s} {ds['truth_kind'].values[i]:18s} seed "
@@ -416,9 +423,10 @@ def gap_text(ds: xr.Dataset) -> str:
         lines.append(f"the truth's effect on the nominal model (computed for "
                      f"{int(np.sum(right & known))}): its cross-validated RMS and off-diagonal "
                      f"both drop in {int(np.sum(right & known & oracle))}; of the "
-                     f"{int(miss.sum())} "
-                     f"cases above where the named effect's do not, it misses too in "
-                     f"{int(np.sum(miss & ~oracle))}")
+                     f"{int(miss.sum())} cases above where the named effect's do not, on the "
+                     f"measure missed it does no better than {RESOLUTION['xo']:g} (off-diagonal) "
+                     f"or {RESOLUTION['rms']:g} % (RMS) below before in "
+                     f"{int(np.sum(miss & shared))}")
     return "\n".join(lines)
 
 
