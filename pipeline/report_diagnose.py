@@ -1,9 +1,10 @@
 """The report's diagnose section, from the run folder's ``diagnose/`` (no computation).
 
 :func:`diagnose_section` reads ``diagnose/diagnose.json`` (pipeline.diagnose.outputs) and shows the
-verdict, the named effects with their location, parameters and what they add (deck units), the
-ranked candidates, the gap before and after (frequency errors, MAC, cross-orthogonality, mass
-properties, flutter speed) with units, the notes, and the candidate-ranking and gap figures
+verdict, the named effects with their location, parameters (with their standard errors) and what
+they add (deck units), the ranked candidates, the gap before and after (frequency errors, MAC,
+cross-orthogonality, mass properties, flutter speed) with units, the notes, and the
+candidate-ranking and gap figures
 (``diagnose/*.png``) embedded. A run folder without ``diagnose/diagnose.json`` gives an empty
 section.
 """
@@ -24,6 +25,21 @@ TOP = 10
 
 def _value(value) -> str:
     return fmt(float("nan") if value is None else value, ".4g")
+
+
+def _parameters(effect: dict) -> str:
+    """``name = value +- error`` of each parameter of a named effect (``not determined`` where
+    its standard error is null; the value alone where none was estimated)."""
+    errors = effect.get("standard_errors")
+    out = []
+    for k, v in (effect.get("parameters") or {}).items():
+        if errors is None:
+            out.append(f"{k} = {_value(v)}")
+        elif errors.get(k) is None:
+            out.append(f"{k} = {_value(v)} (not determined)")
+        else:
+            out.append(f"{k} = {_value(v)} +- {fmt(errors[k], '.2g')}")
+    return ", ".join(out)
 
 
 def _location(location: dict) -> str:
@@ -61,10 +77,9 @@ def diagnose_section(run_dir, labels: UnitLabels) -> str:
            f"<p>Verdict: <b>{html.escape(str(record['verdict']))}</b>.</p>")
     effects = record.get("effects") or []
     if effects:
-        out += table(("round", "kind", "location", "parameters", "adds (deck units)",
-                      "also fits within the margin"), [
-            (i, e["kind"], _location(e.get("location")),
-             ", ".join(f"{k} = {_value(v)}" for k, v in (e.get("parameters") or {}).items()),
+        out += table(("round", "kind", "location", "parameters (+- standard error)",
+                      "adds (deck units)", "also fits within the margin"), [
+            (i, e["kind"], _location(e.get("location")), _parameters(e),
              ", ".join(f"{k} = {_value(v)}" for k, v in (e.get("quantities") or {}).items()),
              "; ".join(f"{o['label']} (+{_value(o['score'])})" for o in e.get("elsewhere") or [])
              or "-")

@@ -43,12 +43,15 @@ class EffectRecord(NamedTuple):
     and "none"'s scores minus the effect's, each score chi^2 / c + p ln n (c the round's
     dispersion; "none"'s less 2 ln of the candidates screened, its prior odds). ``elsewhere``
     lists the candidates of its kind at other sites that score within the margin of it
-    (:func:`pipeline.diagnose.rounds.sites_elsewhere`): its site is then uncertain."""
+    (:func:`pipeline.diagnose.rounds.sites_elsewhere`): its site is then uncertain. ``errors``
+    (npar,) are the standard errors of ``values`` (:mod:`pipeline.diagnose.linearised`; inf:
+    not determined by the data), None when not estimated (a suspension)."""
 
     candidate: object
     values: np.ndarray
     score: float
     elsewhere: tuple = ()
+    errors: np.ndarray | None = None
 
 
 class CandidateScore(NamedTuple):
@@ -80,8 +83,8 @@ def suspension_effects(suspension: Mapping | None) -> int:
 
 
 def effect_json(record: EffectRecord) -> dict:
-    """{"kind", "location", "parameters", "quantities", "label", "score", "sites",
-    "elsewhere"} of a named effect.
+    """{"kind", "location", "parameters", "standard_errors", "quantities", "label", "score",
+    "sites", "elsewhere"} of a named effect.
 
     ``parameters`` are relative to scales of the model of the effect's round
     (:mod:`pipeline.diagnose.effects`); ``quantities`` is what they add to the model in deck units
@@ -93,13 +96,18 @@ def effect_json(record: EffectRecord) -> dict:
     twice in all). ``elsewhere`` lists the candidates of its kind at other sites that the data
     do not tell from it (each ``kind``, ``label``, ``location``, ``score`` above the effect's,
     below the margin, and ``refitted``: False when scored by its linearised fit): empty when its
-    site is as certain as its kind.
+    site is as certain as its kind. ``standard_errors`` holds each parameter's (null: not
+    determined by the data; the whole entry null when not estimated).
     """
     cand = record.candidate
+    errors = (None if record.errors is None else
+              {name: float(e) if np.isfinite(e) else None
+               for name, e in zip(cand.parameters, record.errors)})
     per_site = quantities(cand, record.values)
     return {"kind": cand.kind, "location": location_dict(cand.location),
             "parameters": {name: float(v) for name, v in zip(cand.parameters, record.values)},
-            "quantities": per_site[0], "label": cand.label, "score": float(record.score),
+            "standard_errors": errors, "quantities": per_site[0], "label": cand.label,
+            "score": float(record.score),
             "sites": [{"location": location_dict(site.location),
                        "parameters": {name: float(v) for name, v in zip(site.parameters, x)},
                        "quantities": q}

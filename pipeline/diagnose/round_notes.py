@@ -10,7 +10,10 @@ from __future__ import annotations
 import numpy as np
 
 from pipeline.diagnose.predictive import held_out_evidence
-from pipeline.diagnose.verdict import preference, round_scores
+from pipeline.diagnose.verdict import on_bound, preference, round_scores
+
+#: A parameter smaller than this share of its reference size is at 0 (:func:`undetermined_note`).
+ZERO = 1e-6
 
 
 def bound_note(k: int, cand, bound, outward: bool, gain: float, c: float, margin: float) -> str:
@@ -104,3 +107,21 @@ def located_note(k: int, tried, fit) -> str:
     if fit is tried[0][0]:
         return text + f"{named.label} stays."
     return text + f"{fit.candidate.label} fits best and is named instead."
+
+
+def undetermined_note(k: int, cand, values, errors) -> str | None:
+    """A named effect's parameters whose standard error (:mod:`pipeline.diagnose.linearised`)
+    is at least the value's size: the training data do not determine them (a parameter on a
+    non-zero bound is left to the bound's note, one at 0, "none of it", has no size to compare
+    with); None when there are none."""
+    loose = [(name, v, e) for name, v, e, lo, hi, ref
+             in zip(cand.parameters, values, errors, cand.lower, cand.upper, cand.reference)
+             if not on_bound(v, lo, hi) and abs(v) > ZERO * abs(ref) and not e < abs(v)]
+    if not loose:
+        return None
+    listed = ", ".join(f"{name} = {v:.4g} +- {e:.2g}" if np.isfinite(e) else
+                       f"{name} = {v:.4g} (no bound)" for name, v, e in loose)
+    return (f"round {k + 1}: {cand.kind} {cand.label}: {listed}: a standard error as large as "
+            "the value, the training data do not determine "
+            + ("it" if len(loose) == 1 else "them")
+            + "; a mode it governs that no fit saw is predicted no better than that.")

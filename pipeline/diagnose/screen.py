@@ -78,6 +78,7 @@ from pipeline.diagnose.grounded import (SPRING_LADDER, ladder_sizes, reduce_mass
                                         spring_basis)
 from pipeline.diagnose.joints import hangs_nothing
 from pipeline.diagnose.ladder import reduce_joint
+from pipeline.diagnose.linearised import FD_STEP, effect_jacobian
 from pipeline.diagnose.mirror import sites
 from pipeline.diagnose.quadratic import (coefficients, line_searches, monomials, quadratic_fit,
                                          sample_points, secant)
@@ -112,9 +113,6 @@ REFIT_NFEV = 12
 POLISH_NFEV = 60
 #: The polish stops when an iteration lowers chi^2 by less than this fraction of it.
 POLISH_FTOL = 1e-4
-#: Forward-difference step of an effect parameter, relative to its scale in the refit (the larger
-#: of its reference size and its starting value).
-FD_STEP = 1e-3
 #: Residual at a trial point whose model cannot be analysed, relative to the starting residual.
 PENALTY = 3.0
 #: Fractions of the screening's best size at which the refit's start is analysed exactly: the
@@ -526,17 +524,7 @@ def bound_release(problem: Problem, effects, fit: Refitted, *, jacobian_theta) -
         is not outward).
     """
     cand, x = fit.candidate, np.asarray(fit.values, float)
-    r = problem.residual(fit.theta, fit.evaluations)
-    size = np.maximum(np.abs(np.asarray(cand.reference, float)), np.abs(x))
-
-    paired = pairings(fit.evaluations)
-
-    def residual(values):
-        evs = problem.evaluate(fit.theta, tuple(effects) + ((cand, values),), paired)
-        return problem.residual(fit.theta, evs)
-
-    cols = forward_columns(residual, x, FD_STEP * size, cand.upper, r)
-    jac = np.column_stack(cols + [np.asarray(jacobian_theta, float)])
+    jac, r, _ = effect_jacobian(problem, effects, fit, jacobian_theta)
     delta = np.linalg.lstsq(jac, -r, rcond=None)[0]
     held = np.zeros(jac.shape[1], bool)
     outward = False

@@ -55,6 +55,7 @@ from pipeline.diagnose.detail import detailed, form_text, located
 from pipeline.diagnose.effects import candidates, neighbours
 from pipeline.diagnose.gap import (EQUIVALENT_SIGMAS, gap_metrics, held_out_note,
                                    indistinguishable, offdiag_note, separating_measurement)
+from pipeline.diagnose.linearised import standard_errors
 from pipeline.diagnose.loadpath import best_load_path, load_path_measurement
 from pipeline.diagnose.mirror import sites
 from pipeline.diagnose.predictive import held_out_evidence, held_out_modes
@@ -62,7 +63,7 @@ from pipeline.diagnose.preflight import DiagnoseSettings, check_inputs, checked
 from pipeline.diagnose.result import DiagnoseResult, EffectRecord, suspension_effects
 from pipeline.diagnose.round_notes import (bound_note, held_out_veto_note, load_path_note,
                                            located_note, past_veto_note, reversal_note,
-                                           rich_path_note)
+                                           rich_path_note, undetermined_note)
 from pipeline.diagnose.rounds import (against_path, chi2_split, none_fit, ranking_table,
                                       round_record, score_rows, sites_elsewhere)
 from pipeline.diagnose.screen import (bound_release, pick_for_refit, polish, refit, screen,
@@ -356,7 +357,10 @@ def diagnose(configurations, settings: DiagnoseSettings = DiagnoseSettings(), *,
                 splits = ()
             gap_after = rounds[-1]["gap"] = gap_metrics(problem, chosen.evaluations)
             rounds[-1]["nominal"] = {n: float(t) for n, t in zip(problem.names, chosen.theta)}
-            records.append(EffectRecord(chosen.candidate, chosen.values, lead, spread))
+            errors = standard_errors(problem, effects, chosen, c, jacobian_theta=cal.jacobian)
+            if note := undetermined_note(k, chosen.candidate, chosen.values, errors):
+                notes.append(note)
+            records.append(EffectRecord(chosen.candidate, chosen.values, lead, spread, errors))
             effects.append((chosen.candidate, chosen.values))
             theta, none_evs = chosen.theta, chosen.evaluations
     verdict = "effect" if len(records) > n_hung else first      # the structure's, not the test's

@@ -11,11 +11,13 @@ RECORD = {
     "effect": None,
     "effects": [{"kind": "joint_flexibility",
                  "location": {"grids": [5011, 5021], "elements": [5100], "properties": []},
-                 "parameters": {"compliance": 3.2}, "quantities": {"K1": 1.5e5, "K4": 2.0e3},
+                 "parameters": {"compliance": 3.2}, "standard_errors": {"compliance": 0.41},
+                 "quantities": {"K1": 1.5e5, "K4": 2.0e3},
                  "label": "RBE2 5100", "score": 42.0},
                 {"kind": "boundary_stiffness",
                  "location": {"grids": [204], "elements": [], "properties": []},
-                 "parameters": {"k_z": 0.11}, "quantities": {"K3": 64.0},
+                 "parameters": {"k_z": 0.11}, "standard_errors": {"k_z": None},
+                 "quantities": {"K3": 64.0},
                  "label": "grid 204 z", "score": 73.0,
                  "elsewhere": [{"kind": "boundary_stiffness", "label": "grid 148 z",
                                 "location": {"grids": [148], "elements": [], "properties": []},
@@ -45,8 +47,10 @@ def test_section_tables_with_units(tmp_path):
     page = diagnose_section(tmp_path, unit_labels("english_in"))
     assert "<b>effect</b>" in page
     assert ("<tr><td>1</td><td>joint_flexibility</td><td>grids: 5011, 5021; elements: 5100</td>"
-            "<td>compliance = 3.2</td><td>K1 = 1.5e+05, K4 = 2000</td><td>-</td></tr>") in page
-    assert ("<tr><td>2</td><td>boundary_stiffness</td><td>grids: 204</td><td>k_z = 0.11</td>"
+            "<td>compliance = 3.2 +- 0.41</td><td>K1 = 1.5e+05, K4 = 2000</td><td>-</td></tr>"
+            ) in page
+    assert ("<tr><td>2</td><td>boundary_stiffness</td><td>grids: 204</td><td>k_z = 0.11 (not "
+            "determined)</td>"
             "<td>K3 = 64</td><td>grid 148 z (+0.2)</td></tr>") in page
     assert "<td>2</td><td>lumped_mass</td><td>grid 3005</td><td>grids: 3005</td><td>42</td>" in page
     velocity = unit_labels("english_in").velocity

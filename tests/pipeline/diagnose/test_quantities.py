@@ -130,3 +130,13 @@ def test_curvature_rise_is_the_mid_grid_offset(tmp_path):
     bowed = apply_effect(model, cand, [0.05, 0.0])
     mid = bowed.grids.xyz[np.isclose(bowed.grids.xyz[:, 0], 2.0)]
     np.testing.assert_allclose(mid, [[2.0, q["rise_1"], 0.0]], atol=1e-15)
+
+
+def test_standard_errors_in_the_json(x56_candidates):
+    """A named effect's standard errors go beside its parameters, null where not determined
+    (inf) and the whole entry null when not estimated."""
+    cand = _pick(x56_candidates, "lumped_mass", "grid 5021")
+    record = effect_json(EffectRecord(cand, np.array([0.013, 3.0e-4]), 0.0, (),
+                                      np.array([0.0011, np.inf])))
+    assert record["standard_errors"] == {"mass": 0.0011, "inertia": None}
+    assert _quantities(cand, [0.013, 3.0e-4])["standard_errors"] is None

@@ -5,7 +5,8 @@ from types import SimpleNamespace
 import numpy as np
 
 from pipeline.diagnose.round_notes import (bound_note, held_out_veto_note, load_path_note,
-                                           located_note, past_veto_note, reversal_note)
+                                           located_note, past_veto_note, reversal_note,
+                                           undetermined_note)
 
 MASS = SimpleNamespace(kind="lumped_mass", label="grid 3009")
 JOINT = SimpleNamespace(kind="joint_flexibility", label="RBE2 7003")
@@ -69,3 +70,19 @@ def test_located_note_says_which_joint_stays():
     assert "RBE2 7003 200.0 -> 180.0; RBE2 7002 250.0" in stays and stays.endswith("stays.")
     moved = located_note(0, [(a, None), (b, None)], b)
     assert moved.endswith("RBE2 7002 fits best and is named instead.")
+
+
+def test_undetermined_note_lists_the_parameters_the_data_leave_open():
+    """The frame's joint seed 7 (measured): compliance_rx 320.9 with no error bound (the held-out
+    mode 24 alone governs it), the others determined; a parameter at its zero bound is left to
+    the bound's note."""
+    joint = SimpleNamespace(kind="joint_flexibility", label="RBE2 7005",
+                            parameters=("compliance_x", "compliance_rx", "compliance_ry"),
+                            lower=(0.0, 0.0, 0.0), upper=(1e6, 1e6, 1e6),
+                            reference=(100.0, 100.0, 100.0))
+    text = undetermined_note(0, joint, np.array([1472.8, 320.9, 1149.2]),
+                             np.array([6.6, np.inf, 1500.0]))
+    assert "compliance_rx = 320.9 (no bound), compliance_ry = 1149 +- 1.5e+03" in text
+    assert "compliance_x" not in text and "determine them" in text
+    assert undetermined_note(0, joint, np.array([1472.8, 0.0, 1149.2]),
+                             np.array([6.6, 50.0, 60.0])) is None
