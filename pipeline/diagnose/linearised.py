@@ -24,6 +24,7 @@ from __future__ import annotations
 import numpy as np
 
 from pipeline.diagnose.calibrate import THETA_SCALE, Problem, forward_columns, pairings
+from structures.common.errors import InputError, SolverError
 
 #: Forward-difference step of an effect parameter, relative to its scale in the refit (the larger
 #: of its reference size and its starting value).
@@ -88,9 +89,12 @@ def parameter_errors(jac, modal, c: float, scale) -> np.ndarray:
     return np.where(share > np.sqrt(UNSEEN), np.inf, np.sqrt(var) * scale)
 
 
-def standard_errors(problem: Problem, effects, fit, c: float, *, jacobian_theta) -> np.ndarray:
+def standard_errors(problem: Problem, effects, fit, c: float, *,
+                    jacobian_theta) -> np.ndarray | None:
     """(npar,) standard errors of a refitted effect's parameters, the nominal parameters
-    estimated with them (module docstring; inf: not determined by the training data).
+    estimated with them (module docstring; inf: not determined by the training data); None
+    when a model stepped from the fit cannot be analysed (a mechanism), the errors then not
+    estimated.
 
     Parameters
     ----------
@@ -100,6 +104,9 @@ def standard_errors(problem: Problem, effects, fit, c: float, *, jacobian_theta)
     c : float, the round's modal dispersion.
     jacobian_theta : (n_data, n_theta) d r / d theta.
     """
-    jac, _, size = effect_jacobian(problem, effects, fit, jacobian_theta)
+    try:
+        jac, _, size = effect_jacobian(problem, effects, fit, jacobian_theta)
+    except (SolverError, InputError):
+        return None
     scale = np.concatenate([size, np.full(jac.shape[1] - size.size, THETA_SCALE)])
     return parameter_errors(jac, problem.modal_rows(), c, scale)[:size.size]

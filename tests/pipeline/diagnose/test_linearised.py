@@ -76,3 +76,16 @@ def test_standard_error_is_where_the_exact_chi2_rises_by_one(tmp_path):
     base = chi2(fit.values)
     for sign in (1.0, -1.0):
         assert chi2(fit.values + sign * step) - base == pytest.approx(1.0, rel=0.1)
+
+
+def test_no_standard_errors_where_a_stepped_model_cannot_be_analysed(monkeypatch):
+    """A step of a parameter that makes a mechanism (the solver refuses the model): the errors
+    are not estimated (None), and the diagnosis goes on."""
+    from pipeline.diagnose import linearised
+    from structures.common.errors import SolverError
+
+    def refuse(*args, **kwargs):
+        raise SolverError("mechanism")
+
+    monkeypatch.setattr(linearised, "effect_jacobian", refuse)
+    assert standard_errors(None, (), None, 1.0, jacobian_theta=None) is None
