@@ -14,7 +14,7 @@ import html
 import json
 from pathlib import Path
 
-from pipeline.diagnose.outputs import flat_gap, gap_unit
+from pipeline.diagnose.outputs import flat_gap, gap_unit, parameter_text
 from pipeline.report_figures import png_data_uri
 from pipeline.report_tables import fmt, note, table
 from structures.units import UnitLabels
@@ -25,21 +25,6 @@ TOP = 10
 
 def _value(value) -> str:
     return fmt(float("nan") if value is None else value, ".4g")
-
-
-def _parameters(effect: dict) -> str:
-    """``name = value +- error`` of each parameter of a named effect (``not determined`` where
-    its standard error is null; the value alone where none was estimated)."""
-    errors = effect.get("standard_errors")
-    out = []
-    for k, v in (effect.get("parameters") or {}).items():
-        if errors is None:
-            out.append(f"{k} = {_value(v)}")
-        elif errors.get(k) is None:
-            out.append(f"{k} = {_value(v)} (not determined)")
-        else:
-            out.append(f"{k} = {_value(v)} +- {fmt(errors[k], '.2g')}")
-    return ", ".join(out)
 
 
 def _location(location: dict) -> str:
@@ -79,7 +64,7 @@ def diagnose_section(run_dir, labels: UnitLabels) -> str:
     if effects:
         out += table(("round", "kind", "location", "parameters (+- standard error)",
                       "adds (deck units)", "also fits within the margin"), [
-            (i, e["kind"], _location(e.get("location")), _parameters(e),
+            (i, e["kind"], _location(e.get("location")), parameter_text(e),
              ", ".join(f"{k} = {_value(v)}" for k, v in (e.get("quantities") or {}).items()),
              "; ".join(f"{o['label']} (+{_value(o['score'])})" for o in e.get("elsewhere") or [])
              or "-")

@@ -189,15 +189,32 @@ def _parameters(parameters: dict) -> str:
     return ", ".join(f"{k} = {_number(v, '.4g')}" for k, v in (parameters or {}).items())
 
 
+def parameter_text(effect: dict) -> str:
+    """``name = value +- error`` of each parameter of a named effect's JSON record
+    (``value (not determined)`` where its standard error is null, the value alone where no
+    errors were estimated)."""
+    errors = effect.get("standard_errors")
+    out = []
+    for k, v in (effect.get("parameters") or {}).items():
+        if errors is None:
+            out.append(f"{k} = {_number(v, '.4g')}")
+        elif errors.get(k) is None:
+            out.append(f"{k} = {_number(v, '.4g')} (not determined)")
+        else:
+            out.append(f"{k} = {_number(v, '.4g')} +- {_number(errors[k], '.2g')}")
+    return ", ".join(out)
+
+
 def verdict_summary(record: dict, velocity: str = "model units", top: int = 5) -> str:
     """A few lines of a diagnosis' JSON record: the verdict, each named effect with its location,
-    parameters and what it adds (``quantities``, deck units), the ``top`` candidates and the gap
-    before -> after (``velocity``: the unit of the flutter speed)."""
+    parameters (+- standard errors, :func:`parameter_text`) and what it adds (``quantities``,
+    deck units), the ``top`` candidates and the gap before -> after (``velocity``: the unit of
+    the flutter speed)."""
     lines = [f"verdict: {record['verdict']}"]
     n_hung = len((record.get("suspension") or {}).get("sites") or [])
     for i, effect in enumerate(record.get("effects") or [], 1):
         lines.append(f"  effect {i}: {effect['kind']} at {_location(effect.get('location'))}: "
-                     f"{_parameters(effect.get('parameters'))}"
+                     f"{parameter_text(effect)}"
                      + (" (the test's suspension, from its suspension modes)" if i <= n_hung
                         else ""))
         if effect.get("quantities"):

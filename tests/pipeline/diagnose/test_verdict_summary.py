@@ -29,3 +29,13 @@ def test_an_uncertain_site_is_listed_under_its_effect():
         "    site uncertain, also fits within the margin: grid 148 z (+0.2); grid 205 z (+0.5)"]
     certain = {**RECORD, "effects": [{**RECORD["effects"][0], "elsewhere": []}]}
     assert not any("site uncertain" in line for line in verdict_summary(certain).splitlines())
+
+
+def test_standard_errors_beside_the_parameters():
+    """Each parameter with its standard error, "not determined" where it is null; without
+    ``standard_errors`` (a suspension, an older record) the values alone."""
+    joint = {**RECORD["effects"][0], "kind": "joint_flexibility", "elsewhere": [],
+             "parameters": {"compliance_x": 1472.83, "compliance_rx": 320.92},
+             "standard_errors": {"compliance_x": 6.553, "compliance_rx": None}}
+    line = verdict_summary({**RECORD, "effects": [joint]}).splitlines()[1]
+    assert line.endswith("compliance_x = 1473 +- 6.6, compliance_rx = 320.9 (not determined)")
