@@ -113,7 +113,11 @@ def undetermined_note(k: int, cand, values, errors) -> str | None:
     """A named effect's parameters whose standard error (:mod:`pipeline.diagnose.linearised`)
     is at least the value's size: the training data do not determine them (a parameter on a
     non-zero bound is left to the bound's note, one at 0, "none of it", has no size to compare
-    with); None when there are none."""
+    with); None when there are none. ``errors`` None: they could not be estimated, which the
+    note says."""
+    if errors is None:
+        return (f"round {k + 1}: {cand.label}: its standard errors are not estimated (a model "
+                "stepped from the fit cannot be analysed).")
     loose = [(name, v, e) for name, v, e, lo, hi, ref
              in zip(cand.parameters, values, errors, cand.lower, cand.upper, cand.reference)
              if not on_bound(v, lo, hi) and abs(v) > ZERO * abs(ref) and not e < abs(v)]

@@ -358,10 +358,7 @@ def diagnose(configurations, settings: DiagnoseSettings = DiagnoseSettings(), *,
             gap_after = rounds[-1]["gap"] = gap_metrics(problem, chosen.evaluations)
             rounds[-1]["nominal"] = {n: float(t) for n, t in zip(problem.names, chosen.theta)}
             errors = standard_errors(problem, effects, chosen, c, jacobian_theta=cal.jacobian)
-            if errors is None:
-                notes.append(f"round {k + 1}: {chosen.candidate.label}: its standard errors are "
-                             "not estimated (a model stepped from the fit cannot be analysed).")
-            elif note := undetermined_note(k, chosen.candidate, chosen.values, errors):
+            if note := undetermined_note(k, chosen.candidate, chosen.values, errors):
                 notes.append(note)
             records.append(EffectRecord(chosen.candidate, chosen.values, lead, spread, errors))
             effects.append((chosen.candidate, chosen.values))

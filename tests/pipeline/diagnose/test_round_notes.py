@@ -86,3 +86,11 @@ def test_undetermined_note_lists_the_parameters_the_data_leave_open():
     assert "compliance_x" not in text and "determine them" in text
     assert undetermined_note(0, joint, np.array([1472.8, 0.0, 1149.2]),
                              np.array([6.6, 50.0, 60.0])) is None
+
+
+def test_undetermined_note_says_when_no_errors_were_estimated():
+    joint = SimpleNamespace(kind="joint_flexibility", label="RBE2 7005",
+                            parameters=("compliance_x",), lower=(0.0,), upper=(1e6,),
+                            reference=(100.0,))
+    text = undetermined_note(1, joint, np.array([1472.8]), None)
+    assert text.startswith("round 2: RBE2 7005: its standard errors are not estimated")

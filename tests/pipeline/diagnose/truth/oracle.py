@@ -66,20 +66,14 @@ def oracle_gap(case_toml: Path, truth: dict, *, frequency_only: bool = False) ->
     """
     from threadpoolctl import threadpool_limits
 
-    from pipeline.case import read_case
     from pipeline.diagnose.calibrate import Problem, calibrate
     from pipeline.diagnose.crossval import open_splits, pooled
     from pipeline.diagnose.gap import gap_metrics
-    from pipeline.diagnose.inputs import settings_from_case
-    from pipeline.diagnose.preflight import checked
     from structures.bdf import read_model
 
-    from .study import _configurations
+    from .study import case_references
 
-    case = read_case(case_toml)
-    settings = settings_from_case(case)
-    configurations = _configurations(case, frequency_only)
-    refs = checked(configurations, settings)[0]
+    configurations, settings, refs = case_references(case_toml, frequency_only)
     effect = truth_effect(truth)
     with tempfile.TemporaryDirectory() as tmp:
         models = [read_model(with_effect(c.deck, effect, Path(tmp))) for c in configurations]

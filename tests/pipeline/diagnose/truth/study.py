@@ -81,25 +81,34 @@ def diagnose_case(case_toml: Path, *, frequency_only: bool = False) -> dict:
     return diagnose(_configurations(case, frequency_only), settings_from_case(case)).to_json()
 
 
+def case_references(case_toml: Path, frequency_only: bool = False) -> tuple:
+    """(configurations, settings, references) of a case as the workflow reads and checks it
+    (its ``preflight``): what a gap of another model is set against, with the workflow's
+    pairing, held-out modes and noise."""
+    from pipeline.case import read_case
+    from pipeline.diagnose import preflight
+    from pipeline.diagnose.inputs import settings_from_case
+
+    case = read_case(case_toml)
+    configurations = _configurations(case, frequency_only)
+    settings = settings_from_case(case)
+    return configurations, settings, preflight(configurations, settings)[0]
+
+
 def truth_gap(case_toml: Path, decks: Path, *, frequency_only: bool = False) -> dict:
     """The gap (``gap_after``'s keys) of a case's truth models against its test data.
 
     Each configuration's truth deck (``decks``: a ``make_case(..., decks=)`` folder) is
-    analysed and set against the reference the workflow builds from the case (its
-    ``preflight``): the same pairing, held-out modes and noise as the workflow's gap.
+    analysed and set against the reference the workflow builds from the case
+    (:func:`case_references`): the same pairing, held-out modes and noise as the workflow's gap.
     """
     from types import SimpleNamespace
 
-    from pipeline.case import read_case
     from pipeline.diagnose.evidence import evaluate
     from pipeline.diagnose.gap import gap_metrics
-    from pipeline.diagnose.inputs import settings_from_case
-    from pipeline.diagnose import preflight
     from structures.bdf import read_model
 
-    case = read_case(case_toml)
-    configurations = _configurations(case, frequency_only)
-    refs, _ = preflight(configurations, settings_from_case(case))
+    configurations, _, refs = case_references(case_toml, frequency_only)
     names = json.loads((Path(decks) / TRUTH_DECKS).read_text())
     evaluations = []
     for ref, conf in zip(refs, configurations):
@@ -430,6 +439,16 @@ def gap_text(ds: xr.Dataset) -> str:
     return "\n".join(lines)
 
 
+def _fill_in(folders, name: str, add) -> None:
+    """``add(case)`` for every case run under ``folders`` (its ``diagnose.json`` written) that
+    lacks the file ``name``."""
+    for folder in folders or ():
+        for found in sorted(Path(folder).glob("*/*/*/diagnose.json")):
+            if not (found.parent / name).is_file():
+                add(found.parent)
+                print(f"{name}: {found.parent}")
+
+
 def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--structures", nargs="+", default=list(STRUCTURES), choices=STRUCTURES)
@@ -456,17 +475,8 @@ def main(argv=None) -> None:
                         help="write truth_gap.json for the cases under these folders that lack "
                              "it, then score them")
     args = parser.parse_args(argv)
-    for folder in args.truth_gap or ():
-        for found in sorted(folder.glob("*/*/*/truth.json")):
-            if not (found.parent / TRUTH_GAP).is_file():
-                add_truth_gap(found.parent)
-                print(f"truth gap: {found.parent}")
-    for folder in args.oracle or ():
-        for found in sorted(folder.glob("*/*/*/truth.json")):
-            if (found.parent / "diagnose.json").is_file() and not (found.parent
-                                                                   / ORACLE_GAP).is_file():
-                add_oracle_gap(found.parent)
-                print(f"oracle gap: {found.parent}")
+    _fill_in(args.truth_gap, TRUTH_GAP, add_truth_gap)
+    _fill_in(args.oracle, ORACLE_GAP, add_oracle_gap)
     if args.truth_gap or args.oracle:
         args.score = list(args.score or ()) + list(args.truth_gap or ()) + list(args.oracle or ())
     if args.score:
