@@ -32,7 +32,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import least_squares
 
-from pipeline.diagnose.evidence import chi_square, evaluate, gof_limit, runs_test
+from pipeline.diagnose.evidence import evaluate
+from pipeline.diagnose.fit_statistics import chi_square, gof_limit, runs_test
 from structures.design import DesignVariable, apply_design, bind, material_ids, write_tuned_bdf
 from structures.model import FEModel
 

@@ -67,7 +67,8 @@ from typing import NamedTuple
 import numpy as np
 
 from pipeline.diagnose.calibrate import Calibration, Problem, calibrate
-from pipeline.diagnose.evidence import chi_square, holdout_mask, with_training
+from pipeline.diagnose.evidence import holdout_mask, with_training
+from pipeline.diagnose.fit_statistics import chi_square
 from pipeline.diagnose.gap import gap_metrics
 from pipeline.diagnose.screen import continued, refit
 

@@ -88,7 +88,8 @@ import numpy as np
 from scipy.optimize import differential_evolution
 
 from pipeline.diagnose.effects import directional, every_direction
-from pipeline.diagnose.evidence import chi_square, evaluate_modes
+from pipeline.diagnose.evidence import evaluate_modes
+from pipeline.diagnose.fit_statistics import chi_square
 from pipeline.diagnose.ladder import reduce_joint
 from pipeline.diagnose.screen import LADDER_KINDS, Refitted, Screened, refit
 from structures.common.errors import InputError, SolverError

@@ -1,4 +1,4 @@
-"""Evidence of a model-test disagreement: pairing, residual vector with known scales, chi^2, BIC.
+"""Evidence of a model-test disagreement: the residual vector with known scales.
 
 The residual of one configuration is built from entries of unit variance when the model is right
 (the ``Reference`` fixes how, once per configuration, from the nominal model):
@@ -29,10 +29,9 @@ The residual of one configuration is built from entries of unit variance when th
 One property's error moves several modes together, so the modal entries are correlated: the
 training modal entries are multiplied by the whitening W of their scatter covariance
 (:func:`pipeline.diagnose.scatter.whitening`, generalised least squares), the mass entries are
-independent. chi^2 = |r|^2 of that residual over the training modes; BIC = chi^2 + p ln n
-(Schwarz 1978), n the number of training residuals; a BIC difference above 10 is "very
-strong" evidence (Kass & Raftery 1995). Goodness of fit: chi^2 below the ``GOF_QUANTILE``
-quantile of the chi-square distribution with n - p degrees of freedom.
+independent. chi^2 = |r|^2 of that residual over the training modes, BIC and goodness of fit
+from it: :mod:`pipeline.diagnose.fit_statistics`. The test modes are paired with analysis modes
+by :mod:`pipeline.diagnose.pairing`.
 """
 from __future__ import annotations
 
@@ -40,10 +39,9 @@ from dataclasses import dataclass, replace
 from typing import Mapping
 
 import numpy as np
-import scipy.stats
 import xarray as xr
-from scipy.optimize import linear_sum_assignment
 
+from pipeline.diagnose.pairing import INVISIBLE, pair, report_pairing, seen_shapes
 from pipeline.diagnose.scatter import scatter_effects, scatter_scales, whitening
 from pipeline.diagnose.weighing import mass_residual, mass_scales
 from structures.common.errors import InputError
@@ -54,9 +52,6 @@ from structures.modal import compute_modes
 from structures.model import FEModel
 from structures.modes import elastic_index, rigid_index
 
-#: Goodness-of-fit quantile: chi^2 above the 99.9 % chi-square quantile is a misfit (1 false alarm
-#: in 1000 fits of a right model).
-GOF_QUANTILE = 0.999
 #: A test mode whose part outside the analysis modes' span is this many times the median (the
 #: pooled noise) has no counterpart in the model.
 UNMATCHED_NOISE = 3.0
@@ -75,51 +70,9 @@ DISTINCT = 0.1
 #: Largest off-diagonal of the test-mode orthogonality (SEREP, analysis mass) before the data
 #: quality is questioned (NASA-STD-5002 style limit 0.10, doubled for noise: 0.2).
 SELF_ORTHOGONALITY_LIMIT = 0.2
-#: An analysis mode whose RMS at the sensors is below this share of the largest elastic mode's
-#: (mass-normalised) is invisible to them: its MAC is rounding noise, it is not paired.
-INVISIBLE = 1e-6
 
 
 # ------------------------------------------------------------------------------------ kernels
-def chi_square(r) -> float:
-    """chi^2 = |r|^2 of a residual vector r (any shape) of unit-variance entries."""
-    r = np.asarray(r, float)
-    return float(np.sum(r * r))
-
-
-def bic(chi2: float, n_params: int, n_data: int) -> float:
-    """Bayesian information criterion chi^2 + p ln n (Schwarz 1978) for Gaussian residuals."""
-    if n_data < 1:
-        raise InputError("BIC: no residuals. Fix: give test modes (or measured mass properties).")
-    return float(chi2 + n_params * np.log(n_data))                           # Schwarz 1978, eq. 2
-
-
-def gof_limit(dof: int, quantile: float = GOF_QUANTILE) -> float:
-    """chi^2 quantile for ``dof`` degrees of freedom (at least 1)."""
-    return float(scipy.stats.chi2.ppf(quantile, max(int(dof), 1)))
-
-
-def runs_test(values) -> float:
-    """One-sided p-value (too few runs) of the Wald-Wolfowitz runs test on the signs of ``values``.
-
-    Few runs (long stretches of one sign along the modes) mean a structured residual. Normal
-    approximation (Wald & Wolfowitz 1940): mu = 2 n+ n- / n + 1,
-    var = (mu - 1)(mu - 2) / (n - 1). Returns 1.0 when one sign is absent.
-    """
-    signs = np.sign(np.asarray(values, float))
-    signs = signs[signs != 0]
-    n_pos, n_neg = int(np.sum(signs > 0)), int(np.sum(signs < 0))
-    n = n_pos + n_neg
-    if n_pos == 0 or n_neg == 0 or n < 3:
-        return 1.0
-    runs = 1 + int(np.sum(signs[1:] != signs[:-1]))
-    mu = 2.0 * n_pos * n_neg / n + 1.0                                      # Wald & Wolfowitz 1940
-    var = (mu - 1.0) * (mu - 2.0) / (n - 1.0)
-    if var <= 0:
-        return 1.0
-    return float(scipy.stats.norm.cdf((runs - mu) / np.sqrt(var)))
-
-
 def holdout_mask(n_modes: int, holdout: int, rotation: int = 0) -> np.ndarray:
     """Held-out modes: every ``holdout``-th of ``n_modes`` paired modes in frequency order.
 
@@ -188,7 +141,7 @@ def shape_residual(projector, test_shapes, analysis_shapes, scale, keep) -> np.n
         Test shapes at unit RMS.
     analysis_shapes : array_like, shape (n_mode, n_dof)
         Paired analysis shapes at the same DOFs (any scaling, any sign; zero for a mode the
-        sensors do not see, :func:`seen_shapes`: alpha = 0).
+        sensors do not see, :func:`pipeline.diagnose.pairing.seen_shapes`: alpha = 0).
     scale : array_like, shape (n_mode, m)
         Standard deviation of every coordinate.
     keep : array_like of bool, shape (n_mode, m)
@@ -226,26 +179,6 @@ def self_orthogonality(phi_m, shapes) -> float:
     return float(off.max(initial=0.0))
 
 
-def pair_frequency_only(test_frequency, fe_frequency) -> np.ndarray:
-    """Nearest-frequency assignment: minimise sum |ln(f_fe / f_test)| (Hungarian method).
-
-    Returns
-    -------
-    ndarray of int, shape (n_test,)
-        Index of the analysis frequency paired with every test mode.
-    """
-    f_t = np.asarray(test_frequency, float)
-    f_a = np.asarray(fe_frequency, float)
-    if f_a.size < f_t.size:
-        raise InputError(f"pairing: {f_t.size} test modes but only {f_a.size} elastic analysis "
-                         "modes. Fix: compute more analysis modes (settings.nmodes).")
-    cost = np.abs(np.log(np.maximum(f_a[None, :], 1e-300) / f_t[:, None]))
-    rows, cols = linear_sum_assignment(cost)
-    out = np.empty(f_t.size, int)
-    out[rows] = cols
-    return out
-
-
 def residual_basis(frequency, sensor_shapes, rigid, elastic, paired, f_top: float) -> np.ndarray:
     """Elastic analysis modes of the shape residual's basis A0: the paired ones and every other
     mode of the test band the sensors can tell from them.
@@ -272,8 +205,8 @@ def residual_basis(frequency, sensor_shapes, rigid, elastic, paired, f_top: floa
     ndarray of int, sorted
         Positions along ``mode``: the paired modes and, in frequency order while A0 (with the
         rigid modes) has fewer than n_dof - ``MIN_NOISE_DOF`` columns, every visible
-        (:data:`INVISIBLE`) band mode whose unit-RMS sensor shape keeps at least ``DISTINCT`` of
-        its norm outside the span of the columns already in A0.
+        (:data:`pipeline.diagnose.pairing.INVISIBLE`) band mode whose unit-RMS sensor shape
+        keeps at least ``DISTINCT`` of its norm outside the span of the columns already in A0.
     """
     f = np.asarray(frequency, float)
     a = np.asarray(sensor_shapes, float)
@@ -413,154 +346,6 @@ class Evaluation:
         if ref.whitening is not None:
             modal = ref.whitening @ modal
         return np.concatenate([modal, self.mass])
-
-
-def seen_shapes(sensor_shapes) -> np.ndarray:
-    """(n_fe, n_dof) analysis shapes at the sensors, those of the modes the sensors do not see
-    (RMS below :data:`INVISIBLE` of the largest) set to zero.
-
-    Such a mode's sensor shape is eigen-solver rounding (an in-plane mode of a wing measured
-    normal to its plane: RMS ~1e-12 of the bending modes'); at unit scale it points anywhere and
-    turns under any change of the model, and a test mode paired with it would have a shape
-    residual that jumps under a step of 1e-5 in a modulus (the PT145 wing of the command tests:
-    mode 5 at 673 Hz beside the bending mode at 671 Hz). As zero it explains none of a test
-    shape (alpha = 0), the limit of a vanishing sensor shape.
-    """
-    a = np.array(sensor_shapes, float)
-    rms = np.sqrt(np.mean(a ** 2, axis=1))
-    a[rms < INVISIBLE * rms.max(initial=0.0)] = 0.0
-    return a
-
-
-def pairing_cost(ref: Reference, frequency, sensor_shapes) -> np.ndarray:
-    """chi^2 of the residual entries of every test mode paired with every analysis mode.
-
-    Entry (j, k) is what mode j adds to chi^2 when paired with analysis mode k: the frequency
-    entry ((f_k - f_jG) / f_jG / sigma_fj)^2 plus the shape entries of
-    :func:`shape_residual`, sum_i keep_ji (u_ji - alpha_jk v_ki)^2 / scale_ji^2 with
-    u_j = A0^+ t_j, v_k = A0^+ a_k and alpha_jk = a_k . t_j / a_k . a_k (0 for a mode the sensors
-    do not see at all).
-
-    Parameters
-    ----------
-    ref : Reference with its projector (after :func:`build_reference`).
-    frequency : (n_fe,) analysis frequencies [Hz].
-    sensor_shapes : (n_fe, n_dof) analysis shapes at the measured DOFs.
-
-    Returns
-    -------
-    (n_test, n_fe) float
-    """
-    a = np.asarray(sensor_shapes, float)
-    w = ref.shape_keep / ref.shape_scale ** 2                              # (n_test, m)
-    u = ref.shapes @ ref.projector.T                                       # (n_test, m)
-    v = a @ ref.projector.T                                                # (n_fe, m)
-    norm = np.sum(a * a, axis=1)
-    alpha = np.divide(ref.shapes @ a.T, norm[None, :], out=np.zeros((u.shape[0], a.shape[0])),
-                      where=norm[None, :] > 0.0)                           # (n_test, n_fe)
-    s_cost = (np.sum(w * u * u, axis=1)[:, None] - 2.0 * alpha * ((w * u) @ v.T)
-              + alpha ** 2 * (w @ (v * v).T))
-    return _frequency_cost(ref, frequency) + s_cost
-
-
-def pair(ref: Reference, modes: xr.Dataset, *, sensor_shapes=None) -> np.ndarray:
-    """Pair the test modes with elastic analysis modes.
-
-    - Once the residual is defined (``ref.projector`` set by :func:`build_reference`): the
-      assignment that makes the training and held-out residual smallest, sum_j cost(j, k_j) of
-      :func:`pairing_cost` (Hungarian method). The pairing is a discrete unknown of the model;
-      this is its maximum-likelihood value, the same criterion every fit minimises, so chi^2 is
-      the minimum over assignments of continuous functions of the model and stays continuous
-      where the best assignment changes (a MAC assignment ignores the frequencies: a test mode
-      whose shape the model lacks would go to whichever analysis mode its shape resembles most,
-      at any frequency, and chi^2 would jump by thousands when that choice flips).
-    - The nominal pairing in :func:`build_reference`, which defines the residual, and any
-      pairing without shapes: :func:`report_pairing`.
-
-    Returns
-    -------
-    ndarray of int, shape (n_test,)
-        Index along ``modes.mode``.
-    """
-    if ref.projector is None or not ref.has_shapes:
-        return report_pairing(ref, modes, sensor_shapes=sensor_shapes)
-    elastic = pairable_modes(ref, modes)
-    if sensor_shapes is None:
-        sensor_shapes = modes["shape"].values[:, ref.sensor_index]
-    return _assign(pairing_cost(ref, modes["frequency"].values[elastic],
-                                seen_shapes(sensor_shapes)[elastic]), elastic)
-
-
-def _frequency_cost(ref: Reference, frequency) -> np.ndarray:
-    """(n_test, n_fe) ((f_k - f_jG) / f_jG / sigma_fj)^2: each test mode's frequency entry of
-    chi^2 when paired with each analysis mode."""
-    f = np.asarray(frequency, float)
-    return ((f[None, :] - ref.test_frequency[:, None]) / ref.test_frequency[:, None]
-            / ref.frequency_sigma[:, None]) ** 2
-
-
-def _assign(cost, elastic) -> np.ndarray:
-    """Index along ``modes.mode`` of each test mode's analysis mode in the assignment (Hungarian)
-    of least total ``cost`` (n_test, n_elastic)."""
-    rows, cols = linear_sum_assignment(cost)
-    out = np.empty(cost.shape[0], int)
-    out[rows] = cols
-    return elastic[out]
-
-
-def pairable_modes(ref: Reference, modes: xr.Dataset) -> np.ndarray:
-    """Positions along ``mode`` of the elastic modes; raises when they are fewer than the test
-    modes (each test mode needs its own)."""
-    elastic = elastic_index(modes)
-    if elastic.size < ref.test_frequency.size:
-        raise InputError(f"configuration {ref.name}: {ref.test_frequency.size} test modes but only "
-                         f"{elastic.size} elastic analysis modes. Fix: raise settings.nmodes.")
-    return elastic
-
-
-def report_pairing(ref: Reference, modes: xr.Dataset, *, sensor_shapes=None) -> np.ndarray:
-    """Pair the test modes with elastic analysis modes as a correlation report should: the
-    assignment (Hungarian) minimising sum_j ((f_k - f_jG) / f_jG / sigma_fj)^2
-    + n_DOF (1 - MAC_jk) / sigma_nj^2, the chi^2 of each test mode's frequency and of its whole
-    shape against the analysis mode under the test's own scales (sigma_nj the shape noise per
-    DOF relative to the shape's RMS: |t_j - alpha a_k|^2 = n_DOF (1 - MAC_jk) for a unit-RMS
-    t_j, paper eq. 23; a mode the sensors do not see, :data:`INVISIBLE`, has MAC 0), or nearest
-    frequency without shapes.
-
-    It is the MAC assignment wherever the shapes tell the modes apart, the frequencies breaking
-    near ties (at 1 % frequency and 5 % shape noise over 120 DOFs a MAC difference of 0.01 weighs
-    as much as a 22 % frequency error), and it never pairs a test mode with an analysis mode of a
-    far frequency whose shape is hardly better (the MAC assignment alone pairs a test mode the
-    model lacks, a joint's local mode, with whichever mode its shape resembles most: on the
-    frame's blind-study joint seed 3 that gave a held-out frequency error of 100 %). The fits
-    pair by :func:`pair`, whose shape scales let close modes mix freely (the nominal scatter's
-    mixing): within a pair of close modes it follows the frequencies, and a report of it would
-    show a cross-orthogonality off-diagonal of ~1 for every crossed pair.
-
-    Returns
-    -------
-    ndarray of int, shape (n_test,)
-        Index along ``modes.mode``.
-    """
-    elastic = pairable_modes(ref, modes)
-    f_fe = modes["frequency"].values[elastic]
-    if not ref.has_shapes:
-        return elastic[pair_frequency_only(ref.test_frequency, f_fe)]
-    if sensor_shapes is None:
-        sensor_shapes = modes["shape"].values[:, ref.sensor_index]
-    seen = np.asarray(sensor_shapes)[elastic]
-    rms = np.sqrt(np.mean(seen ** 2, axis=1))
-    metric = mac(ref.shapes.T, seen.T) * (rms >= INVISIBLE * rms.max())[None, :]   # eq. 23
-    return _assign(report_cost(ref, f_fe, metric), elastic)
-
-
-def report_cost(ref: Reference, frequency, metric) -> np.ndarray:
-    """(n_test, n_fe) cost of :func:`report_pairing`: ((f_k - f_jG) / f_jG / sigma_fj)^2
-    + n_DOF (1 - metric_jk) / sigma_nj^2, ``metric`` (n_test, n_fe) the MAC of each test mode
-    with each analysis mode (or with a span of modes,
-    :func:`pipeline.diagnose.gap.close_mode_pairing`)."""
-    shape = ref.shapes.shape[1] * (1.0 - np.asarray(metric, float))
-    return _frequency_cost(ref, frequency) + shape / ref.shape_sigma[:, None] ** 2
 
 
 def evaluate(ref: Reference, model: FEModel, modes: xr.Dataset | None = None,

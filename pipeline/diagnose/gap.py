@@ -2,7 +2,7 @@
 
 Gap metrics (issue 14 step 6, the contract's JSON keys), over all configurations, of the test
 modes paired with analysis modes as :func:`close_mode_pairing` pairs them (a correlation report's
-pairing, :func:`pipeline.diagnose.evidence.report_pairing`, with close analysis modes taken as
+pairing, :func:`pipeline.diagnose.pairing.report_pairing`, with close analysis modes taken as
 the subspace they span):
 
 - ``frequency_rms_held_out`` / ``frequency_rms``: RMS of 100 (f_FE - f_GVT) / f_GVT (paper eq. 18)
@@ -64,8 +64,8 @@ from __future__ import annotations
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
-from pipeline.diagnose.evidence import (INVISIBLE, PARTNER_SIGMAS, pairable_modes, report_cost,
-                                        report_pairing, residual_basis)
+from pipeline.diagnose.evidence import PARTNER_SIGMAS, residual_basis
+from pipeline.diagnose.pairing import INVISIBLE, pairable_modes, report_cost, report_pairing
 from pipeline.diagnose.weighing import mass_references
 from structures.correlation import (cross_orthogonality, mac, serep_coordinates,
                                    significant_coordinates)
@@ -105,7 +105,7 @@ def close_mode_pairing(ref, modes) -> tuple:
     """Pair the test modes with analysis modes, close modes as their span (module docstring).
 
     The assignment (Hungarian) minimises the cost of
-    :func:`pipeline.diagnose.evidence.report_pairing`, ((f_k - f_jG) / f_jG / sigma_fj)^2
+    :func:`pipeline.diagnose.pairing.report_pairing`, ((f_k - f_jG) / f_jG / sigma_fj)^2
     + n_DOF (1 - MAC_jk) / sigma_nj^2, with MAC_jk the share of the unit test shape t_j in the
     span of the sensor shapes of mode k's group; then each group's modes are turned to the test
     modes paired into it.

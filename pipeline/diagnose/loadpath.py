@@ -43,7 +43,8 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import dijkstra
 
-from pipeline.diagnose.evidence import chi_square, evaluate_modes
+from pipeline.diagnose.evidence import evaluate_modes
+from pipeline.diagnose.fit_statistics import chi_square
 from pipeline.diagnose.grounded import ladder_sizes, reduce_load, spring_basis
 from pipeline.diagnose.members import connectivity, fixed_masks
 from structures.model import FEModel

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from pipeline.diagnose.evidence import gof_limit
+from pipeline.diagnose.fit_statistics import gof_limit
 
 
 def held_out_modes(problem, evaluations) -> tuple:
@@ -80,6 +80,6 @@ def kept_modes(none_modes, fit_modes, entries) -> np.ndarray:
 
 def reproduced(mode_chi2, entries) -> np.ndarray:
     """(n_modes,) bool: each mode's chi^2 within the goodness-of-fit limit of its entries
-    (:func:`pipeline.diagnose.evidence.gof_limit` with m_j degrees of freedom)."""
+    (:func:`pipeline.diagnose.fit_statistics.gof_limit` with m_j degrees of freedom)."""
     limits = np.array([gof_limit(m) for m in np.asarray(entries, int)])
     return np.asarray(mode_chi2, float) <= limits

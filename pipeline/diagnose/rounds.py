@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from pipeline.diagnose.calibrate import Problem
-from pipeline.diagnose.evidence import bic, chi_square
+from pipeline.diagnose.fit_statistics import bic, chi_square
 from pipeline.diagnose.gap import separating_measurement
 from pipeline.diagnose.loadpath import outscores
 from pipeline.diagnose.predictive import held_out_evidence, kept_modes

@@ -73,7 +73,8 @@ from scipy.optimize import least_squares
 
 from pipeline.diagnose.calibrate import (THETA_SCALE, Problem, forward_columns, memoised,
                                          pairings)
-from pipeline.diagnose.evidence import bic, chi_square, evaluate, evaluate_modes
+from pipeline.diagnose.evidence import evaluate, evaluate_modes
+from pipeline.diagnose.fit_statistics import bic, chi_square
 from pipeline.diagnose.grounded import (SPRING_LADDER, ladder_sizes, reduce_mass, reduce_spring,
                                         spring_basis)
 from pipeline.diagnose.joints import hangs_nothing

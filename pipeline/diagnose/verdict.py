@@ -37,7 +37,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from pipeline.diagnose.evidence import gof_limit
+from pipeline.diagnose.fit_statistics import gof_limit
 from pipeline.diagnose.mirror import sites
 from pipeline.diagnose.predictive import held_out_evidence
 from structures.model import FEModel
@@ -210,13 +210,13 @@ def decide(none_fit, fits, margin: float, n_data: int, n_candidates: int = 1, *,
     weighing's scales. The p fitted parameters are charged to the modal rows in c's degrees of
     freedom (they are nearly all the data).
 
-    Without a fit that beats "none", the verdict is ``none`` only when the model without a
-    further effect passes the goodness-of-fit test (:func:`pipeline.diagnose.evidence.gof_limit`)
-    on the training rows and on the training and held-out rows together (all the data it should
+    Without a fit that beats "none", the verdict is ``none`` only when the model without a further
+    effect passes the goodness-of-fit test (:func:`pipeline.diagnose.fit_statistics.gof_limit`) on
+    the training rows and on the training and held-out rows together (all the data it should
     reproduce), else ``unexplained``: on the BAH wing (``tests/data/bah_plane``, 6 modes at 26
-    sensor DOFs) with a flexible joint hidden, the training rows passed (68.7 against a limit
-    of 74.7) while the held-out mode the model lacks, the joint's local mode, scored 435 on 8
-    entries. On the saved blind-study cases without an effect whose verdict was ``none``
+    sensor DOFs) with a flexible joint hidden, the training rows passed (68.7 against a limit of
+    74.7) while the held-out mode the model lacks, the joint's local mode, scored 435 on 8 entries.
+    On the saved blind-study cases without an effect whose verdict was ``none``
     (frame, X-56, wing box, frequency-only, at twice the noise and hung on a suspension: 49
     cases) the totals were 27-97 % of their limits.
 

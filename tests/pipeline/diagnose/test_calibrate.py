@@ -9,7 +9,8 @@ import pytest
 from scipy.optimize import minimize_scalar
 
 from pipeline.diagnose.calibrate import Problem, calibrate, mass_prior_scale
-from pipeline.diagnose.evidence import build_reference, holdout_mask, runs_test
+from pipeline.diagnose.evidence import build_reference, holdout_mask
+from pipeline.diagnose.fit_statistics import runs_test
 from structures.bdf import read_model
 from structures.gvt import make_gvt_dataset
 from structures.massprops import mass_properties

@@ -9,7 +9,8 @@ from scipy.optimize import lsq_linear
 from pipeline.diagnose import screen
 from pipeline.diagnose.calibrate import Problem
 from pipeline.diagnose.effects import apply_effect, candidates
-from pipeline.diagnose.evidence import chi_square, evaluate
+from pipeline.diagnose.evidence import evaluate
+from pipeline.diagnose.fit_statistics import chi_square
 from pipeline.diagnose.grounded import (FINEST_STEP, SPRING_LADDER, ladder_sizes, reduce_mass,
                                         reduce_spring, spring_basis)
 from structures.bdf import read_model
