@@ -21,6 +21,7 @@ import json
 import numpy as np
 import pytest
 
+from structures.common.files import read_dataset
 from tests.pipeline.diagnose.truth import KINDS, STRUCTURES, TRUTH_KINDS
 from tests.pipeline.diagnose.truth.oracle import ORACLE_GAP, oracle_gap
 from tests.pipeline.diagnose.truth.study import (confusion_text, gap_text, rescore, run_study,
@@ -202,6 +203,18 @@ def test_quick_blind_subset(quick_run, kind):
     else:
         assert result["verdict"] == "effect" and named == kind, named
         assert bool(ds["location_hit"].values[0]), result["effect"]["location"]
+
+
+def test_quick_none_ranks_none_first_and_writes_its_dataset(quick_run):
+    """Frame seed 0 without an effect: "none" heads the ranking (score 0), the held-out error is
+    the noise's (below 2 %), and the case's netCDF reads back with the verdict and the ranking."""
+    _, result, folder = quick_run("none")
+    assert result["effect"] is None and result["gap_before"]["frequency_rms_held_out"] < 2.0
+    ranking = result["candidates"]
+    assert ranking[0]["kind"] == "none" and ranking[0]["score"] == 0.0
+    back = read_dataset(folder / "diagnose.nc")
+    assert back.attrs["verdict"] == "none" and back.sizes["rank"] == len(ranking)
+    assert back["kind"].values.tolist() == [c["kind"] for c in ranking]
 
 
 def test_quick_gap_shrinks_on_the_named_mass(quick_run):

@@ -126,12 +126,14 @@ def test_wingbox_mass_named_and_none_kept(tmp_path):
 @needs_mystran
 def test_frequency_only_study_case(tmp_path):
     """The study's ``frequency_only`` gives the workflow no shapes (wing box, none, seed 0: ~5 s):
-    its verdict record has no MAC, and a note says what frequencies alone cannot tell."""
+    nothing is named on data without an effect, its verdict record has no MAC and no
+    cross-orthogonality, and a note says what frequencies alone cannot tell."""
     run_study(["wingbox"], ["none"], [0], tmp_path, frequency_only=True, progress=None)
     result = json.loads((tmp_path / "wingbox" / "none" / "0" / "diagnose.json").read_text())
-    assert result["gap_before"]["mac_min"] is None
+    assert result["verdict"] == "none" and result["effect"] is None
+    for gap in (result["gap_before"], result["gap_after"]):
+        assert gap["mac_min"] is None and gap["max_cross_orthogonality_offdiag"] is None
     assert any("frequency-only" in note for note in result["notes"])
-    assert result["verdict"] != "effect"
 
 
 @needs_mystran

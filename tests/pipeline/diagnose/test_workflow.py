@@ -22,7 +22,6 @@ from pipeline.diagnose.rounds import chi2_split, ranking_table, round_record
 from pipeline.diagnose.workflow import unnamed
 from structures.bdf import read_model
 from structures.common.errors import InputError
-from structures.common.files import read_dataset, write_dataset
 from structures.gvt import make_gvt_dataset
 from structures.suspension import rigid_body_readings
 from tests.pipeline.diagnose.truth import make_case
@@ -57,16 +56,6 @@ def _near_truth(effect, truth) -> bool:
     elements = set(truth["neighbours"]["elements"]) | set(truth["elements"])
     return bool(set(loc.grids) & grids or set(loc.elements) & elements
                 or set(loc.properties) & set(truth["properties"]))
-
-
-def test_frame_none_names_nothing(tmp_path):
-    result, _ = _run(tmp_path, "none")
-    assert result.verdict == "none" and not result.effects
-    assert result.gap_before["frequency_rms_held_out"] < 2.0
-    assert result.candidates[0].score == 0.0 and any(c.kind == "none" for c in result.candidates)
-    write_dataset(result.to_dataset(), tmp_path / "diagnose.nc")
-    back = read_dataset(tmp_path / "diagnose.nc")
-    assert back.attrs["verdict"] == "none" and back.sizes["rank"] == len(result.candidates)
 
 
 class GapDidNotShrink(AssertionError):
@@ -104,8 +93,10 @@ def test_frame_outside_is_not_named(tmp_path):
     assert result.verdict != "ambiguous" or result.separating_measurement
 
 
+@pytest.mark.slow
 def test_frame_frequency_only_runs_and_says_what_it_cannot_tell(tmp_path):
-    # measured on seed 0 "none": verdict none, 20 modes paired by nearest frequency
+    # measured on seed 0 "none": verdict none, 20 modes paired by nearest frequency; ~45 s (the
+    # default suite's frequency-only case is the wing box's, test_truth_wingbox)
     case_path = make_case("frame", "none", 0, tmp_path / "none_0")
     case = read_case(case_path)
     confs = [replace(c, gvt=c.gvt.drop_vars("shape")) for c in configurations_from_case(case)]

@@ -29,11 +29,11 @@ shape noise, :func:`make_case`; the workflow is not told it; ``--frequency-only`
 gets the frequencies alone; ``--suspension``: the truths hang on three bungees and the GVTs list
 their suspension modes first):
 prints the confusion matrix, the scores and the gap of every correctly named case, writes
-``DIR/study.nc`` and every case's ``diagnose.json`` and ``score.json``. A study split over
-processes (kinds or seeds per core) is scored as one with ``--score DIR [DIR ...]``
-(:func:`rescore`; no case is run). ``--oracle DIR [DIR ...]`` adds, to the cases run there, the
-gap of the truth's own effect on the nominal model (:mod:`.oracle`: what the right answer
-scores; a miss it shares is the data's, not the naming's) and scores them.
+``DIR/study.nc`` and every case's ``diagnose.json``, ``diagnose.nc`` and ``score.json``. A study
+split over processes (kinds or seeds per core) is scored as one with ``--score DIR [DIR ...]``
+(:func:`rescore`; no case is run). ``--oracle DIR [DIR ...]`` adds, to the cases run there, the gap
+of the truth's own effect on the nominal model (:mod:`.oracle`: what the right answer scores; a
+miss it shares is the data's, not the naming's) and scores them.
 """
 from __future__ import annotations
 
@@ -70,15 +70,20 @@ def _configurations(case, frequency_only: bool) -> tuple:
     return configurations
 
 
-def diagnose_case(case_toml: Path, *, frequency_only: bool = False) -> dict:
+def diagnose_case(case_toml: Path, *, frequency_only: bool = False,
+                  dataset: Path | None = None) -> dict:
     """Run the workflow on a case (only what the case names; with ``frequency_only`` its test
-    frequencies alone, as a published GVT without shapes gives them); returns its JSON."""
+    frequencies alone, as a published GVT without shapes gives them); returns its JSON and, given
+    ``dataset``, writes its netCDF there (the result's Dataset, as ``pipeline diagnose`` does)."""
     from pipeline.case import read_case
     from pipeline.diagnose import diagnose
     from pipeline.diagnose.inputs import settings_from_case
 
     case = read_case(case_toml)
-    return diagnose(_configurations(case, frequency_only), settings_from_case(case)).to_json()
+    result = diagnose(_configurations(case, frequency_only), settings_from_case(case))
+    if dataset is not None:
+        write_dataset(result.to_dataset(), dataset)
+    return result.to_json()
 
 
 def case_references(case_toml: Path, frequency_only: bool = False) -> tuple:
@@ -236,7 +241,8 @@ def run_study(structures=STRUCTURES, kinds=TRUTH_KINDS, seeds=range(10), out=Non
                 truth = json.loads((folder / "truth.json").read_text())
                 start, error = time.perf_counter(), ""
                 try:
-                    result = diagnose_case(case, frequency_only=frequency_only)
+                    result = diagnose_case(case, frequency_only=frequency_only,
+                                           dataset=folder / "diagnose.nc")
                 except Exception as exc:  # a study records a crash and goes on
                     result, error = {"verdict": "error"}, f"{type(exc).__name__}: {exc}"
                 seconds = time.perf_counter() - start
