@@ -6,7 +6,9 @@
   best assignment changes;
 - :func:`report_pairing`, for a correlation report and for the nominal pairing that defines the
   residual: MAC (paper eq. 23) with the frequencies breaking near ties, each under the test's own
-  noise; nearest frequency without shapes (:func:`pair_frequency_only`).
+  noise; nearest frequency without shapes (:func:`pair_frequency_only`). The correlation stage
+  pairs by the MAC alone (:func:`structures.pairing.pair_modes`); diagnose adds the frequencies
+  so that a test mode the model lacks is not paired across the band (:func:`report_pairing`).
 
 Both are Hungarian assignments (``scipy.optimize.linear_sum_assignment``) over the elastic
 analysis modes (:func:`pairable_modes`); a mode the sensors do not see (RMS below ``INVISIBLE``
