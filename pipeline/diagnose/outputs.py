@@ -194,11 +194,11 @@ def parameter_text(effect: dict) -> str:
     (``value (not determined)`` where its standard error is null, the value alone where no
     errors were estimated)."""
     errors = effect.get("standard_errors")
+    if errors is None:
+        return _parameters(effect.get("parameters"))
     out = []
     for k, v in (effect.get("parameters") or {}).items():
-        if errors is None:
-            out.append(f"{k} = {_number(v, '.4g')}")
-        elif errors.get(k) is None:
+        if errors.get(k) is None:
             out.append(f"{k} = {_number(v, '.4g')} (not determined)")
         else:
             out.append(f"{k} = {_number(v, '.4g')} +- {_number(errors[k], '.2g')}")

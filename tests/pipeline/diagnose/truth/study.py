@@ -70,17 +70,24 @@ def _configurations(case, frequency_only: bool) -> tuple:
     return configurations
 
 
+def _case_inputs(case_toml: Path, frequency_only: bool) -> tuple:
+    """(configurations, settings) of a case: what the workflow is given (``frequency_only``:
+    the test frequencies alone)."""
+    from pipeline.case import read_case
+    from pipeline.diagnose.inputs import settings_from_case
+
+    case = read_case(case_toml)
+    return _configurations(case, frequency_only), settings_from_case(case)
+
+
 def diagnose_case(case_toml: Path, *, frequency_only: bool = False,
                   dataset: Path | None = None) -> dict:
     """Run the workflow on a case (only what the case names; with ``frequency_only`` its test
     frequencies alone, as a published GVT without shapes gives them); returns its JSON and, given
     ``dataset``, writes its netCDF there (the result's Dataset, as ``pipeline diagnose`` does)."""
-    from pipeline.case import read_case
     from pipeline.diagnose import diagnose
-    from pipeline.diagnose.inputs import settings_from_case
 
-    case = read_case(case_toml)
-    result = diagnose(_configurations(case, frequency_only), settings_from_case(case))
+    result = diagnose(*_case_inputs(case_toml, frequency_only))
     if dataset is not None:
         write_dataset(result.to_dataset(), dataset)
     return result.to_json()
@@ -90,13 +97,9 @@ def case_references(case_toml: Path, frequency_only: bool = False) -> tuple:
     """(configurations, settings, references) of a case as the workflow reads and checks it
     (its ``preflight``): what a gap of another model is set against, with the workflow's
     pairing, held-out modes and noise."""
-    from pipeline.case import read_case
     from pipeline.diagnose import preflight
-    from pipeline.diagnose.inputs import settings_from_case
 
-    case = read_case(case_toml)
-    configurations = _configurations(case, frequency_only)
-    settings = settings_from_case(case)
+    configurations, settings = _case_inputs(case_toml, frequency_only)
     return configurations, settings, preflight(configurations, settings)[0]
 
 
