@@ -204,9 +204,9 @@ class Problem:
         """Configuration ``i``'s model at nominal parameters ``theta`` with ``effects`` applied.
 
         ``effects`` is a sequence of (Candidate, values) applied in order
-        (:func:`pipeline.diagnose.effects.apply_effect`).
+        (:func:`pipeline.diagnose.apply.apply_effect`).
         """
-        from pipeline.diagnose.effects import apply_effect
+        from pipeline.diagnose.apply import apply_effect
 
         space = self.spaces[i]
         model = self.models[i]

@@ -16,7 +16,7 @@ s = 1 .. holdout - 1 (each configuration's held-out positions moved by s, :func:
   (:func:`pipeline.diagnose.calibrate.calibrate`);
 - *after*: the named effects are fitted again on the same training modes, their kind and place
   kept, in the order they were named, each from its named values with the nominal parameters
-  free (:func:`pipeline.diagnose.screen.continued`). A suspension identified from the suspension
+  free (:func:`pipeline.diagnose.refit.continued`). A suspension identified from the suspension
   modes is kept as identified: it does not depend on the split, and only the nominal parameters
   are refitted with it.
 
@@ -70,7 +70,7 @@ from pipeline.diagnose.calibrate import Calibration, Problem, calibrate
 from pipeline.diagnose.evidence import holdout_mask, with_training
 from pipeline.diagnose.fit_statistics import chi_square
 from pipeline.diagnose.gap import gap_metrics
-from pipeline.diagnose.screen import continued, refit
+from pipeline.diagnose.refit import continued, refit
 
 
 class Split(NamedTuple):
@@ -136,7 +136,7 @@ def _score(problem: Problem, theta, evaluations, c: float) -> float:
 
 def extend(split: Split, candidate, values, c: float) -> tuple | None:
     """A named effect added on another split: its fit continued from its named ``values`` with
-    the nominal parameters free (:func:`pipeline.diagnose.screen.continued`).
+    the nominal parameters free (:func:`pipeline.diagnose.refit.continued`).
 
     Parameters
     ----------

@@ -51,7 +51,7 @@ Once a joint is named, it is fitted again with one compliance per CBUSH componen
    :func:`scipy.optimize.differential_evolution`, fixed seed) on the joint's Craig-Bampton basis
    with one stiffness matrix per component (:mod:`pipeline.diagnose.ladder`; sparse above
    :data:`structures.modal.DENSE_LIMIT` DOFs), the nominal parameters held at the named fit's.
-2. *Refit.* The bounded least squares of :func:`pipeline.diagnose.screen.refit` (exact
+2. *Refit.* The bounded least squares of :func:`pipeline.diagnose.refit.refit` (exact
    reanalysis, the nominal parameters free) from the search's best point.
 
 The detail does not mend a wrong joint: on the frame's joint seed 3, before the neighbours were
@@ -91,7 +91,8 @@ from pipeline.diagnose.effects import directional, every_direction
 from pipeline.diagnose.evidence import evaluate_modes
 from pipeline.diagnose.fit_statistics import chi_square
 from pipeline.diagnose.ladder import reduce_joint
-from pipeline.diagnose.screen import LADDER_KINDS, Refitted, Screened, refit
+from pipeline.diagnose.refit import Refitted, refit
+from pipeline.diagnose.screen import LADDER_KINDS, Screened
 from structures.common.errors import InputError, SolverError
 
 #: Most neighbours of a named joint refitted from its values (module docstring): a joint has

@@ -4,7 +4,7 @@ An effect of :mod:`pipeline.diagnose.effects` is defined by the model it makes; 
 off the difference between the model before and after (new CONM2s, CBUSH/PBUSH and CELAS2
 springs, new or changed CBAR/CBEAM and PBAR/PBEAM cards, new or moved grids, removed rigid
 elements), so that the
-written deck and :func:`pipeline.diagnose.effects.apply_effect` cannot disagree. Cards are field
+written deck and :func:`pipeline.diagnose.apply.apply_effect` cannot disagree. Cards are field
 lists: rendered as small-field text with :mod:`structures.bulk_text` (MYSTRAN-readable), or added
 to a pyNastran deck and written in large field (the precision of the model's numbers).
 """

@@ -109,24 +109,22 @@ The screening step of each parameter (:attr:`Candidate.reference`, :data:`PARAME
 a plausible, clearly visible size: mass 0.02, inertia 4e-4 (r = L / 50), compliance 100,
 rotation 0.5, scale 0.1, taper 0.3, bow 0.05, k 0.1.
 New elements take ids from the model's largest element, CONM2 or rigid-element id + 1; new
-properties from its largest PID + 1.
+properties from its largest PID + 1. This module is the library (the candidates, their bounds and
+their other parametrisations); :mod:`pipeline.diagnose.apply` adds an effect to a model, to its
+matrices or to a deck.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
-from pathlib import Path
 
 import numpy as np
 
-from pipeline.diagnose.effect_deck import (change_matrices, model_changes, small_field_text,
-                                           write_patched_deck)
-from pipeline.diagnose.edits import append_elements, next_eid, next_pid
-from pipeline.diagnose.joints import flexible_joint, joint_sites
-from pipeline.diagnose.members import connectivity, find_members, fixed_masks, grow, remesh
-from pipeline.diagnose.mirror import mirror_pairs, site_values
+from pipeline.diagnose.joints import joint_sites
+from pipeline.diagnose.members import connectivity, find_members, fixed_masks, grow
+from pipeline.diagnose.mirror import mirror_pairs
 from structures.common.errors import InputError, card_message
 from structures.massprops import mass_properties
-from structures.model import FEModel, Property
+from structures.model import FEModel
 from structures.modes import elastic_index
 
 KINDS = ("lumped_mass", "joint_flexibility", "member_taper", "member_curvature",
@@ -376,8 +374,10 @@ def neighbours(model: FEModel, location: Location) -> Location:
     return Location(grids=tuple(grids), elements=tuple(elements), properties=tuple(props))
 
 
-# ---------------------------------------------------------------------------------- application
-def _check_values(candidate: Candidate, values) -> np.ndarray:
+# --------------------------------------------------------------------------- values and other forms
+def check_values(candidate: Candidate, values) -> np.ndarray:
+    """(npar,) float values of the candidate's parameters, checked: finite, one per parameter,
+    inside the bounds (InputError naming the parameter otherwise)."""
     x = np.atleast_1d(np.asarray(values, float))
     if x.shape != (len(candidate.parameters),) or not np.all(np.isfinite(x)):
         given = np.asarray(values).tolist()
@@ -393,48 +393,6 @@ def _check_values(candidate: Candidate, values) -> np.ndarray:
                          f"is outside its bounds [{lo[i]:.6g}, {hi[i]:.6g}]. Fix: keep the "
                          "parameter inside its bounds.")
     return x
-
-
-def _lumped_mass(model, candidate, x):
-    total = candidate.get("total_mass")
-    if total is None:
-        total = mass_properties(model).weight
-    cm = model.masses
-    grids = np.asarray(candidate.location.grids, np.int64)
-    n = grids.size                                      # 1, or a spread mass's equal shares
-    share = x[0] * total / n
-    inertia = share * x[1] * candidate.get("length") ** 2 * np.eye(3)           # m (r / L)^2 L^2
-    masses = replace(cm, eids=np.append(cm.eids, next_eid(model) + np.arange(n)),
-                     grid=np.append(cm.grid, grids), mass=np.append(cm.mass, np.full(n, share)),
-                     offset=np.concatenate([cm.offset, np.zeros((n, 3))]),
-                     inertia=np.concatenate([cm.inertia, np.repeat(inertia[None], n, axis=0)]))
-    return replace(model, masses=masses)
-
-
-def _boundary(model, candidate, x):
-    direction = [DIRECTIONS.index(name[2:]) + 1 for name in candidate.parameters]
-    keep = np.flatnonzero(x > 0.0)
-    n = keep.size
-    elements = append_elements(
-        model, "CELAS", next_eid(model) + np.arange(n), np.zeros(n, np.int64),
-        np.column_stack([np.full(n, candidate.location.grids[0]), np.zeros(n, np.int64)]),
-        {"c1": np.array(direction)[keep], "c2": np.zeros(n, np.int64),
-         "k": x[keep] * candidate.get("k_ref")})
-    return replace(model, elements=elements)
-
-
-def _joint(model, candidate, x):
-    if x.size == len(JOINT_DIRECTIONS):                  # c_1..c_6, one per CBUSH component
-        if not np.all(x > 0.0):
-            raise InputError(f"candidate {candidate.label!r}: directional compliances {x.tolist()}"
-                             " mix zero (a rigid CBUSH component) with nonzero ones. Fix: give "
-                             "every component a compliance > 0, or all 0 for the rigid joint.")
-        c = x
-    else:
-        c = component_compliances(x)
-    k_ref = np.repeat([candidate.get("k_translation"), candidate.get("k_rotation")], 3)
-    return flexible_joint(model, candidate.location.elements[0], k_ref / c,
-                          candidate.get("dependent"))
 
 
 def component_compliances(x) -> np.ndarray:
@@ -458,7 +416,7 @@ def directional(candidate: Candidate, values) -> tuple[Candidate, np.ndarray]:
     Candidate with parameters :data:`JOINT_DIRECTIONS`, and its (6,) values, which give the
     same model as ``values`` give ``candidate``.
     """
-    x = _check_values(candidate, values)
+    x = check_values(candidate, values)
     if candidate.kind != "joint_flexibility" or candidate.parameters != ("compliance", "rotation"):
         raise InputError(f"candidate {candidate.label!r} ({candidate.kind}, parameters "
                          f"{candidate.parameters}) has no directional form. Fix: pass a "
@@ -493,7 +451,7 @@ def every_direction(model: FEModel, candidate: Candidate, values) -> tuple[Candi
     Candidate with parameters ``k_<d>`` for every free direction d, and its values: the given
     one in its direction and 0 in the others (the same model as ``values`` give ``candidate``).
     """
-    x = _check_values(candidate, values)
+    x = check_values(candidate, values)
     if (candidate.kind != "boundary_stiffness" or len(candidate.parameters) != 1
             or candidate.get("sites") is not None):
         raise InputError(f"candidate {candidate.label!r} ({candidate.kind}, parameters "
@@ -506,130 +464,3 @@ def every_direction(model: FEModel, candidate: Candidate, values) -> tuple[Candi
     return out, np.where(np.array(out.parameters) == candidate.parameters[0], x[0], 0.0)
 
 
-def _taper(model, candidate, x):
-    member = candidate.get("member")
-    model, rows, xi_mid = remesh(model, member)
-    es = model.elements[member.card]
-    s = 1.0 + x[1] * (xi_mid - 0.5)
-    pids = np.array(es.pids)
-    props = dict(model.properties)
-    new_pid = next_pid(model)
-    for i, row in enumerate(rows):
-        base = model.property(es.pids[row], card=es.card, eid=es.eids[row])
-        if np.count_nonzero(es.pids == base.pid) > 1:
-            pids[row], new_pid = new_pid, new_pid + 1
-        fields = {k: (None if base.fields.get(k) is None else
-                      base.fields[k] * ((1.0 + x[0]) * s[i]) ** n)
-                  for k, n in TAPER_EXPONENTS.items()}
-        props[int(pids[row])] = Property(int(pids[row]), base.card, {**base.fields, **fields})
-    elements = dict(model.elements)
-    elements[member.card] = replace(es, pids=pids)
-    return replace(model, properties=props, elements=elements)
-
-
-def _curvature(model, candidate, x):
-    return remesh(model, candidate.get("member"), x)[0]
-
-
-#: The :attr:`Candidate.detail` keys each kind needs (set by :func:`candidates`).
-_DETAIL = {"lumped_mass": (), "boundary_stiffness": ("direction", "k_ref"),
-           "joint_flexibility": ("k_translation", "k_rotation"), "member_taper": ("member",),
-           "member_curvature": ("member",)}
-_APPLY = {"lumped_mass": _lumped_mass, "boundary_stiffness": _boundary, "joint_flexibility": _joint,
-          "member_taper": _taper, "member_curvature": _curvature}
-
-
-def apply_effect(model: FEModel, candidate: Candidate, values) -> FEModel:
-    """The model with the candidate effect of the given size added.
-
-    Parameters
-    ----------
-    model : FEModel
-        The model the candidate was built on (or one with other effects already added).
-    candidate : Candidate
-    values : (npar,) parameter values inside the candidate's bounds; all zero returns ``model``.
-
-    Returns
-    -------
-    FEModel
-    """
-    x = _check_values(candidate, values)
-    missing = [key for key in _DETAIL[candidate.kind] if candidate.get(key) is None]
-    if missing:
-        raise InputError(f"candidate {candidate.label!r} lacks the detail {missing} of a "
-                         f"{candidate.kind}. Fix: build candidates with candidates(model).")
-    if not np.any(x):
-        return model
-    for site, x_site in site_values(candidate, x):             # a mirror pair: both sites
-        model = _APPLY[candidate.kind](model, site, x_site)
-    return model
-
-
-def effect_matrices(model: FEModel, candidate: Candidate, values, *, mass: str = "deck"):
-    """Change of the g-set stiffness and mass (basic axes) made by an effect.
-
-    Only the changed and added elements and CONM2s are assembled
-    (:func:`pipeline.diagnose.effect_deck.change_matrices`).
-
-    Parameters
-    ----------
-    model : FEModel
-    candidate : Candidate, not ``joint_flexibility`` (it changes the constraint equations) nor
-        a taper or curvature of a member it splits (new grids): those raise InputError.
-    values : (npar,)
-    mass : {'deck', 'consistent', 'lumped'}, as in :func:`structures.assembly.assemble_g`.
-
-    Returns
-    -------
-    dK, dM : scipy.sparse.csr_matrix (6 n_grids, 6 n_grids),
-        ``assemble_g(new) - assemble_g(model)``.
-    """
-    if candidate.kind == "joint_flexibility":
-        raise InputError(f"candidate {candidate.label!r}: a joint flexibility changes the rigid "
-                         "elements, not only element matrices. Fix: assemble the changed model.")
-    return change_matrices(model, apply_effect(model, candidate, values), mass)
-
-
-def effect_cards(model: FEModel, candidate: Candidate, values) -> str:
-    """Small-field bulk-data text of the effect: cards added or replacing ones of the deck.
-
-    Removed rigid elements and replaced cards are named in ``$`` comment lines.
-
-    Parameters
-    ----------
-    model : FEModel
-    candidate : Candidate
-    values : (npar,)
-
-    Returns
-    -------
-    str
-    """
-    x = _check_values(candidate, values)
-    removed, cards = model_changes(model, apply_effect(model, candidate, x))
-    header = (f"diagnose effect {candidate.kind}: {candidate.label}; " +
-              ", ".join(f"{n} = {v:.6g}" for n, v in zip(candidate.parameters, x)))
-    return small_field_text(removed, cards, header)
-
-
-def write_effect_deck(deck_in, deck_out, model: FEModel, effects) -> Path:
-    """Write ``deck_in`` with effects added (large field, INCLUDEs merged into one file).
-
-    Parameters
-    ----------
-    deck_in, deck_out : path-like
-        ``model`` must be ``read_model(deck_in)``.
-    model : FEModel
-    effects : sequence of (Candidate, values), applied in order.
-
-    Returns
-    -------
-    Path of the written deck; :func:`structures.bdf.read_model` reads it back to the K and M of
-    the model with the effects applied.
-    """
-    changes = []
-    for candidate, values in effects:
-        new = apply_effect(model, candidate, values)
-        changes.append(model_changes(model, new))
-        model = new
-    return write_patched_deck(deck_in, deck_out, changes)

@@ -127,7 +127,8 @@ def reduce_joint(model: FEModel, candidate, sensor_index, nmodes: int, *,
     interior that is not stiff once the boundary is clamped (a mechanism inside), or no
     fixed-interface mode to keep (``nmodes`` 0, or every DOF on the springs).
     """
-    from pipeline.diagnose.effects import JOINT_DIRECTIONS, apply_effect
+    from pipeline.diagnose.apply import apply_effect
+    from pipeline.diagnose.effects import JOINT_DIRECTIONS
 
     if candidate.parameters == JOINT_DIRECTIONS:
         base = np.full(len(JOINT_DIRECTIONS), _C1)

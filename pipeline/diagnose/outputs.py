@@ -8,7 +8,7 @@ writes, below ``folder`` (the stage's staging folder, run-folder layout):
 - ``diagnose/<config>_calibrated.bdf``: each configuration's deck with the calibrated nominal
   parameters (``result.calibrated``), the model of ``gap_before``;
 - ``diagnose/<config>_diagnosed.bdf``: that with the final nominal parameters (``result.nominal``)
-  and the named effects (:func:`pipeline.diagnose.effects.write_effect_deck`), the model of
+  and the named effects (:func:`pipeline.diagnose.apply.write_effect_deck`), the model of
   ``gap_after``, when an effect was named; a suspension identified from the test's suspension
   modes (``result.suspension``, the first ``len(sites)`` effects) belongs to the test, not to
   the aircraft: it is left out of this deck (the free model that flutter and tuning take) and
@@ -114,7 +114,7 @@ def write_diagnosis(case, folder, run_dir, aero: dict | None = None, progress=No
     """
     from pipeline.diagnose import diagnose
     from pipeline.diagnose.calibrate import write_calibrated_deck
-    from pipeline.diagnose.effects import write_effect_deck
+    from pipeline.diagnose.apply import write_effect_deck
     from pipeline.diagnose.inputs import case_diagnose_settings, configurations_from_case
     from pipeline.diagnose.plots import plot_candidates, plot_gap
 

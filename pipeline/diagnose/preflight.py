@@ -44,7 +44,7 @@ class ConfigurationData:
     model : FEModel, the analysis model (nominal).
     gvt : xarray.Dataset, :mod:`structures.gvt` layout; ``shape`` may be absent (frequency-only).
     measured_mass : mapping or None, :func:`structures.massprops.read_measured_mass` layout.
-    deck : Path, the deck (messages and :func:`pipeline.diagnose.effects.write_effect_deck`).
+    deck : Path, the deck (messages and :func:`pipeline.diagnose.apply.write_effect_deck`).
     """
 
     name: str

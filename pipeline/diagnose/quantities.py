@@ -7,7 +7,7 @@ model at the round the effect was named (its nominal parameters as calibrated th
 in the JSON: on the frame blind study's joint seed 7 the same six compliances on the model of the
 final nominal parameters (E 0.8 % stiffer) give a held-out RMS frequency error of 2.26 % where the
 named effect gives 1.65 %. So the verdict also carries what was added, as the written bulk data
-(:func:`pipeline.diagnose.effects.write_effect_deck`) holds it:
+(:func:`pipeline.diagnose.apply.write_effect_deck`) holds it:
 
 ``lumped_mass``
     ``mass``: the mass added, in all (deck mass units, before PARAM WTMASS); ``mass_per_grid``

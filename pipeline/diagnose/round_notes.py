@@ -2,7 +2,7 @@
 its best fit was named, or not, in words an engineer reads in the report and the JSON ``notes``.
 
 Each function returns one note; the numbers it quotes are those the round's verdict used
-(:func:`pipeline.diagnose.verdict.decide`, :func:`pipeline.diagnose.screen.bound_release`,
+(:func:`pipeline.diagnose.verdict.decide`, :func:`pipeline.diagnose.refit.bound_release`,
 :func:`pipeline.diagnose.loadpath.best_load_path`, :func:`pipeline.diagnose.detail.located`).
 """
 from __future__ import annotations

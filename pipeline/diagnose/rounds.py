@@ -17,7 +17,7 @@ from pipeline.diagnose.gap import separating_measurement
 from pipeline.diagnose.loadpath import outscores
 from pipeline.diagnose.predictive import held_out_evidence, kept_modes
 from pipeline.diagnose.result import CandidateScore, location_dict
-from pipeline.diagnose.screen import Refitted
+from pipeline.diagnose.refit import Refitted
 from pipeline.diagnose.verdict import elsewhere, round_scores
 
 #: Sites of an uncertain site's note listed by name (the JSON lists all).

@@ -14,7 +14,7 @@
 4. Screening of every candidate at several sizes, 5. refit of the best
    (:mod:`pipeline.diagnose.screen`) and the verdict (:func:`decide`).
 6. Look again: the named effect, its fit continued to convergence
-   (:func:`pipeline.diagnose.screen.polish`), is added and steps 4-5 repeat, up to
+   (:func:`pipeline.diagnose.refit.polish`), is added and steps 4-5 repeat, up to
    ``settings.max_effects`` (a site already named is not offered again, alone or in a mirror
    pair). The gap is then cross-validated (:mod:`pipeline.diagnose.crossval`): the calibration
    and the named effects' fits are repeated on the other splits of the modes, so that every
@@ -25,7 +25,7 @@ also fit inside its bounds (a parameter on a non-zero bound,
 :func:`pipeline.diagnose.verdict.at_bound`, that the data press against, means the data want
 more of it than the library's plausible range holds: the model-form signal of DESIGN.md section
 5.2, not a finding; pressed: the unbounded Gauss-Newton step moves it outward and gains more
-than the margin, :func:`pipeline.diagnose.screen.bound_release`) and beat
+than the margin, :func:`pipeline.diagnose.refit.bound_release`) and beat
 the best load path between two grids, an effect the library does not hold
 (:mod:`pipeline.diagnose.loadpath`), by the margin, as it must beat the runner-up: a load path
 that beats it by the margin makes the round ``unexplained``, one within the margin either way
@@ -66,8 +66,8 @@ from pipeline.diagnose.round_notes import (bound_note, held_out_veto_note, load_
                                            rich_path_note, undetermined_note)
 from pipeline.diagnose.rounds import (against_path, chi2_split, none_fit, ranking_table,
                                       round_record, score_rows, sites_elsewhere)
-from pipeline.diagnose.screen import (bound_release, pick_for_refit, polish, refit, screen,
-                                      signatures)
+from pipeline.diagnose.refit import bound_release, polish, refit
+from pipeline.diagnose.screen import pick_for_refit, screen, signatures
 from pipeline.diagnose.suspension import FIT_LIMIT, hung_data, identify
 from pipeline.diagnose.verdict import SCATTER_SIGMAS, at_bound, decide, round_scores, within_scatter
 

@@ -155,7 +155,7 @@ def test_hidden_mass_is_named_and_the_gap_shrinks(folder, capsys):
         assert s["parameters"]["mass"] == pytest.approx(
             record["effect"]["parameters"]["mass"], rel=1e-3)
     # the diagnosed deck carries the truth's mass and gives the truth's (the GVT's) frequencies:
-    # the named fit is converged (screen.polish), so to the UFF file's six significant digits
+    # the named fit is converged (refit.polish), so to the UFF file's six significant digits
     # (round-off up to 5e-6; 1.4e-6 measured), not to where the ranking refits stop (0.12 %)
     diagnosed = read_model(run / "base_diagnosed.bdf")
     assert mass_properties(diagnosed).mass == pytest.approx(sum(MASSES) + HIDDEN_MASS, rel=1e-5)

@@ -10,16 +10,16 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from pipeline.diagnose import detail, screen
+from pipeline.diagnose import detail, refit
+from pipeline.diagnose.apply import apply_effect
 from pipeline.diagnose.calibrate import Problem
 from pipeline.diagnose.detail import (NEIGHBOUR_DETAILED, NEIGHBOUR_REFITS, detailed, located,
                                       neighbour_refits)
-from pipeline.diagnose.effects import (apply_effect, candidates, directional, every_direction,
-                                      neighbours)
+from pipeline.diagnose.effects import candidates, directional, every_direction, neighbours
 from pipeline.diagnose.screen import Screened
 from structures.bdf import read_model
 from structures.common.errors import InputError
-from tests.pipeline.diagnose.test_screen import _perfect_reference
+from tests.pipeline.diagnose.perfect_frame import perfect_reference
 from tests.pipeline.diagnose.truth import frame
 
 #: The truth's compliances against the named fit's one per group (c_t, c_r at rotation 0).
@@ -36,12 +36,12 @@ def anisotropic_joint(tmp_path_factory):
                 if c.label.startswith("RBE2 7002 (2002-"))
     rich, _ = directional(cand, [2000.0, 0.0])
     truth_c = 2000.0 * FACTORS
-    _, ref = _perfect_reference(apply_effect(model, rich, truth_c), model)
+    _, ref = perfect_reference(apply_effect(model, rich, truth_c), model)
     problem = Problem.build([ref], [model], 0.03)
     theta = np.zeros(len(problem.names))
     n = problem.residual(theta, problem.evaluate(theta)).size
     j_theta = np.zeros((n, theta.size))                    # the nominal parameters are exact
-    named = screen.refit(problem, theta, (), Screened(cand, np.array([3000.0, 0.0]), 0.0, 0.0,
+    named = refit.refit(problem, theta, (), Screened(cand, np.array([3000.0, 0.0]), 0.0, 0.0,
                                                       None), n_data=n, jacobian_theta=j_theta)
     return problem, named, truth_c, n, j_theta
 
@@ -67,7 +67,7 @@ def test_a_local_fit_from_the_named_values_stays_in_their_valley(anisotropic_joi
     (the perfect test's is 0)."""
     problem, named, _, n, j_theta = anisotropic_joint
     rich, start = directional(named.candidate, named.values)
-    local = screen.refit(problem, named.theta, (), Screened(rich, start, named.chi2, 0.0, None),
+    local = refit.refit(problem, named.theta, (), Screened(rich, start, named.chi2, 0.0, None),
                          n_data=n, jacobian_theta=j_theta)
     assert local.chi2 > 0.1 * named.chi2
 
@@ -80,12 +80,12 @@ def _named_next_to(path, factors):
     model = read_model(frame.write_frame(path))
     cands = {c.label: c for c in candidates(model, ("joint_flexibility", "lumped_mass"))}
     rich, _ = directional(cands["RBE2 7003 (2003-2103/2203)"], [2500.0, 0.0])
-    _, ref = _perfect_reference(apply_effect(model, rich, 2500.0 * np.asarray(factors)), model)
+    _, ref = perfect_reference(apply_effect(model, rich, 2500.0 * np.asarray(factors)), model)
     problem = Problem.build([ref], [model], 0.03)
     theta = np.zeros(len(problem.names))
     n = problem.residual(theta, problem.evaluate(theta)).size
     j_theta = np.zeros((n, theta.size))
-    named = screen.refit(problem, theta, (), Screened(cands["RBE2 7002 (2002-2102/2202)"],
+    named = refit.refit(problem, theta, (), Screened(cands["RBE2 7002 (2002-2102/2202)"],
                                                       np.array([3000.0, 0.0]), 0.0, 0.0, None),
                          n_data=n, jacobian_theta=j_theta)
     return model, cands, problem, named, n, j_theta
@@ -192,12 +192,12 @@ def test_a_named_spring_is_fitted_in_every_free_direction(tmp_path):
     spring = {c.label: c for c in candidates(model, ("boundary_stiffness",))}["grid 2009 z"]
     rich, _ = every_direction(model, spring, [0.35])
     truth_k = np.array([0.25, 0.0, 0.35])
-    _, ref = _perfect_reference(apply_effect(model, rich, truth_k), model)
+    _, ref = perfect_reference(apply_effect(model, rich, truth_k), model)
     problem = Problem.build([ref], [model], 0.03)
     theta = np.zeros(len(problem.names))
     n = problem.residual(theta, problem.evaluate(theta)).size
     j_theta = np.zeros((n, theta.size))
-    named = screen.refit(problem, theta, (), Screened(spring, np.array([0.35]), 0.0, 0.0, None),
+    named = refit.refit(problem, theta, (), Screened(spring, np.array([0.35]), 0.0, 0.0, None),
                          n_data=n, jacobian_theta=j_theta)
     assert named.chi2 > 1000.0
     found = detailed(problem, (), named, n_data=n, jacobian_theta=j_theta)

@@ -15,7 +15,7 @@ from pipeline.diagnose.pairing import (pair, pair_frequency_only, pairing_cost, 
 from structures.bdf import read_model
 from structures.common.errors import InputError
 from structures.correlation import mac
-from tests.pipeline.diagnose.test_screen import _perfect_reference, _with_mass
+from tests.pipeline.diagnose.perfect_frame import perfect_reference, with_mass
 from tests.pipeline.diagnose.truth import frame
 
 
@@ -97,8 +97,8 @@ def test_a_mode_the_sensors_do_not_see_explains_no_test_shape():
 @pytest.fixture(scope="module")
 def frame_case(tmp_path_factory):
     model = read_model(frame.write_frame(tmp_path_factory.mktemp("frame")))
-    changed = _with_mass(model, 3009, 0.03 * model.masses.mass.sum())
-    modes, ref = _perfect_reference(changed, model)
+    changed = with_mass(model, 3009, 0.03 * model.masses.mass.sum())
+    modes, ref = perfect_reference(changed, model)
     return model, changed, ref
 
 

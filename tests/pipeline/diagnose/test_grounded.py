@@ -7,8 +7,9 @@ import pytest
 from scipy.optimize import lsq_linear
 
 from pipeline.diagnose import screen
+from pipeline.diagnose.apply import apply_effect
 from pipeline.diagnose.calibrate import Problem
-from pipeline.diagnose.effects import apply_effect, candidates
+from pipeline.diagnose.effects import candidates
 from pipeline.diagnose.evidence import evaluate
 from pipeline.diagnose.fit_statistics import chi_square
 from pipeline.diagnose.grounded import (FINEST_STEP, SPRING_LADDER, ladder_sizes, reduce_mass,
@@ -16,7 +17,7 @@ from pipeline.diagnose.grounded import (FINEST_STEP, SPRING_LADDER, ladder_sizes
 from structures.bdf import read_model
 from structures.massprops import mass_properties
 from structures.modal import compute_modes
-from tests.pipeline.diagnose.test_screen import _perfect_reference
+from tests.pipeline.diagnose.perfect_frame import perfect_reference
 from tests.pipeline.diagnose.truth import frame
 
 
@@ -29,7 +30,7 @@ def _at(cand, size):
 @pytest.fixture(scope="module")
 def frame_model(tmp_path_factory):
     model = read_model(frame.write_frame(tmp_path_factory.mktemp("frame")))
-    return model, _perfect_reference(model, model)[1]
+    return model, perfect_reference(model, model)[1]
 
 
 def test_reduced_spring_modes_match_exact_reanalysis(frame_model):
@@ -151,7 +152,7 @@ def _made_by(model, cand, size):
     """The frame against a perfect test of the frame with ``cand`` at ``size``: (problem, ref,
     theta 0, evaluations, r0, the chi^2 of the secant through the exact reanalysis at the
     candidate's reference size, fitted within its bounds)."""
-    _, ref = _perfect_reference(apply_effect(model, cand, _at(cand, size)), model)
+    _, ref = perfect_reference(apply_effect(model, cand, _at(cand, size)), model)
     problem = Problem.build([ref], [model], 0.03)
     theta = np.zeros(len(problem.names))
     evs = problem.evaluate(theta)

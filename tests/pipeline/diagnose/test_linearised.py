@@ -8,13 +8,14 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from pipeline.diagnose import screen
+from pipeline.diagnose import refit
+from pipeline.diagnose.apply import apply_effect
 from pipeline.diagnose.calibrate import Problem
-from pipeline.diagnose.effects import apply_effect, candidates
+from pipeline.diagnose.effects import candidates
 from pipeline.diagnose.linearised import effect_jacobian, parameter_errors, standard_errors
 from pipeline.diagnose.screen import Screened
 from structures.bdf import read_model
-from tests.pipeline.diagnose.test_screen import _perfect_reference
+from tests.pipeline.diagnose.perfect_frame import perfect_reference
 from tests.pipeline.diagnose.truth import frame
 
 
@@ -54,14 +55,14 @@ def test_standard_error_is_where_the_exact_chi2_rises_by_one(tmp_path):
     model = read_model(frame.write_frame(tmp_path))
     cand = next(c for c in candidates(model, ("lumped_mass",)) if c.label == "grid 4004")
     truth = np.array([0.05, 2.0e-4])
-    _, ref = _perfect_reference(apply_effect(model, cand, truth), model)
+    _, ref = perfect_reference(apply_effect(model, cand, truth), model)
     problem = Problem.build([ref], [model], 0.03)
     theta0 = np.zeros(len(problem.names))
     r0 = problem.residual(theta0, problem.evaluate(theta0))
     no_theta = np.zeros((r0.size, theta0.size))
     row = Screened(cand, truth * 0.9, 0.0, 0.0, np.zeros((r0.size, 2)))
-    fit = screen.refit(problem, theta0, (), row, n_data=r0.size, jacobian_theta=no_theta,
-                       max_nfev=screen.POLISH_NFEV, ftol=1e-12)
+    fit = refit.refit(problem, theta0, (), row, n_data=r0.size, jacobian_theta=no_theta,
+                       max_nfev=refit.POLISH_NFEV, ftol=1e-12)
     fit = replace(fit, theta=theta0)                             # the nominal parameters held
     sigma = standard_errors(problem, (), fit, 1.0, jacobian_theta=no_theta)
     assert np.all(np.isfinite(sigma)) and sigma[0] < 0.1 * fit.values[0]

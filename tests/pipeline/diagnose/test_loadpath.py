@@ -14,7 +14,7 @@ from pipeline.diagnose.loadpath import LoadPath, _directions, outscores, pairs
 from structures.bdf import read_model
 from structures.modal import compute_modes
 from structures.model import Material, Property
-from tests.pipeline.diagnose.test_screen import _perfect_reference
+from tests.pipeline.diagnose.perfect_frame import perfect_reference
 from tests.pipeline.diagnose.truth import frame
 
 CHAIN = """SOL 103
@@ -76,7 +76,7 @@ def _write_with_ps(tmp_path, grid: int, ps: str):
 @pytest.fixture(scope="module")
 def frame_model(tmp_path_factory):
     model = read_model(frame.write_frame(tmp_path_factory.mktemp("frame")))
-    return model, _perfect_reference(model, model)[1]
+    return model, perfect_reference(model, model)[1]
 
 
 def _with_rod(model, a: int, b: int, k: float):

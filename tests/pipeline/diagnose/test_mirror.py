@@ -5,7 +5,8 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from pipeline.diagnose.effects import apply_effect, candidates
+from pipeline.diagnose.apply import apply_effect
+from pipeline.diagnose.effects import candidates
 from pipeline.diagnose.mirror import mirror_grids, mirror_pairs, sites
 from structures.massprops import mass_properties
 from structures.modal import compute_modes

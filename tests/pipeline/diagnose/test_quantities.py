@@ -4,7 +4,8 @@ import numpy as np
 import pytest
 from pyNastran.bdf.bdf import BDF
 
-from pipeline.diagnose.effects import apply_effect, candidates, directional, write_effect_deck
+from pipeline.diagnose.apply import apply_effect, write_effect_deck
+from pipeline.diagnose.effects import candidates, directional
 from pipeline.diagnose.result import EffectRecord, effect_json
 from structures.bdf import read_model
 from structures.bulk_text import card

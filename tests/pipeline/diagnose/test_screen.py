@@ -3,7 +3,6 @@ linear fit by hand, the choice of candidates to refit, and the joint ladder on i
 basis against exact reanalysis."""
 from __future__ import annotations
 
-from dataclasses import replace
 from pathlib import Path
 from types import SimpleNamespace
 
@@ -11,55 +10,19 @@ import numpy as np
 import pytest
 
 from pipeline.diagnose import quadratic, screen
+from pipeline.diagnose.apply import apply_effect
 from pipeline.diagnose.calibrate import Problem
 from pipeline.diagnose.effect_deck import change_matrices
-from pipeline.diagnose.effects import KINDS, apply_effect, candidates
-from pipeline.diagnose.evidence import build_reference, evaluate
+from pipeline.diagnose.effects import KINDS, candidates
+from pipeline.diagnose.evidence import evaluate
 from pipeline.diagnose.joints import hangs_nothing
 from pipeline.diagnose.ladder import reduce_joint
 from pipeline.diagnose.screen import Screened, pick_for_refit
 from structures.assembly import assemble_g
 from structures.bdf import read_model
 from structures.bulk_text import card
-from structures.gvt import make_gvt_dataset
-from structures.massprops import mass_properties
 from structures.modal import compute_modes
-from structures.model import ConcentratedMass
-from tests.pipeline.diagnose.truth import frame
-
-
-def _perfect_reference(truth, model, nmodes: int = 46):
-    """``model`` against the modes 7..26 of ``truth`` at the frame's 120 sensors and its weighing
-    (no noise); returns (model's modes, reference)."""
-    truth_modes = compute_modes(truth, nmodes)
-    modes = truth_modes if truth is model else compute_modes(model, nmodes)
-    grid, comp = np.array(frame.sensors()).T
-    dof = np.array([np.flatnonzero((truth_modes["grid"].values == g)
-                                   & (truth_modes["component"].values == c))[0]
-                    for g, c in zip(grid, comp)])
-    gvt = make_gvt_dataset(truth_modes["frequency"].values[6:26],
-                           truth_modes["shape"].values[6:26][:, dof], grid, comp,
-                           mode=np.arange(7, 27))
-    props = mass_properties(truth).as_dict()
-    measured = {k: props[k] for k in ("weight", "x_cg", "y_cg", "z_cg", "Ixx", "Iyy", "Izz")}
-    ref, _ = build_reference("frame", model, gvt, measured, modes, frequency_noise=0.01,
-                             shape_noise_value=0.05, model_scatter=0.03, holdout=3, nmodes=nmodes)
-    return modes, ref
-
-
-@pytest.fixture(scope="module")
-def frame_reference(tmp_path_factory):
-    """The frame model against its own modes 7..26 at the 120 sensors (a perfect test)."""
-    model = read_model(frame.write_frame(tmp_path_factory.mktemp("frame")))
-    modes, ref = _perfect_reference(model, model)
-    return model, modes, ref
-
-
-def _with_mass(model, grid: int, mass: float):
-    cm = model.masses
-    return replace(model, masses=ConcentratedMass(
-        np.append(cm.eids, cm.eids.max() + 1), np.append(cm.grid, grid), np.append(cm.mass, mass),
-        np.vstack([cm.offset, np.zeros((1, 3))]), np.concatenate([cm.inertia, np.zeros((1, 3, 3))])))
+from tests.pipeline.diagnose.perfect_frame import perfect_reference, with_mass
 
 
 def test_every_kind_has_a_screening_route():
@@ -84,7 +47,7 @@ def test_pick_for_refit_takes_every_kind_first():
 
 def test_change_matrices_equal_full_assembly_difference(frame_reference):
     model, _, _ = frame_reference
-    changed = _with_mass(model, 3005, 1.5)
+    changed = with_mass(model, 3005, 1.5)
     pid = int(model.elements["CBAR"].pids[3])
     changed = changed.with_property(pid, I1=2.0 * model.properties[pid].get("I1"))
     dk, dm = change_matrices(model, changed)
@@ -177,7 +140,7 @@ def test_joint_ladder_on_basis_picks_the_exact_ladders_size(frame_reference, mon
     model, _, ref0 = frame_reference
     joints = [c for c in candidates(model, ("joint_flexibility",)) if c.get("dependent") is None][:3]
     truth = apply_effect(model, joints[0], [300.0, 0.0])
-    _, ref = _perfect_reference(truth, model, ref0.nmodes)
+    _, ref = perfect_reference(truth, model, ref0.nmodes)
     problem = Problem.build([ref], [model], 0.03)
     theta = np.zeros(len(problem.names))
     evs = problem.evaluate(theta)
@@ -272,31 +235,6 @@ def test_hangs_nothing_with_an_spc_or_a_ps_on_a_hung_grid(tmp_path):
     assert hangs_nothing(_joint_deck(tmp_path, "mass.bdf", cm=123), 10) is False
 
 
-def test_refit_of_a_negative_quadrant_candidate_from_zero(frame_reference):
-    """A member_curvature candidate of the ``bow +y -z`` quadrant has a negative reference step for
-    bow_2; refitted from a start with bow_2 = 0, its parameter scale is the step's size (not 0, which
-    made the bounds 0 / 0 and dropped the candidate). The refit returns finite parameters within
-    the quadrant's bounds and a chi^2 no worse than the start's."""
-    model, _, ref = frame_reference
-    cand = next(c for c in candidates(model, ("member_curvature",)) if c.reference[1] < 0)
-    problem = Problem.build([ref], [model], 0.03)
-    theta0 = np.zeros(len(problem.names))
-    evs = problem.evaluate(theta0)
-    r0 = problem.residual(theta0, evs)
-    start = np.array([0.02, 0.0])
-    row = Screened(cand, start, 0.0, 0.0, np.zeros((r0.size, 2)))
-    start_chi2 = float(np.sum(problem.residual(theta0, problem.evaluate(
-        theta0, ((cand, start),))) ** 2))
-    with np.errstate(divide="raise", invalid="raise"):
-        fit = screen.refit(problem, theta0, (), row, n_data=r0.size,
-                           jacobian_theta=np.zeros((r0.size, len(theta0))))
-    assert fit is not None
-    assert np.all(np.isfinite(fit.values))
-    assert cand.lower[0] <= fit.values[0] <= cand.upper[0]
-    assert cand.lower[1] <= fit.values[1] <= cand.upper[1] == 0.0
-    assert fit.chi2 <= start_chi2 * (1 + 1e-9)
-
-
 @pytest.fixture(scope="module")
 def bowed_tail(frame_reference):
     """The frame against the test of the frame whose tail member (PID 51) is bowed by (0.09,
@@ -305,7 +243,7 @@ def bowed_tail(frame_reference):
     cand = next(c for c in candidates(model, ("member_curvature",))
                 if 51 in c.location.properties and c.reference[1] > 0)
     x_true = np.array([0.09, 0.06])
-    _, ref = _perfect_reference(apply_effect(model, cand, x_true), model)
+    _, ref = perfect_reference(apply_effect(model, cand, x_true), model)
     problem = Problem.build([ref], [model], 0.03)
     theta = np.zeros(len(problem.names))
     evs = problem.evaluate(theta)
@@ -353,60 +291,3 @@ def test_screening_recovers_a_bowed_members_bow(bowed_tail):
     assert best.values == pytest.approx(x_true, abs=0.01)
     assert best.chi2 < 0.05 * float(r0 @ r0)
     assert r0 + best.signature @ best.values == pytest.approx(residual(best.values), abs=1e-9)
-
-
-def test_refit_starts_at_the_best_exactly_analysed_fraction_of_the_screened_size(
-        frame_reference, monkeypatch):
-    """The model against its own modes: any added mass makes chi^2 grow, so of the screened size's
-    fractions REFIT_START the smallest is the best start; with the iterations stubbed out
-    (least_squares returning its start) the refit returns that start and its exact chi^2."""
-    model, _, ref = frame_reference
-    cand = next(c for c in candidates(model, ("lumped_mass",)) if c.get("sites") is None)
-    problem = Problem.build([ref], [model], 0.03)
-    theta0 = np.zeros(len(problem.names))
-    r0 = problem.residual(theta0, problem.evaluate(theta0))
-    start = np.array([0.04, 0.0])
-    row = Screened(cand, start, 0.0, 0.0, np.zeros((r0.size, 2)))
-
-    class Stopped:
-        def __init__(self, x):
-            self.x = x
-
-    monkeypatch.setattr(screen, "least_squares", lambda fun, z0, **kw: Stopped(z0))
-    fit = screen.refit(problem, theta0, (), row, n_data=r0.size,
-                       jacobian_theta=np.zeros((r0.size, len(theta0))))
-    best = min(screen.REFIT_START)
-    assert fit.values == pytest.approx(best * start, rel=1e-12)
-    exact = np.sum(problem.residual(theta0, problem.evaluate(theta0, ((cand, best * start),))) ** 2)
-    assert fit.chi2 == pytest.approx(exact, rel=1e-12)
-    chi2 = [np.sum(problem.residual(theta0, problem.evaluate(theta0, ((cand, t * start),))) ** 2)
-            for t in screen.REFIT_START]
-    assert np.argmin(chi2) == np.argmin(screen.REFIT_START)
-
-
-@pytest.mark.parametrize("truth_mass, pressed", [(0.14, True), (0.10, False)])
-def test_bound_release_tells_a_pressed_bound_from_a_touched_one(frame_reference, truth_mass,
-                                                                pressed):
-    """A perfect test made by the frame with a point mass at the tail grid 4004: 14 % of the
-    model's mass, beyond the mass's bound 0.10, or 10 %, on it. Refitted from the bound, the mass
-    sits on it both times; for 14 % the unbounded Gauss-Newton step from there moves it outward
-    and the exact chi^2 along it falls by more than half of the fit's (measured: 2760 of 3524,
-    the nominal model's 51850), for 10 % it gains nothing (measured 3e-16; limit 1e-3 of the
-    nominal chi^2): the data press against the bound only when the truth lies beyond it."""
-    model, _, ref0 = frame_reference
-    cand = next(c for c in candidates(model, ("lumped_mass",)) if c.label == "grid 4004")
-    wide = replace(cand, upper=(0.2, cand.upper[1]))                     # to make the truth
-    _, ref = _perfect_reference(apply_effect(model, wide, [truth_mass, 0.0]), model,
-                                ref0.nmodes)
-    problem = Problem.build([ref], [model], 0.03)
-    theta0 = np.zeros(len(problem.names))
-    r0 = problem.residual(theta0, problem.evaluate(theta0))
-    row = Screened(cand, np.array([0.10, 0.0]), 0.0, 0.0, np.zeros((r0.size, 2)))
-    jac = np.zeros((r0.size, len(theta0)))
-    fit = screen.refit(problem, theta0, (), row, n_data=r0.size, jacobian_theta=jac)
-    assert fit.values[0] == pytest.approx(0.10, abs=1e-3)
-    outward, gain = screen.bound_release(problem, (), fit, jacobian_theta=jac)
-    if pressed:
-        assert outward and gain > 0.5 * fit.chi2
-    else:
-        assert gain < 1e-3 * np.sum(r0 ** 2)

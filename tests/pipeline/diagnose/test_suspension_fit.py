@@ -13,7 +13,8 @@ import numpy as np
 import pytest
 
 from pipeline.case import read_case
-from pipeline.diagnose.effects import apply_effect, candidates
+from pipeline.diagnose.apply import apply_effect
+from pipeline.diagnose.effects import candidates
 from pipeline.diagnose.inputs import configurations_from_case
 from pipeline.diagnose.suspension import (HungData, hung_data, hypotheses, identify,
                                            measured_rigid_mass)

@@ -13,7 +13,8 @@ import numpy as np
 import pytest
 
 from pipeline.case import read_case
-from pipeline.diagnose.effects import Candidate, Location, apply_effect, candidates
+from pipeline.diagnose.apply import apply_effect
+from pipeline.diagnose.effects import Candidate, Location, candidates
 from pipeline.diagnose import DiagnoseSettings, diagnose, preflight
 from pipeline.diagnose.inputs import configurations_from_case, settings_from_case
 from pipeline.diagnose.verdict import decide
