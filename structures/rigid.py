@@ -24,23 +24,20 @@ def _components(text: str) -> list[int]:
     return sorted({int(ch) for ch in str(text) if ch in "123456"})
 
 
-def _cd_block(cd_axes):
-    out = np.zeros((6, 6))
-    out[:3, :3] = cd_axes.T
-    out[3:, 3:] = cd_axes.T
-    return out
-
-
 def _rigid_rows(grids, entries, ref_xyz, elem, filename):
     """Rows of S (u_cd = S q) for (grid, components) entries, and their g-set DOF numbers."""
-    rows, dofs = [], []
-    for gid, comps in entries:
-        gi = grids.index([gid], card=elem.card, card_id=elem.eid, filename=filename)[0]
-        s_full = _cd_block(grids.cd_axes[gi]) @ rigid_offset(grids.xyz[gi] - ref_xyz)
-        for c in _components(comps):
-            rows.append(s_full[c - 1])
-            dofs.append(6 * gi + c - 1)
-    return np.array(rows).reshape(-1, 6), np.array(dofs, dtype=np.int64)
+    if not entries:
+        return np.zeros((0, 6)), np.zeros(0, dtype=np.int64)
+    gi = grids.index([gid for gid, _ in entries], card=elem.card, card_id=elem.eid,
+                     filename=filename)
+    comps = [_components(c) for _, c in entries]
+    # u_cd = blockdiag(CD^T, CD^T) (u_ref + theta x r) per grid: (n, 6, 6)
+    cd_t = np.swapaxes(grids.cd_axes[gi], -1, -2)
+    offset = rigid_offset(grids.xyz[gi] - ref_xyz)
+    s_full = np.concatenate([cd_t @ offset[:, :3], cd_t @ offset[:, 3:]], axis=1)
+    which = np.repeat(np.arange(len(entries)), [len(c) for c in comps])
+    comp = np.array([c - 1 for cs in comps for c in cs], dtype=np.int64)
+    return s_full[which, comp], 6 * gi[which] + comp
 
 
 def element_constraints(grids, elem, filename: str = ""):
@@ -118,20 +115,19 @@ def solve_constraints(grids, rigid, n_g: int, filename: str = ""):
             owner[int(d)] = (elem.card, elem.eid)
         blocks.append((dep, indep, g))
     m_dofs = np.array(sorted(owner), dtype=np.int64)
-    pos = {d: i for i, d in enumerate(m_dofs)}
     for dep, indep, g in blocks:
-        r = np.array([pos[int(d)] for d in dep])
-        rr, cc = np.meshgrid(r, indep, indexing="ij")
+        rr, cc = np.meshgrid(np.searchsorted(m_dofs, dep), indep, indexing="ij")
         rows.append(rr.ravel())
         cols.append(cc.ravel())
         vals.append(g.ravel())
-    g_all = sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
-                          shape=(len(m_dofs), n_g))
-    g_mm = g_all[:, m_dofs]
-    g_all_o = g_all.tolil()
-    g_all_o[:, m_dofs] = 0.0
-    g_all_o = g_all_o.tocsr()
+    rows, cols, vals = np.concatenate(rows), np.concatenate(cols), np.concatenate(vals)
+    # the terms on m-set DOFs (chains) and on the others
+    on_m = np.isin(cols, m_dofs)
+    g_mm = sp.csr_matrix((vals[on_m], (rows[on_m], np.searchsorted(m_dofs, cols[on_m]))),
+                         shape=(len(m_dofs), len(m_dofs)))
+    g_all_o = sp.csr_matrix((vals[~on_m], (rows[~on_m], cols[~on_m])), shape=(len(m_dofs), n_g))
     g_all_o.eliminate_zeros()
+    g_mm.eliminate_zeros()
     if g_mm.nnz == 0:
         return m_dofs, g_all_o
     # Chains: u_m = G_mm u_m + G_mo u_o  ->  (I - G_mm) u_m = G_mo u_o
