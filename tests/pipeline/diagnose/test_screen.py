@@ -21,6 +21,7 @@ from pipeline.diagnose.screen import Screened, pick_for_refit
 from structures.assembly import assemble_g
 from structures.bdf import read_model
 from structures.bulk_text import card
+from structures.common.errors import SolverError
 from structures.modal import compute_modes
 from tests.pipeline.diagnose.perfect_frame import perfect_reference, with_mass
 
@@ -43,6 +44,127 @@ def test_pick_for_refit_takes_every_kind_first():
     assert [r.candidate.kind for r in chosen] == ["a", "b", "c", "a"]
     assert chosen[3] is rows[1]
     assert [r.candidate.kind for r in pick_for_refit(rows, 2)] == ["a", "b"]
+
+
+def _valley(x_star, width, r0=np.full(5, np.sqrt(20.0))):
+    """A member taper's training residual r(x) (5,) with a narrow Gaussian valley at x_star
+    (chi^2 |r0|^2 far from it, 1 % of that at its floor) that the quadratic model's samples at
+    +-2 h and 2 h_k + 2 h_l do not see."""
+
+    def r(x):
+        d2 = np.sum(((np.asarray(x, float) - x_star) / width) ** 2)
+        return r0 * np.sqrt(1.0 - 0.99 * np.exp(-d2))
+
+    return r
+
+
+def _taper():
+    from pipeline.diagnose.effects import Candidate, Location
+    return Candidate("member_taper", Location(properties=(72,)), "PID 72",
+                     ("scale", "taper"), (-0.3, -0.8), (0.3, 0.8), (0.1, 0.3))
+
+
+def test_taper_grid_finds_a_valley_the_quadratic_model_misses():
+    """A valley at (-0.1, -0.3), 0.03 and 0.1 wide: the quadratic model from its five samples is
+    flat (its fit drops nothing), the exact grid's point (-0.1, -0.3) is the valley's floor, and
+    the result is (x, chi^2, r) of that point; a point that cannot be analysed is passed over."""
+    cand, r = _taper(), _valley(np.array([-0.1, -0.3]), np.array([0.03, 0.1]))
+    r0 = r(np.zeros(2))
+    sampled = [r(x) for x in quadratic.sample_points(cand.reference, "centred")]
+    s = quadratic.coefficients(r0, sampled, cand.reference, "centred")
+    x_q, chi_q = quadratic.quadratic_fit(r0, s, cand.reference, cand.lower, cand.upper, "centred")
+    assert chi_q > 0.99 * (r0 @ r0)
+
+    def shared(c, x):
+        if np.allclose(x, (0.2, 0.6)):
+            raise SolverError("singular")
+        return r(x)
+
+    x, chi2, rx = screen._grid_best(cand, r0, s, shared)
+    np.testing.assert_allclose(x, (-0.1, -0.3), atol=1e-12)
+    assert chi2 == pytest.approx(1.0, rel=1e-9) and rx @ rx == pytest.approx(chi2)
+
+
+def test_grid_searches_take_the_best_model_fits_of_the_kind(monkeypatch):
+    """Only the GRID_TOP tapers whose quadratic model fits best are analysed on the grid: with
+    GRID_TOP 1 the bowl (model fit chi^2 1) is, and the valley (a flat model, chi^2 51) keeps
+    the quadratic route; with GRID_TOP 2 both are, the valley found at its grid point."""
+    from pipeline.diagnose.effects import Candidate, Location
+    bowl_at = np.array([0.05, 0.15])
+
+    def bowl(x):
+        return np.r_[(np.asarray(x, float) - bowl_at) / (0.1, 0.3) * 10.0, 1.0, 0.0, 0.0]
+
+    r0 = bowl(np.zeros(2))                                           # chi^2 51 for both
+    shapes = {"bowl": bowl, "valley": _valley(np.array([-0.1, -0.3]), np.array([0.03, 0.1]), r0)}
+
+    def entries():
+        out = []
+        for name in ("valley", "bowl"):
+            cand = Candidate("member_taper", Location(properties=(len(out) + 1,)), name,
+                             ("scale", "taper"), (-0.3, -0.8), (0.3, 0.8), (0.1, 0.3))
+            sampled = [shapes[name](x) for x in quadratic.sample_points(cand.reference,
+                                                                        "centred")]
+            out.append((cand, quadratic.coefficients(r0, sampled, cand.reference, "centred"),
+                        None))
+        return out
+
+    for top, searched in ((1, {"bowl"}), (2, {"bowl", "valley"})):
+        monkeypatch.setattr(screen, "GRID_TOP", top)
+        out = entries()
+        screen.grid_searches(out, r0, lambda c, x: shapes[c.label](x))
+        assert {c.label for c, _, exact in out if exact is not None} == searched
+        for cand, s, exact in out:
+            if exact is not None:
+                np.testing.assert_allclose(exact[0], {"bowl": bowl_at,
+                                                      "valley": (-0.1, -0.3)}[cand.label],
+                                           atol=1e-6)
+
+
+def test_grid_refinement_follows_the_valley_below_the_grid():
+    """The valley's floor at (-0.1, -0.44), between grid points: the grid's best (-0.1, -0.3)
+    (chi^2 86) is refined to (-0.1, -0.45) (chi^2 2.0: the half step reaches it, no quarter step
+    is better); an entry below the GRID_REFINE_TOP best grid results of its kind and an entry of
+    another kind are left as they were."""
+    cand, r = _taper(), _valley(np.array([-0.1, -0.44]), np.array([0.03, 0.1]))
+    r0 = r(np.zeros(2))
+    worse = [(_taper(), np.zeros((5, 2)), (np.array([0.2, 0.6]), 99.0 + k))
+             for k in range(screen.GRID_REFINE_TOP)]
+    other = (SimpleNamespace(kind="lumped_mass"), np.zeros((5, 1)), (np.array([1.0]), 0.5))
+    x0 = np.array([-0.1, -0.3])
+    out = [(cand, np.zeros((5, 2)), (x0, float(r(x0) @ r(x0))))] + worse + [other]
+    assert out[0][2][1] == pytest.approx(86.0, abs=0.5)
+    before = list(out)
+    screen.grid_refinements(out, r0, lambda c, x: r(x))
+    x, chi2 = out[0][2]
+    np.testing.assert_allclose(x, (-0.1, -0.45), atol=1e-12)
+    assert chi2 == pytest.approx(r(x) @ r(x)) and chi2 < 2.5
+    np.testing.assert_allclose(out[0][1] @ x, r(x) - r0)            # the secant to x*
+    assert out[-2] is before[-2] and out[-1] is before[-1]     # the 5th grid result, a mass
+
+
+def test_taper_grid_takes_the_models_fit_when_it_is_best_and_none_below_no_effect():
+    """A smooth bowl at (0.05, 0.15), inside the samples' span, between grid points: the
+    quadratic model's fit, analysed exactly, is the result (chi^2 1, every grid point 26 or
+    more); a bowl at 0 (no effect fits best) keeps the quadratic route (None)."""
+    cand = _taper()
+
+    def bowl(x_star):
+        def r(x):
+            return np.r_[(np.asarray(x, float) - x_star) / (0.1, 0.3) * 10.0, 1.0, 0.0, 0.0]
+        return r
+
+    for x_star, expected in (((0.05, 0.15), (0.05, 0.15)), ((0.0, 0.0), None)):
+        r = bowl(np.array(x_star))
+        r0 = r(np.zeros(2))
+        sampled = [r(x) for x in quadratic.sample_points(cand.reference, "centred")]
+        s = quadratic.coefficients(r0, sampled, cand.reference, "centred")
+        found = screen._grid_best(cand, r0, s, lambda c, x: r(x))
+        if expected is None:
+            assert found is None
+        else:
+            np.testing.assert_allclose(found[0], expected, atol=1e-6)
+            assert found[1] == pytest.approx(1.0, abs=1e-6)
 
 
 def test_change_matrices_equal_full_assembly_difference(frame_reference):
