@@ -30,13 +30,17 @@ def _lumped_mass(model, candidate, x):
         total = mass_properties(model).weight
     cm = model.masses
     grids = np.asarray(candidate.location.grids, np.int64)
-    n = grids.size                                      # 1, or a spread mass's equal shares
-    share = x[0] * total / n
-    inertia = share * x[1] * candidate.get("length") ** 2 * np.eye(3)           # m (r / L)^2 L^2
+    if candidate.get("per_grid"):                       # one share per grid, the empty left out
+        share = x[:-1] * total
+        grids, share = grids[share > 0.0], share[share > 0.0]
+    else:                                               # 1, or a spread mass's equal shares
+        share = np.full(grids.size, x[0] * total / grids.size)
+    n = grids.size
+    inertia = (share * x[-1] * candidate.get("length") ** 2)[:, None, None] * np.eye(3)  # m r^2
     masses = replace(cm, eids=np.append(cm.eids, next_eid(model) + np.arange(n)),
-                     grid=np.append(cm.grid, grids), mass=np.append(cm.mass, np.full(n, share)),
+                     grid=np.append(cm.grid, grids), mass=np.append(cm.mass, share),
                      offset=np.concatenate([cm.offset, np.zeros((n, 3))]),
-                     inertia=np.concatenate([cm.inertia, np.repeat(inertia[None], n, axis=0)]))
+                     inertia=np.concatenate([cm.inertia, inertia]))
     return replace(model, masses=masses)
 
 

@@ -20,6 +20,10 @@ scale of the model (so that bounds do not depend on units):
     along a member or over an attachment (a cable run, an engine on its pylon) that no one grid
     represents, where the rotary inertia of a point mass is its second moment only. One such
     candidate per distinct set of grids; a grid without a free neighbour has none.
+    Once named, a mass may be added with one mass per grid of its neighbourhood
+    (:func:`distributed`, :mod:`pipeline.diagnose.detail`): parameters ``mass_<g>`` per grid,
+    then ``inertia``, the shares free (a mass that sits mostly on one grid of a spread, or on
+    two grids unequally).
 ``joint_flexibility`` of a rigid element, parameters ``compliance`` and ``rotation``
     An RBE2, or an RBAR with all six independent components on one grid, stays rigid but is
     moved onto a new grid (id: the largest + 1) at its independent grid, which hangs on a
@@ -245,6 +249,15 @@ def _element_grids(model: FEModel) -> np.ndarray:
     return ids[ids > 0]
 
 
+def _grids_and_masks(model: FEModel) -> tuple:
+    """(grids, fixed, free): the grids that carry structure (:func:`_element_grids`), their
+    constrained-component bit masks (:func:`pipeline.diagnose.members.fixed_masks`) and those of
+    them whose translations are not all constrained."""
+    grids = _element_grids(model)
+    fixed = fixed_masks(model)[model.grids.index(grids)] if grids.size else np.zeros(0, int)
+    return grids, fixed, grids[(fixed & 7) != 7]
+
+
 def _lowest_elastic_frequency(model: FEModel) -> float:
     from structures.modal import compute_modes
     ds = compute_modes(model, 8)
@@ -276,9 +289,7 @@ def candidates(model: FEModel, kinds=KINDS, *, frequency: float | None = None
     """
     kinds = _check_kinds(kinds)
     out = []
-    grids = _element_grids(model)
-    fixed = fixed_masks(model)[model.grids.index(grids)] if grids.size else np.zeros(0, int)
-    free_grids = grids[(fixed & 7) != 7]
+    grids, fixed, free_grids = _grids_and_masks(model)
     props = mass_properties(model) if {"lumped_mass", "boundary_stiffness"} & set(kinds) else None
     members = find_members(model) if {"member_taper", "member_curvature"} & set(kinds) else ()
     for kind in kinds:
@@ -338,6 +349,19 @@ def spread_sites(model: FEModel, free_grids) -> list:
     -------
     list of (int, tuple of int)
     """
+    around = _around(model, free_grids)
+    out, seen = [], set()
+    for g in sorted(around):
+        grids = tuple(sorted(around[g]))
+        if len(grids) > 1 and grids not in seen:
+            seen.add(grids)
+            out.append((g, grids))
+    return out
+
+
+def _around(model: FEModel, free_grids) -> dict:
+    """{g: set of g and the free grids one element layer around it (rigid elements included)}
+    for every free grid g."""
     free = set(np.asarray(free_grids, np.int64).tolist())
     around = {g: {g} for g in free}
     for _, nodes, _ in connectivity(model):
@@ -345,13 +369,7 @@ def spread_sites(model: FEModel, free_grids) -> list:
             on = [n for n in row if n in free]
             for n in on:
                 around[n].update(on)
-    out, seen = [], set()
-    for g in sorted(free):
-        grids = tuple(sorted(around[g]))
-        if len(grids) > 1 and grids not in seen:
-            seen.add(grids)
-            out.append((g, grids))
-    return out
+    return around
 
 
 def neighbours(model: FEModel, location: Location) -> Location:
@@ -434,6 +452,52 @@ def directional(candidate: Candidate, values) -> tuple[Candidate, np.ndarray]:
         detail["sites"] = tuple(replace(site, **fields) for site in detail["sites"])
         detail["signs"] = tuple(((1.0,) * n,) * len(detail["signs"]))
     return replace(candidate, detail=tuple(detail.items()), **fields), np.clip(c, lo, hi)
+
+
+def distributed(model: FEModel, candidate: Candidate, values) -> tuple[Candidate, np.ndarray]:
+    """A ``lumped_mass`` at one grid or spread in equal shares as the same mass with one share
+    per grid of its neighbourhood: parameters ``mass_<g>`` (each grid's mass over the model's
+    total mass, bounds and reference of ``mass``) for every grid g of the location, then
+    ``inertia`` ((r / L)^2 of each share, as before). The neighbourhood of a mass at one grid is
+    the grid and the free grids one element layer around it (the grids of its spread mass); a
+    spread mass keeps its grids. Label ``grids a, b, c``; detail ``per_grid`` True.
+
+    Parameters
+    ----------
+    model : FEModel, the model the candidate was made on.
+    candidate : Candidate, ``lumped_mass`` with parameters ``mass``, ``inertia`` at one site.
+    values : (2,) its values.
+
+    Returns
+    -------
+    Candidate with parameters ``mass_<g>`` per grid and ``inertia``, and its (n_grids + 1,)
+    values: the named mass in equal shares over the named grids, 0 at the others, and its
+    inertia (the same model as ``values`` give ``candidate``).
+    """
+    x = check_values(candidate, values)
+    if (candidate.kind != "lumped_mass" or candidate.parameters != ("mass", "inertia")
+            or candidate.get("sites") is not None):
+        raise InputError(f"candidate {candidate.label!r} ({candidate.kind}, parameters "
+                         f"{candidate.parameters}) is not a mass at one site. Fix: pass a "
+                         "lumped_mass candidate with parameters mass, inertia.")
+    named = candidate.location.grids
+    grids = named
+    if len(named) == 1:
+        grids = tuple(sorted(_around(model, _grids_and_masks(model)[2]).get(named[0], named)))
+    if len(grids) < 2:
+        raise InputError(f"candidate {candidate.label!r}: grid {named[0]} has no free "
+                         "neighbour, so its mass has no other distribution. Fix: keep the "
+                         "named form.")
+    lo, hi, ref = PARAMETER_RANGES["lumped_mass"]["mass"]
+    n = len(grids)
+    out = replace(candidate, location=Location(grids=grids),
+                  label="grids " + ", ".join(map(str, grids)),
+                  parameters=tuple(f"mass_{g}" for g in grids) + ("inertia",),
+                  lower=(lo,) * n + candidate.lower[1:], upper=(hi,) * n + candidate.upper[1:],
+                  reference=(ref,) * n + candidate.reference[1:],
+                  detail=candidate.detail + (("per_grid", True),))
+    shares = np.where(np.isin(grids, named), x[0] / len(named), 0.0)
+    return out, np.append(shares, x[1])
 
 
 def every_direction(model: FEModel, candidate: Candidate, values) -> tuple[Candidate, np.ndarray]:

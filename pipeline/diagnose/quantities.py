@@ -12,7 +12,10 @@ named effect gives 1.65 %. So the verdict also carries what was added, as the wr
 ``lumped_mass``
     ``mass``: the mass added, in all (deck mass units, before PARAM WTMASS); ``mass_per_grid``
     and ``inertia_per_grid`` (I11 = I22 = I33 of each CONM2, mass x length^2): the equal shares
-    on the grids of ``location``; ``radius_of_gyration`` (length).
+    on the grids of ``location``, or, with one mass per grid (``per_grid``,
+    :func:`pipeline.diagnose.effects.distributed`), ``mass_at_<g>`` for each grid g (each
+    CONM2's I11 = I22 = I33 its mass x ``radius_of_gyration`` ^ 2); ``radius_of_gyration``
+    (length).
 ``joint_flexibility``
     ``K1`` .. ``K6``: the CBUSH's stiffness per component in basic axes (force / length for
     1-3, force x length / radian for 4-6); a joint one-sided on a dependent grid uses those of
@@ -38,11 +41,16 @@ from pipeline.diagnose.mirror import site_values
 def _one_site(candidate, x) -> dict:
     kind = candidate.kind
     if kind == "lumped_mass":
-        n = len(candidate.location.grids)
-        mass, length = x[0] * candidate.get("total_mass"), candidate.get("length")
-        return {"mass": mass, "mass_per_grid": mass / n,
-                "inertia_per_grid": mass / n * x[1] * length ** 2,
-                "radius_of_gyration": float(np.sqrt(x[1])) * length}
+        total, length = candidate.get("total_mass"), candidate.get("length")
+        grids = candidate.location.grids
+        shares = (x[:-1] if candidate.get("per_grid") else np.full(len(grids), x[0] / len(grids)))
+        out = {"mass": float(np.sum(shares)) * total}
+        if candidate.get("per_grid"):
+            out.update({f"mass_at_{g}": float(m) * total for g, m in zip(grids, shares)})
+        else:
+            out.update(mass_per_grid=out["mass"] / len(grids),
+                       inertia_per_grid=out["mass"] / len(grids) * x[1] * length ** 2)
+        return {**out, "radius_of_gyration": float(np.sqrt(x[-1])) * length}
     if kind == "joint_flexibility":
         c = x if x.size == len(JOINT_DIRECTIONS) else component_compliances(x)
         k_ref = np.repeat([candidate.get("k_translation"), candidate.get("k_rotation")], 3)

@@ -181,7 +181,8 @@ class DiagnoseResult:
         ``gap_after``; the last such round's is ``gap_after``) and ``nominal`` (its model's nominal
         parameters, as the top-level ``nominal``), else null; ``detailed`` (when the named
         effect was added in its detailed form, :mod:`pipeline.diagnose.detail`, a joint with
-        one compliance per CBUSH component or a support spring in every free direction: its
+        one compliance per CBUSH component, a support spring in every free direction or a mass
+        with one share per grid of its neighbourhood: its
         ``parameters``, ``chi2`` and ``bic`` and the named form's ``named_chi2`` and
         ``named_bic``; the effect's parameters are then the detailed ones); ``neighbours``
         (when a named joint was compared with its neighbouring joints,

@@ -107,7 +107,8 @@ def within_scatter(model: FEModel, candidate, values, scatter: float) -> bool:
         cm = model.masses
         local = min(float(cm.mass[np.isin(cm.grid, site.location.grids)].sum())
                     for site in sites(candidate))
-        return bool(x["mass"] * candidate.get("total_mass") <= limit * local)
+        mass = sum(v for name, v in x.items() if name.startswith("mass"))   # or per grid
+        return bool(mass * candidate.get("total_mass") <= limit * local)
     if candidate.kind == "member_taper":
         change = (1.0 + x["scale"]) ** 4 * (1.0 + x.get("taper", 0.0) / 2.0) ** 4 - 1.0
         return bool(change <= limit)

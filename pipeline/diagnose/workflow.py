@@ -132,7 +132,9 @@ def _prefer_one_side(problem: Problem, theta, effects, rows, fits, none, n_data:
 def unnamed(cands, effects) -> list:
     """The candidates none of whose sites is already named: a site is named once, a joint once
     per rigid element (a named joint's rigid element stays rigid on a new grid, so its joint
-    candidates of the next round have a location of their own).
+    candidates of the next round have a location of their own), and a mass on grids that a mass
+    named with one share per grid already covers
+    (:func:`pipeline.diagnose.effects.distributed`: its shares are free there).
 
     Parameters
     ----------
@@ -142,9 +144,12 @@ def unnamed(cands, effects) -> list:
     named = {(s.kind, s.location) for c, _ in effects for s in sites(c)}
     hung = {s.location.elements[0] for c, _ in effects for s in sites(c)
             if s.kind == "joint_flexibility"}
+    shared = [set(c.location.grids) for c, _ in effects if c.get("per_grid")]
     return [c for c in cands if not any(
         (s.kind, s.location) in named
-        or (s.kind == "joint_flexibility" and s.location.elements[0] in hung) for s in sites(c))]
+        or (s.kind == "joint_flexibility" and s.location.elements[0] in hung)
+        or (s.kind == "lumped_mass" and any(set(s.location.grids) <= g for g in shared))
+        for s in sites(c))]
 
 
 def _say(progress, text: str) -> None:

@@ -5,7 +5,7 @@ import pytest
 from pyNastran.bdf.bdf import BDF
 
 from pipeline.diagnose.apply import apply_effect, write_effect_deck
-from pipeline.diagnose.effects import candidates, directional
+from pipeline.diagnose.effects import candidates, directional, distributed
 from pipeline.diagnose.result import EffectRecord, effect_json
 from structures.bdf import read_model
 from structures.bulk_text import card
@@ -56,6 +56,29 @@ def test_lumped_mass_is_the_new_conm2s(x56_candidates, x56_cards, written, label
     assert q["radius_of_gyration"] ** 2 * q["mass_per_grid"] == \
         pytest.approx(q["inertia_per_grid"], rel=1e-12)
     assert record["sites"][0]["quantities"] == q
+
+
+def test_a_mass_per_grid_is_the_new_conm2s(x56, x56_candidates, x56_cards, written):
+    """A mass with one share per grid (pipeline.diagnose.effects.distributed): a CONM2 at each
+    grid of nonzero share carrying ``mass_at_<g>`` and I11 = I22 = I33 = its mass x r^2, none at
+    a grid of zero share, the shares summing to ``mass``."""
+    rich, _ = distributed(x56, _pick(x56_candidates, "lumped_mass", "grid 3005 spread over"),
+                          [0.013, 3.0e-4])
+    shares = np.zeros(len(rich.parameters))
+    shares[[0, 1]], shares[-1] = (0.009, 0.002), 3.0e-4
+    q = _quantities(rich, shares)["quantities"]
+    new = {m.nid: m for eid, m in written(rich, shares).masses.items()
+           if eid not in x56_cards.masses}
+    assert sorted(new) == list(rich.location.grids[:2])
+    for g, m in new.items():
+        assert m.mass == pytest.approx(q[f"mass_at_{g}"], rel=1e-12)
+        i = q[f"mass_at_{g}"] * q["radius_of_gyration"] ** 2
+        np.testing.assert_allclose(np.asarray(m.I, float), [i, 0.0, i, 0.0, 0.0, i], rtol=1e-12)
+    assert [q[f"mass_at_{g}"] for g in rich.location.grids[2:]] == [0.0] * (len(shares) - 3)
+    assert sum(m.mass for m in new.values()) == pytest.approx(q["mass"], rel=1e-12)
+    assert q["mass"] == pytest.approx(0.011 / 0.013 * _quantities(
+        _pick(x56_candidates, "lumped_mass", "grid 3005 spread over"), [0.013, 3.0e-4])
+        ["quantities"]["mass"], rel=1e-12)
 
 
 def test_joint_is_the_new_cbush_stiffness(x56_candidates, x56_cards, written):

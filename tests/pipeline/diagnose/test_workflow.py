@@ -14,7 +14,7 @@ import pytest
 
 from pipeline.case import read_case
 from pipeline.diagnose.apply import apply_effect
-from pipeline.diagnose.effects import Candidate, Location, candidates
+from pipeline.diagnose.effects import Candidate, Location, candidates, distributed
 from pipeline.diagnose import DiagnoseSettings, diagnose, preflight
 from pipeline.diagnose.inputs import configurations_from_case, settings_from_case
 from pipeline.diagnose.verdict import decide
@@ -25,7 +25,7 @@ from structures.bdf import read_model
 from structures.common.errors import InputError
 from structures.gvt import make_gvt_dataset
 from structures.suspension import rigid_body_readings
-from tests.pipeline.diagnose.truth import make_case
+from tests.pipeline.diagnose.truth import frame, make_case
 
 
 @pytest.mark.parametrize("field, value", [("kinds", ("bogus",)), ("max_effects", 0),
@@ -406,3 +406,25 @@ def test_a_named_joint_is_not_offered_again():
                    if s.kind == "joint_flexibility")
     assert any(c.location.elements == (7601,) for c in kept)
     assert any(c.kind == "lumped_mass" and c.location.grids == (5021,) for c in kept)
+
+
+def test_a_mass_per_grid_covers_its_grids(tmp_path):
+    """Named with one share per grid of 3007's neighbourhood (3006, 3007, 3008, 3107, 3207), a
+    mass leaves the next round's library without the masses on those grids alone (the point
+    masses, the spreads of 3107 and 3007 over them, and the mirror pairs with a site among
+    them: its shares are free there), as a point mass named at 3007 leaves out 3007 and its
+    pairs; a spread reaching past them (3008's, to 3009), the masses elsewhere and the other
+    kinds at those grids stay."""
+    model = read_model(frame.write_frame(tmp_path))
+    cands = candidates(model, ("lumped_mass", "boundary_stiffness"))
+    point = next(c for c in cands if c.label == "grid 3007")
+    rich, values = distributed(model, point, [0.02, 0.0])
+    kept = {c.label for c in unnamed(cands, [(rich, values)])}
+    gone = {c.label for c in cands} - kept
+    alone = {"grid 3006", "grid 3007", "grid 3008", "grid 3107", "grid 3207",
+             "grid 3107 spread over 3007, 3207", "grid 3007 spread over 3006, 3008, 3107, 3207"}
+    assert alone | {"grid 2007 and its mirror image grid 3007"} <= gone
+    assert all(c.kind == "lumped_mass" and (c.label in alone or "mirror image grid 3" in c.label)
+               for c in cands if c.label in gone)
+    assert {"grid 3008 spread over 3007, 3009, 3108, 3208", "grid 3009", "grid 3007 z",
+            "grid 2007"} <= kept
