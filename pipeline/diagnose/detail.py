@@ -82,7 +82,7 @@ least badly: on the frame blind study's mass seed 12 (15.4 and 2.9 mass units at
 of the mass on 3207. Once a mass is named it is fitted again with one mass per grid of its
 neighbourhood (:func:`pipeline.diagnose.effects.distributed`: the named grid and the free grids
 one element layer around it, or the spread's grids) and the shared (r / L)^2, refitted from
-each of the named shares and the whole mass on each grid in turn (:func:`mass_starts`, exact
+each of the named shares and the whole mass on each other grid in turn (:func:`mass_starts`, exact
 analyses), the refit of least BIC kept: chi^2 is not convex in the shares, and the start of
 least chi^2 need not lead to the least. On tests/pipeline/diagnose/test_detail.py's frame with
 0.020 and 0.006 of its mass at 3007 and 3107, the point mass at 3007 leaves chi^2 369 and the
@@ -267,13 +267,16 @@ def mass_starts(problem, effects, theta, candidate, values) -> list:
 
     Returns
     -------
-    list of (values, chi2): each start that can be analysed, (n_grids + 1,) values and their
-    chi^2, least chi^2 first (empty when none can).
+    list of (values, chi2): each distinct start that can be analysed, (n_grids + 1,) values
+    and their chi^2, least chi^2 first (empty when none can).
     """
     x0 = np.asarray(values, float)
     n = x0.size - 1
-    starts = [x0] + [np.append(np.eye(n)[i] * min(x0[:n].sum(), candidate.upper[i]), x0[n])
-                     for i in range(n)]
+    starts = [x0]
+    for i in range(n):
+        x = np.append(np.eye(n)[i] * min(x0[:n].sum(), candidate.upper[i]), x0[n])
+        if not any(np.array_equal(x, s) for s in starts):     # a point mass's own grid: once
+            starts.append(x)
     return _analysed(problem, effects, theta, candidate, starts)
 
 

@@ -238,7 +238,7 @@ def test_a_named_mass_is_fitted_with_one_share_per_grid(tmp_path):
     """Truth: the frame with 0.020 and 0.006 of its mass at grids 3007 and 3107 (a spar grid and
     the next along its chord); named: a point mass at 3007, refitted (chi^2 369 on a perfect
     test, whose truth has 0, at 0.028). The detailed form, a mass per grid of 3007's
-    neighbourhood refitted from each of the named shares and the whole mass on each grid,
+    neighbourhood refitted from each of the named shares and the whole mass on each other grid,
     reaches chi^2 below 1e-5 of the named fit's (0.0014), recovers both masses within 1 % and
     leaves the other three grids below 1e-4 (3e-5: the perfect test hardly tells a 0.1 % mass
     there); its BIC is lower."""
@@ -255,6 +255,8 @@ def test_a_named_mass_is_fitted_with_one_share_per_grid(tmp_path):
     named = refit.refit(problem, theta, (), Screened(point, np.array([0.026, 0.0]), 0.0, 0.0,
                                                       None), n_data=n, jacobian_theta=j_theta)
     assert named.chi2 > 300.0
+    starts = detail.mass_starts(problem, (), theta, *distributed(model, point, named.values))
+    assert len(starts) == 5                   # the named point mass is the whole mass at 3007
     found = detailed(problem, (), named, n_data=n, jacobian_theta=j_theta)
     assert found is not None and found.candidate.label == "grids 3006, 3007, 3008, 3107, 3207"
     assert found.chi2 < 1e-5 * named.chi2 and found.bic < named.bic
