@@ -234,6 +234,24 @@ def test_distributed_keeps_the_named_mass_and_frees_its_neighbourhood(tmp_path):
             distributed(model, cands[label], cands[label].reference)
 
 
+def _named_mass(tmp_path, label: str, shares: dict, named_mass: float):
+    """A perfect test of the frame with ``shares`` (grid: mass over the total) added, and the
+    named ``lumped_mass`` at ``label`` refitted from ``named_mass``: (problem, named fit, its
+    per-grid form with the truth's values, n, d r / d theta = 0)."""
+    model = read_model(frame.write_frame(tmp_path))
+    cand = {c.label: c for c in candidates(model, ("lumped_mass",))}[label]
+    rich, _ = distributed(model, cand, [named_mass, 0.0])
+    truth = np.array([shares.get(g, 0.0) for g in rich.location.grids] + [0.0])
+    _, ref = perfect_reference(apply_effect(model, rich, truth), model)
+    problem = Problem.build([ref], [model], 0.03)
+    theta = np.zeros(len(problem.names))
+    n = problem.residual(theta, problem.evaluate(theta)).size
+    j_theta = np.zeros((n, theta.size))                    # the nominal parameters are exact
+    named = refit.refit(problem, theta, (), Screened(cand, np.array([named_mass, 0.0]), 0.0, 0.0,
+                                                      None), n_data=n, jacobian_theta=j_theta)
+    return problem, named, (rich, truth), n, j_theta
+
+
 def test_a_named_mass_is_fitted_with_one_share_per_grid(tmp_path):
     """Truth: the frame with 0.020 and 0.006 of its mass at grids 3007 and 3107 (a spar grid and
     the next along its chord); named: a point mass at 3007, refitted (chi^2 369 on a perfect
@@ -242,20 +260,11 @@ def test_a_named_mass_is_fitted_with_one_share_per_grid(tmp_path):
     reaches chi^2 below 1e-5 of the named fit's (0.0014), recovers both masses within 1 % and
     leaves the other three grids below 1e-4 (3e-5: the perfect test hardly tells a 0.1 % mass
     there); its BIC is lower."""
-    model = read_model(frame.write_frame(tmp_path))
-    point = {c.label: c for c in candidates(model, ("lumped_mass",))}["grid 3007"]
-    rich, _ = distributed(model, point, [0.02, 0.0])
-    truth = np.zeros(len(rich.parameters))
-    truth[[1, 3]] = 0.020, 0.006
-    _, ref = perfect_reference(apply_effect(model, rich, truth), model)
-    problem = Problem.build([ref], [model], 0.03)
-    theta = np.zeros(len(problem.names))
-    n = problem.residual(theta, problem.evaluate(theta)).size
-    j_theta = np.zeros((n, theta.size))
-    named = refit.refit(problem, theta, (), Screened(point, np.array([0.026, 0.0]), 0.0, 0.0,
-                                                      None), n_data=n, jacobian_theta=j_theta)
+    problem, named, (_, truth), n, j_theta = _named_mass(
+        tmp_path, "grid 3007", {3007: 0.020, 3107: 0.006}, 0.026)
     assert named.chi2 > 300.0
-    starts = detail.mass_starts(problem, (), theta, *distributed(model, point, named.values))
+    starts = detail.mass_starts(problem, (), named.theta, *distributed(
+        problem.model(0, named.theta, ()), named.candidate, named.values))
     assert len(starts) == 5                   # the named point mass is the whole mass at 3007
     found = detailed(problem, (), named, n_data=n, jacobian_theta=j_theta)
     assert found is not None and found.candidate.label == "grids 3006, 3007, 3008, 3107, 3207"
@@ -271,24 +280,15 @@ def test_a_named_mass_is_refitted_from_every_start(tmp_path):
     (chi^2 2057, the mass all at 3107); the detailed form refits from every start and keeps the
     least BIC: chi^2 below 1 (0.11 from the whole mass at 3007), both masses within 2 % (0.5 %),
     3207 below 1e-4."""
-    model = read_model(frame.write_frame(tmp_path))
-    spread = {c.label: c for c in candidates(model, ("lumped_mass",))}[
-        "grid 3107 spread over 3007, 3207"]
-    rich, _ = distributed(model, spread, [0.03, 0.0])
-    truth = np.array([0.010, 0.015, 0.0, 0.0])
-    _, ref = perfect_reference(apply_effect(model, rich, truth), model)
-    problem = Problem.build([ref], [model], 0.03)
-    theta = np.zeros(len(problem.names))
-    n = problem.residual(theta, problem.evaluate(theta)).size
-    j_theta = np.zeros((n, theta.size))
-    named = refit.refit(problem, theta, (), Screened(spread, np.array([0.025, 0.0]), 0.0, 0.0,
-                                                      None), n_data=n, jacobian_theta=j_theta)
+    problem, named, (rich, truth), n, j_theta = _named_mass(
+        tmp_path, "grid 3107 spread over 3007, 3207", {3007: 0.010, 3107: 0.015}, 0.025)
     assert named.chi2 > 3000.0
-    starts = detail.mass_starts(problem, (), theta, rich,
-                                np.append(np.full(3, named.values[0] / 3), named.values[1]))
+    starts = detail.mass_starts(problem, (), named.theta, *distributed(
+        problem.model(0, named.theta, ()), named.candidate, named.values))
     assert len(starts) == 4 and starts[0][1] == min(c for _, c in starts)
-    first = refit.refit(problem, theta, (), Screened(rich, starts[0][0], starts[0][1], 0.0, None),
-                        n_data=n, jacobian_theta=j_theta)
+    first = refit.refit(problem, named.theta, (),
+                        Screened(rich, starts[0][0], starts[0][1], 0.0, None), n_data=n,
+                        jacobian_theta=j_theta)
     assert first.chi2 > 1000.0                     # the least chi^2 start's own valley
     found = detailed(problem, (), named, n_data=n, jacobian_theta=j_theta)
     assert found is not None and found.candidate.label == "grids 3007, 3107, 3207"
