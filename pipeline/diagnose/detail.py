@@ -89,7 +89,7 @@ least chi^2 need not lead to the least. On tests/pipeline/diagnose/test_detail.p
 detailed form 0.0014, the two masses within 1 %. On the frame blind study's mass seed 12 (that
 truth, 15.4 and 2.9 mass units at 3007 and 3107, named as the spread above) the named shares
 start at chi^2 1328 and refit to 1166, the whole mass at 3007 starts at 2613 and refits to 747;
-from the start of least chi^2 alone (before this) the workflow added the 1166 fit.
+refitted from the start of least chi^2 alone, the workflow would add the 1166 fit.
 
 The detailed joint, spring or mass replaces the named one when it lowers BIC = chi^2 + p ln n
 (Schwarz 1978) over the training data: four more parameters (a joint), one or two (a spring) or
