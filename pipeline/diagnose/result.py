@@ -155,9 +155,10 @@ class DiagnoseResult:
         effects (``gap_before``'s model).
     rounds : tuple of mapping, per look-again round: its ``verdict`` and the ``reason``
         (:func:`pipeline.diagnose.verdict.decide`: ``gain``, ``no_gain``, ``runner_up``,
-        ``held_out``, ``past_veto`` or ``held_out_reversal``, the last two when the held-out
+        ``held_out``, ``past_veto``, ``held_out_reversal``, the last two when the held-out
         modes took part in naming (past a veto of the best, or reversing the training
-        ranking); before the load path and bound checks, which can
+        ranking), or ``unconfirmed`` (a later round's best that the held-out modes do not
+        support by the margin: not named); before the load path and bound checks, which can
         still turn an ``effect`` into ``unexplained``, and the stability check, which makes it
         ``unexplained`` with the reason ``unstable``), ``vetoed`` (the labels of the fits
         the held-out modes contradict by more than the margin), ``n_data`` (training

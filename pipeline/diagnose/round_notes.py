@@ -75,6 +75,16 @@ def past_veto_note(k: int, cand, vetoed, lead: float, evidence: float) -> str:
             "its gap on them is no blind check.")
 
 
+def unconfirmed_note(k: int, cand, lead: float, evidence: float, margin: float) -> str:
+    """A later round's best fit that beats the rest on the training modes but that the held-out
+    modes do not support by the margin (reason ``unconfirmed``)."""
+    return (f"round {k + 1}: {cand.kind} {cand.label} beats the rest on the training modes by "
+            f"{lead:.1f} but the held-out modes do not support it by the margin {margin:g} "
+            f"(evidence {evidence:+.1f}): after a named effect the remainder is mostly the "
+            "nominal scatter, which a local change mimics on the modes it is fitted to, so a "
+            "later round names only what the modes it did not see confirm; not named.")
+
+
 def reversal_note(k: int, fits, best: int, runner, lead: float, scored, n_data: int,
                   n_candidates: int, held_out, c: float, verdict: str) -> str:
     """A round whose held-out modes reversed the training ranking (reason

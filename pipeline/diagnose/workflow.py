@@ -16,7 +16,9 @@
 6. Look again: the named effect, its fit continued to convergence
    (:func:`pipeline.diagnose.refit.polish`), is added and steps 4-5 repeat, up to
    ``settings.max_effects`` (a site already named is not offered again, alone or in a mirror
-   pair). The gap is then cross-validated (:mod:`pipeline.diagnose.crossval`): the calibration
+   pair; a later round's fit must also be supported by the held-out modes by the margin,
+   :func:`decide`'s ``confirm``). The gap is then cross-validated
+   (:mod:`pipeline.diagnose.crossval`): the calibration
    and the named effects' fits are repeated on the other splits of the modes, so that every
    paired mode is judged once by a fit that did not see it.
 
@@ -63,7 +65,8 @@ from pipeline.diagnose.preflight import DiagnoseSettings, check_inputs, checked
 from pipeline.diagnose.result import DiagnoseResult, EffectRecord, suspension_effects
 from pipeline.diagnose.round_notes import (bound_note, held_out_veto_note, load_path_note,
                                            located_note, past_veto_note, reversal_note,
-                                           rich_path_note, undetermined_note)
+                                           rich_path_note, unconfirmed_note,
+                                           undetermined_note)
 from pipeline.diagnose.rounds import (against_path, chi2_split, none_fit, ranking_table,
                                       round_record, score_rows, sites_elsewhere)
 from pipeline.diagnose.refit import bound_release, polish, refit
@@ -248,7 +251,8 @@ def diagnose(configurations, settings: DiagnoseSettings = DiagnoseSettings(), *,
             alike = cache(lambda i, j: indistinguishable(problem, fits[i], fits[j]))
             verdict, best, runner, lead, reason, c = decide(
                 scored[0], scored[1], settings.margin, n_data, len(cands),
-                n_modal=scored[2], held_out=(modes_none, modes, entries), alike=alike)
+                n_modal=scored[2], held_out=(modes_none, modes, entries), alike=alike,
+                confirm=k > 0)
             same = [] if best is None else [fits[i].candidate.label for i in range(len(fits))
                                             if i != best and alike(best, i)]
             if same and reason != "no_gain":
@@ -301,6 +305,10 @@ def diagnose(configurations, settings: DiagnoseSettings = DiagnoseSettings(), *,
             if reason == "held_out":
                 notes.append(held_out_veto_note(k, fits[best].candidate, none, fits[best],
                                                 modes_none, modes[best], rounds[-1]["best"]))
+            if reason == "unconfirmed":
+                notes.append(unconfirmed_note(k, fits[best].candidate, lead,
+                                              rounds[-1]["best"]["held_out_evidence"],
+                                              settings.margin))
             if reason == "past_veto" and verdict == "effect":
                 notes.append(past_veto_note(k, fits[best].candidate, rounds[-1]["vetoed"], lead,
                                             rounds[-1]["best"]["held_out_evidence"]))

@@ -6,7 +6,7 @@ import numpy as np
 
 from pipeline.diagnose.round_notes import (bound_note, held_out_veto_note, load_path_note,
                                            located_note, past_veto_note, reversal_note,
-                                           undetermined_note)
+                                           unconfirmed_note, undetermined_note)
 
 MASS = SimpleNamespace(kind="lumped_mass", label="grid 3009")
 JOINT = SimpleNamespace(kind="joint_flexibility", label="RBE2 7003")
@@ -45,6 +45,13 @@ def test_past_veto_note_lists_the_vetoed_and_the_evidence():
     text = past_veto_note(2, JOINT, ["lumped_mass grid 5", "member_taper PID 7"], 14.2, 3.25)
     assert text.startswith("round 3") and "grid 5; member_taper PID 7" in text
     assert "by 14.2" in text and "+3.2" in text
+
+
+def test_unconfirmed_note_quotes_the_lead_and_the_evidence():
+    text = unconfirmed_note(1, JOINT, 168.2, -3.6, 10.0)
+    assert text.startswith("round 2: joint_flexibility RBE2 7003 beats the rest")
+    assert "by 168.2" in text and "margin 10" in text and "(evidence -3.6)" in text
+    assert text.endswith("not named.")
 
 
 def test_reversal_note_quotes_both_rankings():

@@ -126,6 +126,8 @@ def test_past_a_veto_the_next_fit_is_named_only_when_the_held_out_modes_support_
                                                     n_modal=N, held_out=supported)
     assert (verdict, best, runner, reason, c) == ("effect", 1, 2, "past_veto", 1.0)
     assert lead == pytest.approx(50.0, rel=1e-12)
+    assert decide((600.0, 0.0, 2), table(), 10.0, N, n_modal=N, held_out=supported,
+                  confirm=True)[:5] == (verdict, best, runner, lead, reason)
     weak = (none_modes, [mass, np.array([18.0, 22.0, 28.0]), taper], entries)
     verdict, best, _, _, reason, _ = decide((600.0, 0.0, 2), table(), 10.0, N,
                                             n_modal=N, held_out=weak)
@@ -137,6 +139,36 @@ def test_past_a_veto_the_next_fit_is_named_only_when_the_held_out_modes_support_
                   10.0, N, n_modal=N, held_out=supported)
     assert near[:3] + near[4:5] == ("effect", 1, None, "past_veto")
     assert near[3] == pytest.approx(200.0 - LN, rel=1e-12)
+
+
+def test_a_later_round_names_only_what_the_held_out_modes_support():
+    """Training scores (c = max(1, 370 / 397) = 1): mass 370 + 3 ln n, joint 420 + 3 ln n,
+    "none" 450 + 2 ln n: the mass leads the joint by 50 and "none" by 80 - ln n. Three held-out
+    modes of 10 entries (limit 29.588 each), "none" 15, 20, 23 (58; the goodness of fit holds:
+    450 <= chi2_0.999(398) = 490.9 and 508 <= chi2_0.999(428) = 524.1). The mass at 14, 18, 21
+    (evidence 58 - 53 = +5) is named in a first round; in a later round (confirm) it is not,
+    and the round is "none" (or "unexplained" when "none" fails the goodness of fit: 600).
+    At 5, 8, 10 (evidence +35 > 10) a later round names it as a first round does. Past a veto
+    the support is already required: that rule is unchanged."""
+    entries = np.array([10, 10, 10])
+    none_modes = np.array([15.0, 20.0, 23.0])
+    fits = [("lumped_mass", 1, 370.0, 0.0, 3), ("joint_flexibility", 2, 420.0, 0.0, 3)]
+    joint = none_modes.copy()
+    weak = (none_modes, [np.array([14.0, 18.0, 21.0]), joint], entries)
+    strong = (none_modes, [np.array([5.0, 8.0, 10.0]), joint], entries)
+    first = decide((450.0, 0.0, 2), fits, 10.0, N, n_modal=N, held_out=weak)
+    assert first[:3] + first[4:5] == ("effect", 0, 1, "gain")
+    assert first[3] == pytest.approx(50.0, rel=1e-12)
+    later = decide((450.0, 0.0, 2), fits, 10.0, N, n_modal=N, held_out=weak, confirm=True)
+    assert later[:3] + later[4:] == ("none", 0, 1, "unconfirmed", 1.0)
+    assert later[3] == pytest.approx(50.0, rel=1e-12)
+    failing = decide((600.0, 0.0, 2), fits, 10.0, N, n_modal=N, held_out=weak, confirm=True)
+    assert failing[::4] == ("unexplained", "unconfirmed")
+    assert decide((450.0, 0.0, 2), fits, 10.0, N, n_modal=N, held_out=strong,
+                  confirm=True)[:3] == ("effect", 0, 1)
+    # without held-out modes there is nothing to confirm with: the training gain names it
+    assert decide((450.0, 0.0, 2), fits, 10.0, N, n_modal=N,
+                  confirm=True)[::4] == ("effect", "gain")
 
 
 def test_held_out_modes_that_reverse_the_training_ranking_name_the_other_fit():
