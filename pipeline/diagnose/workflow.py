@@ -18,9 +18,9 @@
    ``settings.max_effects`` (a site already named is not offered again, alone or in a mirror
    pair; a later round's fit must also be supported by the held-out modes by the margin,
    :func:`decide`'s ``confirm``). The gap is then cross-validated
-   (:mod:`pipeline.diagnose.crossval`): the calibration
-   and the named effects' fits are repeated on the other splits of the modes, so that every
-   paired mode is judged once by a fit that did not see it.
+   (:mod:`pipeline.diagnose.crossval`): the calibration and the named effects' fits are
+   repeated on the other splits of the modes, so that every paired mode is judged once by a
+   fit that did not see it.
 
 The verdict of each round is :func:`pipeline.diagnose.verdict.decide`; an effect it names must
 also fit inside its bounds (a parameter on a non-zero bound,
