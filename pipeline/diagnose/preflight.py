@@ -67,6 +67,13 @@ class ConfigurationData:
         object.__setattr__(self, "deck", Path(self.deck))
 
 
+#: The largest value each fraction setting of :class:`DiagnoseSettings` takes: beyond them the
+#: test or the model says nothing (a frequency known to 20 %, a shape's noise as large as the
+#: shape, every section quantity off by half), and a value written in per cent (1 for 1 %) is
+#: caught.
+FRACTION_LIMITS = {"frequency_noise": 0.2, "shape_noise": 1.0, "model_scatter": 0.5}
+
+
 @dataclass(frozen=True)
 class DiagnoseSettings:
     """Settings of :func:`pipeline.diagnose.diagnose`.
@@ -119,6 +126,11 @@ class DiagnoseSettings:
                 raise InputError(f"diagnose: {name} = {value!r} must be positive or None.")
         if not (np.isfinite(self.model_scatter) and self.model_scatter >= 0):
             raise InputError(f"diagnose: model_scatter = {self.model_scatter!r} must be >= 0.")
+        for name, largest in FRACTION_LIMITS.items():
+            value = getattr(self, name)
+            if value is not None and value > largest:
+                raise InputError(f"diagnose: {name} = {value!r} is a fraction (0.01 = 1 %) and "
+                                 f"must be at most {largest:g}. Fix: write it as a fraction.")
         if self.nmodes is not None and not (isinstance(self.nmodes, (int, np.integer))
                                             and self.nmodes > 0):
             raise InputError(f"diagnose: nmodes = {self.nmodes!r} must be a positive integer.")
@@ -155,6 +167,15 @@ def preflight(configurations, settings: DiagnoseSettings = DiagnoseSettings()) -
 
 
 def check_inputs(configurations: tuple, settings) -> None:
+    """The checks of :func:`preflight` that need no computation: configurations given, named
+    once, the settings a :class:`DiagnoseSettings` and ``nmodes`` (when set) no fewer than any
+    configuration's test modes.
+
+    Raises
+    ------
+    InputError
+        Naming the configuration, the counts and the fix.
+    """
     if not configurations:
         raise InputError("diagnose: no configurations. Fix: give at least one ConfigurationData.")
     names = [c.name for c in configurations]
@@ -162,6 +183,14 @@ def check_inputs(configurations: tuple, settings) -> None:
         raise InputError(f"diagnose: configuration names {names} repeat. Fix: name each once.")
     if not isinstance(settings, DiagnoseSettings):
         raise InputError("diagnose: settings must be a DiagnoseSettings.")
+    for data in configurations:
+        n_test = data.gvt.sizes["mode"]
+        if settings.nmodes is not None and settings.nmodes < n_test:
+            raise InputError(f"diagnose: configuration {data.name}: its GVT lists {n_test} test "
+                             f"modes but nmodes = {settings.nmodes} analysis modes (rigid-body "
+                             f"modes among them) cannot pair them. Fix: raise [diagnose] nmodes "
+                             f"to at least {n_test + N_RIGID}, or leave it out "
+                             "(2 x elastic test modes + 6).")
 
 
 def checked(configurations, settings) -> tuple:

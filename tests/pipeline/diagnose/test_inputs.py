@@ -76,6 +76,10 @@ def test_flutter_defaults_to_the_cases_flutter_table(folder):
     ("refit = 0", ("refit = 0 must be an integer >= 1",)),
     ("nmodes = 0", ("nmodes = 0 must be a positive integer",)),
     ("model_scatter = -0.1", ("model_scatter = -0.1 must be >= 0",)),
+    ("frequency_noise = 1.0", ("frequency_noise = 1.0 is a fraction (0.01 = 1 %)",
+                               "at most 0.2", "Fix")),
+    ("shape_noise = 5", ("shape_noise = 5.0 is a fraction", "at most 1", "Fix")),
+    ("model_scatter = 3", ("model_scatter = 3.0 is a fraction", "at most 0.5", "Fix")),
     ("flutter = true", ("flutter = true needs the case's [flutter]", "Fix")),
 ])
 def test_bad_table_raises_naming_the_key_and_the_fix(folder, body, needles):

@@ -3,6 +3,7 @@ end-to-end blind cases of the truth generator's frame (tests/pipeline/diagnose/t
 imported by the workflow). The verdict rules are in test_verdict.py."""
 from __future__ import annotations
 
+import importlib
 import json
 from dataclasses import replace
 from math import log
@@ -147,7 +148,20 @@ def test_preflight_checks_the_data_without_screening(tmp_path):
     assert int(refs[0].train.sum()) == 14 and refs[0].has_shapes
     assert any("sensor DOFs" in n for n in notes)
     with pytest.raises(InputError, match="nmodes"):
+        preflight(confs, DiagnoseSettings(nmodes=24))
+
+
+def test_too_few_analysis_modes_refused_before_any_computation(tmp_path, monkeypatch):
+    """nmodes below the test modes' count is refused from the settings and the GVT alone: the
+    modal solve is never reached."""
+    preflight_module = importlib.import_module("pipeline.diagnose.preflight")
+    case = read_case(make_case("frame", "none", 0, tmp_path / "none_0"))
+    confs = configurations_from_case(case)
+    monkeypatch.setattr(preflight_module, "compute_modes", lambda *a: pytest.fail("solved"))
+    with pytest.raises(InputError) as err:
         preflight(confs, DiagnoseSettings(nmodes=10))
+    for needle in ("configuration frame", "20 test modes", "nmodes = 10", "at least 26", "Fix"):
+        assert needle in str(err.value), (needle, str(err.value))
     with pytest.raises(InputError, match="repeat"):
         preflight(confs * 2, DiagnoseSettings())
 
