@@ -156,8 +156,8 @@ def read_measured_mass(path) -> dict:
     Raises
     ------
     InputError
-        Naming the file, the key and the fix for a missing file, bad JSON, unknown keys or values
-        that are not finite numbers of the right count.
+        Naming the file, the key and the fix for a missing file, bad JSON, a list or an empty
+        object, unknown keys or values that are not finite numbers of the right count.
     """
     import json
     from pathlib import Path
@@ -172,10 +172,15 @@ def read_measured_mass(path) -> dict:
     except (ValueError, UnicodeDecodeError) as exc:
         raise InputError(f"file {path}: not valid JSON ({exc}). Fix: write {form}.") from None
     lengths = {"weight": None, "cg": 3, "inertia_cg": 6}
-    if not isinstance(data, dict) or set(data) - set(lengths):
-        raise InputError(f"file {path}: unknown keys "
-                         f"{sorted(set(data) - set(lengths)) if isinstance(data, dict) else data!r}"
-                         f"; valid: {sorted(lengths)}. Fix: write {form}.")
+    if not isinstance(data, dict):
+        raise InputError(f"file {path}: holds a JSON {type(data).__name__}, not an object of "
+                         f"named quantities. Fix: write {form}.")
+    if set(data) - set(lengths):
+        raise InputError(f"file {path}: unknown keys {sorted(set(data) - set(lengths))}; valid: "
+                         f"{sorted(lengths)}. Fix: write {form}.")
+    if not data:
+        raise InputError(f"file {path}: names no quantity. Fix: write {form}, or leave "
+                         "measured_mass out of the case.")
     out = {}
     for key, n in lengths.items():
         if key not in data:

@@ -88,7 +88,9 @@ def test_measured_mass_json(tmp_path):
     for text, words in (('{"weight": 1.0, "cog": [1, 2, 3]}', "unknown keys ['cog']"),
                         ('{"cg": [1.0, 2.0]}', "cg = [1.0, 2.0] is not a list of 3 finite"),
                         ('{"weight": "heavy"}', "weight = 'heavy' is not a finite number"),
-                        ('{"weight": 1.0,}', "not valid JSON")):
+                        ('{"weight": 1.0,}', "not valid JSON"),
+                        ('[1.0, 2.0]', "holds a JSON list, not an object"),
+                        ('{}', "names no quantity")):
         path.write_text(text)
         with pytest.raises(InputError, match=re.escape(words)):
             read_measured_mass(path)
