@@ -9,7 +9,8 @@ identified from the test's suspension modes, ``<config>_as_tested.bdf`` adds it)
 and parameters, the best five candidates and the gap before -> after; ``--json FILE`` also writes
 the verdict record there. The case and its ``[diagnose]`` table, every deck and GVT file and the
 output paths are checked, and the diagnosis's data checks made
-(pipeline.diagnose.preflight), before anything is computed.
+(pipeline.diagnose.inputs.check_case_data, in pipeline.run.run_case), before anything is
+computed.
 """
 from __future__ import annotations
 
@@ -30,8 +31,6 @@ def add_parser(sub) -> None:
 
 def run(args) -> int:
     from pipeline.cmd_run import case_and_run_folder
-    from pipeline.diagnose import preflight
-    from pipeline.diagnose.inputs import configurations_from_case, settings_from_case
     from pipeline.diagnose.outputs import FOLDER, verdict_summary
     from pipeline.run import run_case
     from structures.common.files import check_output, write_json
@@ -41,10 +40,6 @@ def run(args) -> int:
     if args.json:
         check_output(args.json, folder=False, option="--json")
     check_output(out, folder=True)
-    # every deck and GVT file read, and every data check of the diagnosis (pairing, sensor DOFs,
-    # noise estimate, measured mass) made, before any stage computes
-    settings = settings_from_case(case)
-    preflight(configurations_from_case(case), settings)
     run_case(case, out, diagnose_only=True)
     record = json.loads((out / FOLDER / "diagnose.json").read_text())
     print(verdict_summary(record, unit_labels(case.units).velocity))

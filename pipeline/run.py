@@ -82,11 +82,21 @@ def run_case(case, out_dir, log=None, from_stage: str | None = None,
     diagnose_only : bool
         Bring the ``diagnose`` stage and the stage-0 stages it reads up to date and stop
         (``pipeline diagnose``); returns the run folder.
+
+    Raises
+    ------
+    InputError
+        Before any stage runs: a flutter request the decks cannot meet and, when the diagnosis
+        is among the stages, any data check of it
+        (:func:`pipeline.diagnose.inputs.check_case_data`).
     """
     from pipeline.chain import check_flutter_requests
+    from pipeline.diagnose.inputs import check_case_data
 
     check_flutter_requests(case)
     out = check_output(out_dir, folder=True)
+    if diagnose_only or (case.diagnose is not None and not baseline_only):
+        check_case_data(case)        # every deck and GVT file read, and checked with the model
     created = [p for p in (out, *out.parents) if not p.exists()]
     out.mkdir(parents=True, exist_ok=True)
     display = Display()

@@ -157,3 +157,29 @@ def configurations_from_case(case) -> tuple:
                                      measured_mass=dict(c.measured_mass) or None,
                                      deck=Path(c.deck)))
     return tuple(out)
+
+
+def check_case_data(case) -> None:
+    """Every data check of the diagnosis (:func:`pipeline.diagnose.preflight`: the settings
+    against the test, analysis modes, pairing, sensor DOFs, the shape-noise estimate, the
+    measured mass) on what ``case`` names, before any stage of ``pipeline diagnose`` or of a
+    ``pipeline run`` with a ``[diagnose]`` table computes.
+
+    Parameters
+    ----------
+    case : pipeline.case.Case
+
+    Raises
+    ------
+    InputError
+        As :func:`configurations_from_case`, and the preflight's errors prefixed with the case
+        file.
+    """
+    from pipeline.diagnose import preflight
+
+    settings = settings_from_case(case)
+    configurations = configurations_from_case(case)
+    try:
+        preflight(configurations, settings)
+    except InputError as exc:
+        raise InputError(f"case {case.path}: {exc}") from None

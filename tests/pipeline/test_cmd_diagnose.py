@@ -71,10 +71,21 @@ def test_missing_case(tmp_path, capsys):
     ("[diagnose]\nkinds = [\"mass\"]\n", ("kinds ['mass'] not in", "lumped_mass", "Fix")),
     ("[diagnose]\nfrequency_noise = -0.01\n", ("frequency_noise = -0.01 must be a positive",)),
     ("[diagnose]\nflutter = true\n", ("flutter = true", "[flutter]", "Fix")),
+    ("[diagnose]\nfrequency_noise = 1\n", ("frequency_noise = 1.0 is a fraction", "Fix")),
+    ("[diagnose]\nnmodes = 8\n", ("12 test modes", "nmodes = 8", "at least 18", "Fix")),
 ])
 def test_bad_diagnose_table(folder, capsys, body, needles):
     path = case_file(folder, body)
     failed(["diagnose", path, "--out", folder / "run"], capsys, str(path), *needles)
+    assert not (folder / "run").exists()
+
+
+def test_pipeline_run_checks_the_diagnosis_data_before_any_stage(folder, capsys):
+    """``pipeline run`` with a ``[diagnose]`` table makes the diagnosis's data checks first:
+    too few analysis modes for the test fails before stage 0, leaving no run folder."""
+    path = case_file(folder, "[diagnose]\nnmodes = 8\n")
+    failed(["run", path, "--out", folder / "run"], capsys, str(path), "12 test modes",
+           "nmodes = 8", "Fix")
     assert not (folder / "run").exists()
 
 
