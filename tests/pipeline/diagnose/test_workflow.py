@@ -140,7 +140,8 @@ def test_suspension_modes_in_the_test_data_are_left_out(tmp_path):
 
 def test_preflight_checks_the_data_without_screening(tmp_path):
     """The frame's 20 test modes: one reference with every mode paired, the training split of
-    holdout 3 (modes 3, 6, ... held out: 14 train), notes; too few analysis modes refused."""
+    holdout 3 (modes 3, 6, ... held out: 14 train), notes; too few elastic analysis modes (24
+    modes, 6 of them rigid) refused after the modal solve; repeated names refused."""
     case = read_case(make_case("frame", "none", 0, tmp_path / "none_0"))
     confs = configurations_from_case(case)
     refs, notes = preflight(confs, DiagnoseSettings())
@@ -149,6 +150,8 @@ def test_preflight_checks_the_data_without_screening(tmp_path):
     assert any("sensor DOFs" in n for n in notes)
     with pytest.raises(InputError, match="nmodes"):
         preflight(confs, DiagnoseSettings(nmodes=24))
+    with pytest.raises(InputError, match="repeat"):
+        preflight(confs * 2, DiagnoseSettings())
 
 
 def test_too_few_analysis_modes_refused_before_any_computation(tmp_path, monkeypatch):
@@ -162,8 +165,6 @@ def test_too_few_analysis_modes_refused_before_any_computation(tmp_path, monkeyp
         preflight(confs, DiagnoseSettings(nmodes=10))
     for needle in ("configuration frame", "20 test modes", "nmodes = 10", "at least 26", "Fix"):
         assert needle in str(err.value), (needle, str(err.value))
-    with pytest.raises(InputError, match="repeat"):
-        preflight(confs * 2, DiagnoseSettings())
 
 
 def _rows(modal: float, stated: float, n: int = 100, n_modal: int = 90) -> np.ndarray:
