@@ -210,8 +210,54 @@ def check_measured_mass(measured: Mapping, where: str = "measured mass propertie
             raise InputError(f"{where}: {name} = {value!r} is not a finite number.")
         out[name] = float(value)
     if "weight" in out and not out["weight"] > 0:
-        raise InputError(f"{where}: weight = {out['weight']} must be positive.")
+        raise InputError(f"{where}: weight = {out['weight']} must be positive. Fix: give the "
+                         "measured weight in the deck's units (mass / PARAM WTMASS).")
+    _check_inertia(out, where)
     return out
+
+
+#: How far below zero a second moment of mass implied by measured moments and products of
+#: inertia may fall, as a fraction of the largest moment: swing tests measure moments to a few
+#: per cent (2 % is what the diagnosis assumes), so a flat body's near-zero second moment can
+#: come out slightly negative; 5 % is 2.5 such standard deviations.
+INERTIA_CONSISTENCY = 0.05
+
+
+def _check_inertia(measured: Mapping, where: str) -> None:
+    """Refuse moments and products of inertia that no body has.
+
+    About any axes, S = sum m r r^T = (tr J / 2) 1 - J (J the inertia tensor, products
+    Ixy = sum m x y entering it as -Ixy) is a second moment of mass, positive semi-definite: every
+    moment is positive and no moment exceeds the sum of the other two (S_zz = (Ixx + Iyy - Izz) / 2
+    >= 0). Checked when the three moments are given; with the products too on all of S, else on
+    its diagonal.
+    """
+    moments = ("Ixx", "Iyy", "Izz")
+    if not all(k in measured for k in moments):
+        return
+    diag = np.array([measured[k] for k in moments])
+    if np.any(diag <= 0.0):
+        bad = [k for k, v in zip(moments, diag) if v <= 0.0]
+        raise InputError(f"{where}: moments of inertia {bad} must be positive. Fix: give the "
+                         "moments about the CG in the deck's mass and length units.")
+    products = ("Ixy", "Iyz", "Izx")
+    full = all(k in measured for k in products)
+    s = np.diag(0.5 * diag.sum() - diag)
+    if full:
+        for (i, j), name in zip(((0, 1), (1, 2), (2, 0)), products):
+            s[i, j] = s[j, i] = measured[name]
+    lowest = float(np.linalg.eigvalsh(s)[0] if full else s.diagonal().min())
+    if lowest < -INERTIA_CONSISTENCY * diag.max():
+        what = ("with the products, a second moment of mass" if full else
+                "a second moment of mass (half the sum of two moments less the third)")
+        raise InputError(
+            f"{where}: the moments {diag.tolist()}"
+            + (f" and products [Ixy, Iyz, Izx] = {[measured[k] for k in products]}" if full else "")
+            + f" are not a body's inertia: {what} comes to {lowest:.6g}, below zero by "
+            f"{-100 * lowest / diag.max():.1f} % of the largest moment (at most "
+            f"{100 * INERTIA_CONSISTENCY:.0f} % is measurement error). Fix: check that no moment "
+            "exceeds the sum of the other two, the products' size and sign (Ixy = sum m x y) and "
+            "the units.")
 
 
 def compare_mass_properties(props: MassProperties, measured: Mapping) -> xr.Dataset:

@@ -168,8 +168,8 @@ def preflight(configurations, settings: DiagnoseSettings = DiagnoseSettings()) -
 
 def check_inputs(configurations: tuple, settings) -> None:
     """The checks of :func:`preflight` that need no computation: configurations given, named
-    once, the settings a :class:`DiagnoseSettings` and ``nmodes`` (when set) no fewer than any
-    configuration's test modes.
+    once, the settings a :class:`DiagnoseSettings`, every test frequency positive and ``nmodes``
+    (when set) no fewer than any configuration's test modes.
 
     Raises
     ------
@@ -185,6 +185,13 @@ def check_inputs(configurations: tuple, settings) -> None:
         raise InputError("diagnose: settings must be a DiagnoseSettings.")
     for data in configurations:
         n_test = data.gvt.sizes["mode"]
+        frequency = data.gvt["frequency"].values
+        if np.any(frequency <= 0.0):
+            raise InputError(f"diagnose: configuration {data.name}: test modes "
+                             f"{data.gvt['mode'].values[frequency <= 0.0].tolist()} have frequency "
+                             "0 Hz; every measured mode, a suspension mode too, has a positive "
+                             "frequency, and each is weighed by its relative error. Fix: correct "
+                             "their frequency records or remove those modes from the GVT file.")
         if settings.nmodes is not None and settings.nmodes < n_test:
             raise InputError(f"diagnose: configuration {data.name}: its GVT lists {n_test} test "
                              f"modes but nmodes = {settings.nmodes} analysis modes (rigid-body "

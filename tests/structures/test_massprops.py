@@ -96,3 +96,52 @@ def test_measured_mass_json(tmp_path):
             read_measured_mass(path)
     with pytest.raises(InputError, match="no such measured-mass file"):
         read_measured_mass(tmp_path / "none.json")
+
+
+def _inertia_json(inertia) -> dict:
+    """[Ixx, Iyy, Izz, Ixy, Ixz, Iyz] of the file format from a (3, 3) inertia tensor
+    (products Ixy = sum m x y, the tensor's off-diagonals negated)."""
+    return [inertia[0, 0], inertia[1, 1], inertia[2, 2], -inertia[0, 1], -inertia[0, 2],
+            -inertia[1, 2]]
+
+
+def test_measured_inertia_must_be_a_bodys(tmp_path):
+    """A flat cloud of point masses (Izz = Ixx + Iyy, its z second moment zero) turned about
+    every axis passes, with a swing test's 2 % error on Izz too; Izz raised by 20 % of itself
+    (its second moment -10 % of Izz, 8.3 % of the raised one), products five times too large or
+    a negative moment are refused."""
+    import json
+
+    from structures.massprops import read_measured_mass
+
+    rng = np.random.default_rng(3)
+    points = [(float(m), rng.normal(size=3) * (2.0, 1.0, 0.0), np.zeros((3, 3)))
+              for m in rng.uniform(1.0, 5.0, 12)]
+    _, _, flat = _hand(points)
+    assert np.isclose(flat[2, 2], flat[0, 0] + flat[1, 1])
+    c, s = np.cos(0.7), np.sin(0.7)
+    turn = np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]]) @ \
+        np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
+    path = tmp_path / "mass.json"
+
+    def read(values):
+        path.write_text(json.dumps({"weight": 10.0, "inertia_cg": [float(v) for v in values]}))
+        return read_measured_mass(path)
+
+    read(_inertia_json(flat))
+    read(_inertia_json(turn @ flat @ turn.T))
+    heavy_z = flat.copy()
+    heavy_z[2, 2] *= 1.02
+    read(_inertia_json(heavy_z))
+    too_heavy = flat.copy()
+    too_heavy[2, 2] *= 1.2
+    with pytest.raises(InputError, match=r"not a body's inertia: with the products, a second "
+                                         r"moment of mass comes to -[0-9.]+, below zero by 8\.3 %"):
+        read(_inertia_json(too_heavy))
+    big = _inertia_json(turn @ flat @ turn.T)
+    big[3:] = [5.0 * v for v in big[3:]]
+    with pytest.raises(InputError, match=r"not a body's inertia.*Fix: check that no moment "
+                                         r"exceeds the sum of the other two"):
+        read(big)
+    with pytest.raises(InputError, match=re.escape("moments of inertia ['Iyy'] must be positive")):
+        read([10.0, -1.0, 10.0, 0.0, 0.0, 0.0])

@@ -167,6 +167,23 @@ def test_too_few_analysis_modes_refused_before_any_computation(tmp_path, monkeyp
         assert needle in str(err.value), (needle, str(err.value))
 
 
+def test_zero_test_frequency_refused_before_any_computation(tmp_path, monkeypatch):
+    """A test mode at 0 Hz (a GVT format allows it) is refused from the GVT alone, naming the
+    modes: it used to pass every check."""
+    preflight_module = importlib.import_module("pipeline.diagnose.preflight")
+    case = read_case(make_case("frame", "none", 0, tmp_path / "none_0"))
+    (conf,) = configurations_from_case(case)
+    frequency = conf.gvt["frequency"].values.copy()
+    frequency[[0, 4]] = 0.0
+    gvt = conf.gvt.assign(frequency=("mode", frequency))
+    monkeypatch.setattr(preflight_module, "compute_modes", lambda *a: pytest.fail("solved"))
+    with pytest.raises(InputError) as err:
+        preflight([replace(conf, gvt=gvt)], DiagnoseSettings())
+    modes = conf.gvt["mode"].values[[0, 4]].tolist()
+    for needle in ("configuration frame", f"test modes {modes} have frequency 0 Hz", "Fix"):
+        assert needle in str(err.value), (needle, str(err.value))
+
+
 def _rows(modal: float, stated: float, n: int = 100, n_modal: int = 90) -> np.ndarray:
     """(n,) residual with chi^2 ``modal`` in its first entry (modal rows: the first n_modal)
     and ``stated`` in entry n_modal (a weighing row)."""
