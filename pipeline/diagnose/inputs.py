@@ -9,6 +9,7 @@ The optional ``[diagnose]`` table of a case file (every key optional; defaults s
     frequency_noise = 0.01   # standard deviation of a test frequency (fraction, 0.01 = 1 %)
     shape_noise = 0.05       # of a mode-shape coefficient (fraction); left out: estimated from data
     holdout = 3              # every holdout-th paired mode of each configuration is held out
+                             # (2 up to a configuration's elastic test modes)
     margin = 10.0            # BIC margin by which the named effect beats the other kinds
     refit = 6                # candidates refitted after the linear screening
     nmodes = 30              # analysis modes; left out: 2 x elastic test modes + 6 rigid

@@ -111,6 +111,10 @@ class DiagnoseSettings:
         if bad or not kinds:
             raise InputError(f"diagnose: kinds {bad or '[]'} not in {list(KINDS)}. Fix: list some "
                              "of them.")
+        repeated = sorted({k for k in kinds if kinds.count(k) > 1})
+        if repeated:
+            raise InputError(f"diagnose: kinds {list(kinds)} list {repeated} more than once. Fix: "
+                             "list each kind once.")
         object.__setattr__(self, "kinds", kinds)
         for name, low in (("max_effects", 1), ("holdout", 2), ("refit", 1)):
             value = getattr(self, name)
@@ -233,6 +237,12 @@ def _preflight(configurations, settings: DiagnoseSettings, notes: list, hung: li
             frequency_noise=settings.frequency_noise,
             shape_noise_value=settings.shape_noise, model_scatter=settings.model_scatter,
             holdout=settings.holdout, nmodes=nmodes, rotation=rotation)
+        if settings.holdout > ref.test_frequency.size:
+            raise InputError(f"diagnose: configuration {data.name}: holdout = {settings.holdout} "
+                             f"but only {ref.test_frequency.size} elastic test modes: some splits "
+                             "of the modes would hold none out, and nothing would judge the fits "
+                             "there. Fix: set [diagnose] holdout to at most "
+                             f"{ref.test_frequency.size} (3, the default, holds out every third).")
         refs.append(ref)
         if ref.has_shapes:
             notes.append(f"{data.name}: {n_test} test modes, {ref.sensor_index.size} sensor DOFs, "

@@ -69,6 +69,8 @@ def test_flutter_defaults_to_the_cases_flutter_table(folder):
     ('kinds = "lumped_mass"', ("kinds", "a list of strings", "Fix")),
     ('kinds = ["lumped_mass", "cable"]', ("kinds ['cable'] not in", "joint_flexibility", "Fix")),
     ("kinds = []", ("kinds [] not in", "Fix")),
+    ('kinds = ["lumped_mass", "member_taper", "lumped_mass"]',
+     ("list ['lumped_mass'] more than once", "Fix: list each kind once")),
     ("frequency_noise = 0.0", ("frequency_noise = 0.0 must be a positive number",)),
     ("shape_noise = -0.1", ("shape_noise = -0.1 must be positive",)),
     ("holdout = 1", ("holdout = 1 must be an integer >= 2",)),

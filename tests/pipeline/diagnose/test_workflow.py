@@ -141,7 +141,9 @@ def test_suspension_modes_in_the_test_data_are_left_out(tmp_path):
 def test_preflight_checks_the_data_without_screening(tmp_path):
     """The frame's 20 test modes: one reference with every mode paired, the training split of
     holdout 3 (modes 3, 6, ... held out: 14 train), notes; too few elastic analysis modes (24
-    modes, 6 of them rigid) refused after the modal solve; repeated names refused."""
+    modes, 6 of them rigid) refused after the modal solve; repeated names refused; a holdout
+    above the 20 paired modes, which would leave splits with no mode held out, refused, and 20
+    holding out one mode accepted."""
     case = read_case(make_case("frame", "none", 0, tmp_path / "none_0"))
     confs = configurations_from_case(case)
     refs, notes = preflight(confs, DiagnoseSettings())
@@ -152,6 +154,11 @@ def test_preflight_checks_the_data_without_screening(tmp_path):
         preflight(confs, DiagnoseSettings(nmodes=24))
     with pytest.raises(InputError, match="repeat"):
         preflight(confs * 2, DiagnoseSettings())
+    with pytest.raises(InputError, match=r"holdout = 21 but only 20 elastic test modes.*at most "
+                                         r"20"):
+        preflight(confs, DiagnoseSettings(holdout=21))
+    (ref,), _ = preflight(confs, DiagnoseSettings(holdout=20))
+    assert int((~ref.train).sum()) == 1
 
 
 def test_too_few_analysis_modes_refused_before_any_computation(tmp_path, monkeypatch):
