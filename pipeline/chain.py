@@ -33,7 +33,7 @@ from structures.bdf import read_model
 from structures.common.errors import InputError
 from structures.common.files import write_dataset
 from structures.common.nastran import read_pynastran
-from structures.massprops import mass_properties
+from structures.massprops import check_cg_inside, mass_properties
 from structures.modal import compute_modes
 from structures.units import system_of, unit_labels
 
@@ -74,6 +74,7 @@ def configuration_modes(config: Configuration, nmodes: int | None = None) -> tup
         The modes (DESIGN.md section 6) and the mass properties.
     """
     model = read_model(config.deck)
+    check_cg_inside(config.measured_mass, model, f"configuration {config.name}, measured_mass")
     system = assemble(model, config.mass)
     modes = compute_modes(model, nmodes or config.nmodes, mass=config.mass, system=system)
     return modes, mass_properties(model, m_basic=system.m_basic)
@@ -428,6 +429,21 @@ def case_grid_gaf(case: Case, config: Configuration, progress=None) -> xr.Datase
                          flutter_ids=_flutter_ids(settings, None),
                          structural_damping=settings.structural_damping, units=case.units,
                          matched=settings.matched, progress=progress)
+
+
+def check_case_masses(case: Case) -> None:
+    """Before any computation: every configuration's measured CG lies within its deck's extent
+    (:func:`structures.massprops.check_cg_inside`; its deck is read only when it states one).
+
+    Raises
+    ------
+    InputError
+        Naming the configuration, the coordinate, the extent and the fix.
+    """
+    for config in case.configurations:
+        if {"x_cg", "y_cg", "z_cg"} & set(config.measured_mass):
+            check_cg_inside(config.measured_mass, read_model(config.deck),
+                            f"configuration {config.name}, measured_mass")
 
 
 def check_flutter_requests(case: Case, flutter_ids=None) -> None:

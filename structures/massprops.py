@@ -260,6 +260,47 @@ def _check_inertia(measured: Mapping, where: str) -> None:
             "the units.")
 
 
+#: How far outside the extent of a model's grids and CONM2 centres a measured CG may lie, as a
+#: fraction of the extent's largest side: a CG lies inside the body, so a CG beyond it is in
+#: other units or axes; 5 % leaves room for a weighing's error and for mass (rods' and shells'
+#: own) between grids nearer the edge.
+CG_EXTENT_MARGIN = 0.05
+
+
+def check_cg_inside(measured: Mapping, model: FEModel, where: str) -> None:
+    """Refuse a measured CG that lies outside the model's extent (the box of its grids and
+    CONM2 centres of mass, basic axes, widened by :data:`CG_EXTENT_MARGIN` of its largest
+    side): a body's CG lies within it, so the CG is in other units or axes.
+
+    Parameters
+    ----------
+    measured : mapping with any of ``x_cg``, ``y_cg``, ``z_cg`` (:data:`MASS_QUANTITIES`).
+    model : FEModel
+    where : str, the file or configuration (the message's start).
+
+    Raises
+    ------
+    InputError
+        Naming the coordinates, the extent and the fix.
+    """
+    axes = [(i, k) for i, k in enumerate(("x_cg", "y_cg", "z_cg")) if k in measured]
+    if not axes or not len(model.grids.ids):
+        return
+    points = model.grids.xyz
+    if len(model.masses.eids):
+        points = np.vstack([points, model.grids.xyz[model.grids.index(model.masses.grid)]
+                            + model.masses.offset])
+    low, high = points.min(axis=0), points.max(axis=0)
+    margin = CG_EXTENT_MARGIN * float(np.max(high - low))
+    outside = [f"{k} = {measured[k]:g} (the model spans {low[i]:g} .. {high[i]:g})" for i, k in axes
+               if not low[i] - margin <= measured[k] <= high[i] + margin]
+    if outside:
+        raise InputError(f"{where}: the measured CG lies outside the model: "
+                         f"{'; '.join(outside)}, more than {100 * CG_EXTENT_MARGIN:.0f} % of the "
+                         "model's size beyond its grids and masses, where no body's CG can be. "
+                         "Fix: give the CG in the deck's length unit and basic axes.")
+
+
 def compare_mass_properties(props: MassProperties, measured: Mapping) -> xr.Dataset:
     """Model against measured mass properties, per quantity (the data of the paper's J1..J10).
 

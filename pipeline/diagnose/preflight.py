@@ -24,7 +24,7 @@ from threadpoolctl import threadpool_limits
 from pipeline.diagnose.effects import KINDS
 from pipeline.diagnose.evidence import SELF_ORTHOGONALITY_LIMIT, build_reference
 from structures.common.errors import InputError
-from structures.massprops import check_measured_mass
+from structures.massprops import check_cg_inside, check_measured_mass
 from structures.modal import compute_modes
 from structures.model import FEModel
 from structures.modes import elastic_index, rigid_index
@@ -64,6 +64,8 @@ class ConfigurationData:
         if self.measured_mass is not None:
             object.__setattr__(self, "measured_mass", check_measured_mass(
                 self.measured_mass, f"configuration {self.name} measured mass"))
+            check_cg_inside(self.measured_mass, self.model,
+                            f"configuration {self.name} measured mass")
         object.__setattr__(self, "deck", Path(self.deck))
 
 

@@ -61,6 +61,27 @@ def test_unknown_or_bad_measured_quantities_raise(case_dir):
         read_case(case_dir / "case.toml")
 
 
+def test_cg_in_other_units_is_refused_before_any_stage(case_dir, capsys):
+    """The BAH plane's CG given in millimetres (its deck is in metres): `pipeline run` and
+    `pipeline correlate` stop with exit 2 naming the configuration and the coordinate before
+    any computation; `pipeline run` leaves no run folder."""
+    props = mass_properties(read_model(case_dir / "bah_plane.bdf"))
+    (case_dir / "case.toml").write_text(
+        'name = "m"\n[[configurations]]\nname = "a"\ndeck = "bah_plane.bdf"\ngvt = "gvt.unv"\n'
+        f'nmodes = 8\nmeasured_mass = {{ x_cg = {1000 * props.cg[0]!r} }}\n')
+    run = case_dir / "run"
+    assert main(["run", str(case_dir / "case.toml"), "--out", str(run)]) == 2
+    err = capsys.readouterr().err
+    for needle in ("configuration a, measured_mass: the measured CG lies outside the model",
+                   f"x_cg = {1000 * props.cg[0]:g}", "Fix: give the CG in the deck's length unit"):
+        assert needle in err, (needle, err)
+    assert not run.exists()
+    assert main(["correlate", str(case_dir / "case.toml"), "--out",
+                 str(case_dir / "corr.nc")]) == 2
+    assert "the measured CG lies outside the model" in capsys.readouterr().err
+    assert not (case_dir / "corr.nc").exists()
+
+
 def test_comparison_of_model_with_itself_is_zero():
     props = mass_properties(read_model(DATA / "bah_plane" / "bah_plane.bdf"))
     same = {k: v for k, v in props.as_dict().items() if k != "mass" and v != 0.0}

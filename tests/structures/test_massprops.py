@@ -145,3 +145,30 @@ def test_measured_inertia_must_be_a_bodys(tmp_path):
         read(big)
     with pytest.raises(InputError, match=re.escape("moments of inertia ['Iyy'] must be positive")):
         read([10.0, -1.0, 10.0, 0.0, 0.0, 0.0])
+
+
+@pytest.mark.parametrize("cg, refused", [
+    ((1.0, 0.5, 0.0), None),
+    ((2.09, 1.55, -1.09), None),          # within 5 % of the largest side (2) of every edge
+    ((2.11, 0.5, 0.0), "x_cg = 2.11 (the model spans 0 .. 2)"),
+    ((1.0, 1.61, 0.0), "y_cg = 1.61 (the model spans 0 .. 1.5)"),
+    ((1.0, 0.5, 0.0254 * 10.0), "z_cg = 0.254 (the model spans -1 .. 0.1)"),
+])
+def test_measured_cg_must_lie_within_the_model(tmp_path, cg, refused):
+    """DECK's grids span x 0..2, y 0..1, z 0; its CONM2 centres (grid + offset: (0.5, 0.2, 0.1),
+    (2, 0, -1), (1.5, 1.5, 0)) widen y to 1.5 and z to -1..0.1 (by hand); the margin is 5 % of
+    the largest side, 0.1."""
+    from structures.massprops import check_cg_inside
+
+    path = tmp_path / "masses.bdf"
+    path.write_text(DECK)
+    model = read_model(path)
+    measured = dict(zip(("x_cg", "y_cg", "z_cg"), cg), weight=20.0)
+    if refused is None:
+        check_cg_inside(measured, model, "mass.json")
+        return
+    with pytest.raises(InputError) as err:
+        check_cg_inside(measured, model, "mass.json")
+    for needle in ("mass.json: the measured CG lies outside the model", refused,
+                   "Fix: give the CG in the deck's length unit and basic axes"):
+        assert needle in str(err.value), (needle, str(err.value))
