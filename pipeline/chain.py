@@ -443,7 +443,7 @@ def check_case_masses(case: Case) -> None:
     for config in case.configurations:
         if {"x_cg", "y_cg", "z_cg"} & set(config.measured_mass):
             check_cg_inside(config.measured_mass, read_model(config.deck),
-                            f"configuration {config.name}, measured_mass")
+                            f"case {case.path}: configuration {config.name}, measured_mass")
 
 
 def check_flutter_requests(case: Case, flutter_ids=None) -> None:

@@ -157,7 +157,8 @@ def read_measured_mass(path) -> dict:
     ------
     InputError
         Naming the file, the key and the fix for a missing file, bad JSON, a list or an empty
-        object, unknown keys or values that are not finite numbers of the right count.
+        object, unknown keys, values that are not finite numbers of the right count, a weight
+        that is not positive or an inertia no body has (:func:`check_measured_mass`).
     """
     import json
     from pathlib import Path
@@ -200,7 +201,9 @@ def read_measured_mass(path) -> dict:
 
 
 def check_measured_mass(measured: Mapping, where: str = "measured mass properties") -> dict:
-    """Validate measured mass properties: names from :data:`MASS_QUANTITIES`, finite numbers."""
+    """Validate measured mass properties: names from :data:`MASS_QUANTITIES`, finite numbers, a
+    positive weight and moments and products of inertia that a body can have
+    (:func:`_check_inertia`)."""
     unknown = sorted(set(measured) - set(MASS_QUANTITIES))
     if unknown:
         raise InputError(f"{where}: unknown quantities {unknown}; valid: {list(MASS_QUANTITIES)}.")
