@@ -19,8 +19,9 @@ GAP_PANELS = (("frequency error", "RMS %", (("frequency_rms_held_out", "held-out
                                             ("frequency_rms_cross_validated",
                                              "every mode, cross-validated"),
                                             ("frequency_rms", "all paired modes"))),
-              ("mode shapes", "-", (("max_cross_orthogonality_offdiag", "largest |S_ij|, i != j"),
-                                    ("mac_min", "smallest paired MAC"))))
+              ("mode shapes", "MAC, |S_ij| (0 .. 1)",
+               (("max_cross_orthogonality_offdiag", "largest |S_ij|, i != j"),
+                ("mac_min", "smallest paired MAC"))))
 
 
 def candidate_label(entry: dict) -> str:
@@ -115,8 +116,13 @@ def plot_gap(record: dict, velocity: str = "model units") -> Figure:
     width = 0.38
     for ax, (title, unit, rows) in zip(axes, panels):
         x = np.arange(len(rows))
-        ax.bar(x - width / 2, [r[1] for r in rows], width, color="0.6", label="before")
-        ax.bar(x + width / 2, [r[2] for r in rows], width, color="tab:green", label="after")
+        for side, (shift, color, label) in enumerate(((-width / 2, "0.6", "before"),
+                                                      (width / 2, "tab:green", "after"))):
+            values = [r[1 + side] for r in rows]
+            bars = ax.bar(x + shift, values, width, color=color, label=label)
+            ax.bar_label(bars, ["" if np.isnan(v) else f"{v:.3g}" for v in values], fontsize=7,
+                         padding=1, rotation=90 if len(rows) > 3 else 0)  # 0 reads "0"
+        ax.margins(y=0.25 if len(rows) > 3 else 0.12)
         ax.set_xticks(x, [r[0] for r in rows], rotation=20, ha="right", fontsize=8)
         ax.axhline(0.0, color="k", linewidth=0.6)
         ax.set_title(title)

@@ -70,6 +70,11 @@ def test_gap_groups_before_and_after_per_metric():
     assert heights[1] == [0.31, 0.62, 0.05, 0.97]
     assert heights[2] == [-3.5, 1.0, -0.2, 0.1]
     assert heights[3] == [1200.0, 1100.0]
+    # each bar carries its value, so that an "after" of 0 reads 0 rather than missing
+    assert [t.get_text() for t in fig.axes[1].texts] == ["0.31", "0.62", "0.05", "0.97"]
+    zero = {**RECORD, "gap_after": {**RECORD["gap_after"], "frequency_rms_held_out": 0.0}}
+    assert [t.get_text() for t in plot_gap(zero).axes[0].texts] == ["4.1", "3.5", "3.9", "0",
+                                                                   "0.75", "0.7"]
 
 
 def test_gap_without_mass_or_flutter_leaves_their_panels_out():
