@@ -33,7 +33,8 @@ def candidate_label(entry: dict) -> str:
 
 
 def plot_candidates(record: dict, top: int = 12, *, ax=None) -> Figure:
-    """The ranked candidates of the first round as horizontal bars of their score.
+    """The ranked candidates of the first round as horizontal bars of their score, with the best
+    of every other kind below them.
 
     Parameters
     ----------
@@ -41,7 +42,10 @@ def plot_candidates(record: dict, top: int = 12, *, ax=None) -> Figure:
         A diagnosis' JSON record; its ``candidates`` (ranked, best first, each with ``kind``,
         ``location``, ``score`` and optional ``label``) are drawn.
     top : int
-        Candidates shown (the best ``top``).
+        Candidates shown in rank order (the best ``top``); below them, after a gap, the best
+        candidate of each kind (``none`` too) that none of those is of, labelled "best <kind>:"
+        ("nothing missing" for ``none``), so that the runner-up kinds the verdict's margin was
+        set against are always seen.
     ax : matplotlib Axes, optional
         Draw into it instead of a new figure.
 
@@ -51,27 +55,40 @@ def plot_candidates(record: dict, top: int = 12, *, ax=None) -> Figure:
         Bars coloured by kind (:data:`KIND_COLOURS`), a dot at each bar's end (the best's score
         is 0), best at the top; room on the right for the legend.
     """
-    entries = list(record.get("candidates") or [])[:top]
-    fig = ax.figure if ax is not None else Figure(figsize=(8.0, 1.0 + 0.35 * max(len(entries), 2)))
+    ranked = list(record.get("candidates") or [])
+    entries = ranked[:top]
+    shown = {e["kind"] for e in entries}
+    others = [e for i, e in enumerate(ranked[top:], top)
+              if e["kind"] not in shown and all(o["kind"] != e["kind"] for o in ranked[top:i])]
+    labels = [candidate_label(e) for e in entries] + [
+        candidate_label(e) if e["kind"] == "none" else f"best {e['kind']}: {candidate_label(e)}"
+        for e in others]
+    n_rows = len(entries) + len(others) + (1 if others else 0)
+    width = 8.0 + 0.07 * max(0, max(map(len, labels), default=0) - 40)   # room for the labels
+    fig = ax.figure if ax is not None else Figure(figsize=(width, 1.0 + 0.35 * max(n_rows, 2)))
     ax = ax if ax is not None else fig.add_subplot()
     if not entries:
         ax.text(0.5, 0.5, "no candidate screened", ha="center", va="center",
                 transform=ax.transAxes)
         ax.set_axis_off()
         return fig
-    y = np.arange(len(entries))[::-1]
-    scores = np.array([np.nan if e.get("score") is None else float(e["score"]) for e in entries])
-    colours = [KIND_COLOURS.get(e["kind"], "k") for e in entries]
+    rows = entries + others
+    y = np.concatenate([np.arange(len(entries)), len(entries) + 1 + np.arange(len(others))])
+    y = y.max() - y                                                    # best at the top
+    scores = np.array([np.nan if e.get("score") is None else float(e["score"]) for e in rows])
+    colours = [KIND_COLOURS.get(e["kind"], "k") for e in rows]
     ax.barh(y, scores, color=colours)
     ax.scatter(scores, y, color=colours, edgecolors="k", zorder=3)   # a zero score shows too
+    if others:
+        ax.axhline(y[len(entries)] + 1.0, color="0.5", linewidth=0.8, linestyle=":")
     high = np.nanmax(np.abs(scores)) if np.isfinite(scores).any() else 0.0
     ax.set_xlim(min(0.0, np.nanmin(scores)) if high else -1.0, 1.4 * high if high else 1.0)
-    ax.set_yticks(y, [candidate_label(e) for e in entries], fontsize=8)
+    ax.set_yticks(y, labels, fontsize=8)
     ax.set_xlabel("score (BIC difference to the best candidate; lower is better)")
     ax.set_title(f"Candidate ranking (verdict: {record.get('verdict', '?')})")
-    kinds = list(dict.fromkeys(e["kind"] for e in entries))
+    kinds = list(dict.fromkeys(e["kind"] for e in rows))
     ax.legend(handles=[Patch(color=KIND_COLOURS.get(k, "k"), label=k) for k in kinds],
-              fontsize=8, loc="lower right")
+              fontsize=8, loc="upper right")                # the best, shortest bars
     fig.tight_layout()
     return fig
 

@@ -51,8 +51,25 @@ def test_candidates_are_bars_of_their_score_coloured_by_kind():
         ("joint_flexibility", "lumped_mass", "member_taper"))
 
 
-def test_candidates_top_and_empty():
-    assert len(plot_candidates(RECORD, top=2).axes[0].patches) == 2
+def test_candidates_top_then_the_best_of_every_other_kind():
+    """The best ``top``, then (after a gap) the best of each kind not among them: with top = 1
+    the mass and the taper below the joint; ``none`` is named "nothing missing"."""
+    record = {**RECORD, "candidates": RECORD["candidates"] + [
+        {"kind": "lumped_mass", "location": {"grids": [3006]}, "score": 50.0},
+        {"kind": "none", "location": {}, "score": 60.0, "label": "nothing missing"}]}
+    assert len(plot_candidates(record, top=5).axes[0].patches) == 5
+    ax = plot_candidates(record, top=1).axes[0]
+    bars = sorted(ax.patches, key=lambda p: -p.get_y())
+    np.testing.assert_allclose([b.get_width() for b in bars], [0.0, 14.5, 40.25, 60.0])
+    assert [b.get_y() for b in bars][:2] == [bars[0].get_y(), bars[0].get_y() - 2.0]  # the gap
+    labels = [t.get_text() for t in sorted(ax.get_yticklabels(),
+                                           key=lambda t: -t.get_position()[1])]
+    assert labels == ["RBE2 5100 (engine 5011-5021)",
+                      "best lumped_mass: lumped_mass (grids [3005])",
+                      "best member_taper: PBAR 151", "nothing missing"]
+
+
+def test_candidates_empty():
     empty = plot_candidates({"verdict": "none", "candidates": []})
     assert [t.get_text() for t in empty.axes[0].texts] == ["no candidate screened"]
     assert candidate_label({"kind": "none", "location": {}}) == "none"
