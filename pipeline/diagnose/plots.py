@@ -139,11 +139,15 @@ def plot_gap(record: dict, velocity: str = "model units") -> Figure:
             bars = ax.bar(x + shift, values, width, color=color, label=label)
             ax.bar_label(bars, ["" if np.isnan(v) else f"{v:.3g}" for v in values], fontsize=7,
                          padding=1, rotation=90 if len(rows) > 3 else 0)  # 0 reads "0"
-        ax.margins(y=0.25 if len(rows) > 3 else 0.12)
+        finite = np.array([v for r in rows for v in r[1:] if not np.isnan(v)] or [0.0])
+        low, high = min(finite.min(), 0.0), max(finite.max(), 0.0)
+        pad = (0.25 if len(rows) > 3 else 0.12) * ((high - low) or 1.0)   # room for the values
+        ax.set_ylim(low - pad if low < 0 else 0.0, high + pad)
         ax.set_xticks(x, [r[0] for r in rows], rotation=20, ha="right", fontsize=8)
         ax.axhline(0.0, color="k", linewidth=0.6)
         ax.set_title(title)
         ax.set_ylabel(unit)
-    axes[0].legend(fontsize=8)
-    fig.tight_layout()
+    fig.legend(*axes[0].get_legend_handles_labels(), loc="upper left", ncols=2, fontsize=8,
+               frameon=False)                          # above the panels, never on a bar
+    fig.tight_layout(rect=(0.0, 0.0, 1.0, 0.93))
     return fig

@@ -87,6 +87,9 @@ def test_gap_groups_before_and_after_per_metric():
     assert heights[1] == [0.31, 0.62, 0.05, 0.97]
     assert heights[2] == [-3.5, 1.0, -0.2, 0.1]
     assert heights[3] == [1200.0, 1100.0]
+    assert [t.get_text() for t in fig.legends[0].get_texts()] == ["before", "after"]
+    # room beyond the longest bars for their values: mass errors -3.5 .. 1.0, pad 0.12 x 4.5
+    np.testing.assert_allclose(fig.axes[2].get_ylim(), (-3.5 - 0.54, 1.0 + 0.54))
     # each bar carries its value, so that an "after" of 0 reads 0 rather than missing
     assert [t.get_text() for t in fig.axes[1].texts] == ["0.31", "0.62", "0.05", "0.97"]
     zero = {**RECORD, "gap_after": {**RECORD["gap_after"], "frequency_rms_held_out": 0.0}}
