@@ -230,19 +230,20 @@ def _check_inertia(measured: Mapping, where: str) -> None:
     """Refuse moments and products of inertia that no body has.
 
     About any axes, S = sum m r r^T = (tr J / 2) 1 - J (J the inertia tensor, products
-    Ixy = sum m x y entering it as -Ixy) is a second moment of mass, positive semi-definite: every
-    moment is positive and no moment exceeds the sum of the other two (S_zz = (Ixx + Iyy - Izz) / 2
-    >= 0). Checked when the three moments are given; with the products too on all of S, else on
-    its diagonal.
+    Ixy = sum m x y entering it as -Ixy) is a second moment of mass, positive semi-definite:
+    every moment is non-negative (zero about the line of masses on a line) and no moment
+    exceeds the sum of the other two (S_zz = (Ixx + Iyy - Izz) / 2 >= 0). Checked when the
+    three moments are given; with the products too on all of S, else on its diagonal.
     """
     moments = ("Ixx", "Iyy", "Izz")
     if not all(k in measured for k in moments):
         return
     diag = np.array([measured[k] for k in moments])
-    if np.any(diag <= 0.0):
-        bad = [k for k, v in zip(moments, diag) if v <= 0.0]
-        raise InputError(f"{where}: moments of inertia {bad} must be positive. Fix: give the "
-                         "moments about the CG in the deck's mass and length units.")
+    if np.any(diag < 0.0) or not diag.max() > 0.0:
+        bad = [k for k, v in zip(moments, diag) if v < 0.0] or list(moments)
+        raise InputError(f"{where}: moments of inertia {bad} must not be negative, nor all zero "
+                         "(a point mass's). Fix: give the moments about the CG in the deck's mass "
+                         "and length units.")
     products = ("Ixy", "Iyz", "Izx")
     full = all(k in measured for k in products)
     s = np.diag(0.5 * diag.sum() - diag)

@@ -143,8 +143,12 @@ def test_measured_inertia_must_be_a_bodys(tmp_path):
     with pytest.raises(InputError, match=r"not a body's inertia.*Fix: check that no moment "
                                          r"exceeds the sum of the other two"):
         read(big)
-    with pytest.raises(InputError, match=re.escape("moments of inertia ['Iyy'] must be positive")):
+    with pytest.raises(InputError, match=re.escape("moments of inertia ['Iyy'] must not be "
+                                                   "negative")):
         read([10.0, -1.0, 10.0, 0.0, 0.0, 0.0])
+    with pytest.raises(InputError, match=re.escape("nor all zero")):
+        read([0.0, 0.0, 0.0, 0.0, 0.0, 0.0])
+    read([0.0, 20.9, 20.9, 0.0, 0.0, 0.0])          # masses on a line along x: Ixx = 0
 
 
 @pytest.mark.parametrize("cg, refused", [
