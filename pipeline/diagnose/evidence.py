@@ -416,9 +416,13 @@ def build_reference(name: str, model: FEModel, gvt: xr.Dataset, measured_mass: M
         phi_all = modes["shape"].values[:, sensor_index].T
         m_noise = min(phi_all.shape[1], phi_all.shape[0] - MIN_NOISE_DOF)
         if shape_noise_value is None:
-            if m_noise < f_test.size:
+            n_rigid = rigid_index(modes).size
+            if m_noise - n_rigid < f_test.size:
                 raise InputError(f"configuration {name}: {phi_all.shape[0]} measured DOFs are too "
-                                 f"few to estimate the shape noise of {f_test.size} modes. Fix: give "
+                                 f"few to estimate the shape noise of {f_test.size} modes (the "
+                                 f"span of the {n_rigid} rigid-body and {f_test.size} lowest "
+                                 f"elastic analysis modes must leave {MIN_NOISE_DOF} DOFs outside "
+                                 "it, or the higher test modes count as noise). Fix: give "
                                  "[diagnose] shape_noise.")
             per_mode = shape_noise(phi_all[:, :m_noise], shapes)
             # pooled: a test mode the model lacks altogether (a local mode) would otherwise count
