@@ -57,9 +57,11 @@ def plot_candidates(record: dict, top: int = 12, *, ax=None) -> Figure:
     """
     ranked = list(record.get("candidates") or [])
     entries = ranked[:top]
-    shown = {e["kind"] for e in entries}
-    others = [e for i, e in enumerate(ranked[top:], top)
-              if e["kind"] not in shown and all(o["kind"] != e["kind"] for o in ranked[top:i])]
+    shown, others = {e["kind"] for e in entries}, []
+    for e in ranked[top:]:                          # the best of each kind not yet shown
+        if e["kind"] not in shown:
+            shown.add(e["kind"])
+            others.append(e)
     labels = [candidate_label(e) for e in entries] + [
         candidate_label(e) if e["kind"] == "none" else f"best {e['kind']}: {candidate_label(e)}"
         for e in others]
