@@ -67,6 +67,8 @@ RESIDUAL_TOL = 1e-10
 #: gave backward errors up to 1.07e-10 (over RESIDUAL_TOL: a spurious warning), 1e-10 up to
 #: 1.1e-11, 1e-11 up to 2.7e-13.
 LANCZOS_TOL = 1e-11
+#: Modes computed when neither the caller nor the deck (EIGRL/EIGR ND) says how many.
+DEFAULT_NMODES = 20
 #: Eigenvalues above this fraction of the largest one found are elastic for the residual check.
 ELASTIC_RATIO = 1e-6
 #: Largest backward error ||K phi|| / || |K| |phi| || of a rigid-body mode. Measured: 7e-17 (the
@@ -501,7 +503,8 @@ def compute_modes(model: FEModel, nmodes: int | None = None, *, mass: str = "dec
     Parameters
     ----------
     model : FEModel
-    nmodes : int, default the deck's EIGRL/EIGR ND, else 20.
+    nmodes : int, default the deck's EIGRL/EIGR ND, else ``DEFAULT_NMODES``; at most as many as
+        degrees of freedom carry mass (a model has no more modes).
     mass : {'deck', 'consistent', 'lumped'}
     shift : float, negative spectral shift (rad/s)^2.
     system : AssembledSystem, optional, reuse an existing assembly.
@@ -516,7 +519,13 @@ def compute_modes(model: FEModel, nmodes: int | None = None, *, mass: str = "dec
     """
     if system is None:
         system = assemble(model, mass)
-    n = nmodes or model.eigrl_nd or 20
+    # A model has as many modes as degrees of freedom carrying mass (the rest condense out)
+    carried = int(np.count_nonzero(system.M.diagonal() > 0))
+    if carried == 0:
+        raise SolverError(card_message("no degree of freedom carries mass: the model has no "
+                                       "modes.", filename=model.filename,
+                                       fix="add mass (CONM2, material density, NSM)."))
+    n = min(nmodes or model.eigrl_nd or DEFAULT_NMODES, carried)
     lam, phi = solve_eigen(system.K, system.M, n, shift=shift, groups=system.a_dofs // 6,
                            filename=model.filename)
     dk = system.K.diagonal()
@@ -525,11 +534,10 @@ def compute_modes(model: FEModel, nmodes: int | None = None, *, mass: str = "dec
     scale = float(np.median(ratio)) if ratio.size else 1.0
     _check_mechanisms(model, system, lam, phi, scale)
     phi_r, motions = rigid_body_modes(model, system)
-    size = system.K.shape[0]
-    if _rigid_ratio(lam, phi_r.shape[1]) > RIGID_ZERO and n < size:
+    if _rigid_ratio(lam, phi_r.shape[1]) > RIGID_ZERO and n < carried:
         # A Lanczos solve can miss one member of a multiple eigenvalue, the rigid-body zeros:
         # solved again with a larger Krylov space (RIGID_RETRY), the lowest n kept
-        more = min(size, RIGID_RETRY * n + phi_r.shape[1])
+        more = min(carried, RIGID_RETRY * n + phi_r.shape[1])
         lam, phi = solve_eigen(system.K, system.M, more, shift=shift, groups=system.a_dofs // 6,
                                filename=model.filename)
         lam, phi = lam[:n], phi[:, :n]

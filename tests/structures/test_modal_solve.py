@@ -1,6 +1,7 @@
 """structures.modal.solve_eigen: the sparse shift-invert solve with a lumped mass that leaves DOFs
 massless (the Lanczos run on the DOFs with mass alone); a stiff free-free model against a
-massless mechanism (the singularity test and its repeat at a larger shift)."""
+massless mechanism (the singularity test and its repeat at a larger shift); compute_modes on a
+model with few or no degrees of freedom carrying mass."""
 from __future__ import annotations
 
 import numpy as np
@@ -9,6 +10,7 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 
 from structures import modal
+from structures.bdf import read_model
 from structures.sparse_factor import PIVOT_RATIO, MasslessMechanism, factorize
 
 
@@ -112,3 +114,39 @@ def test_a_massless_mechanism_still_raises(n):
     m[0, 0] = 0.0
     with pytest.raises(MasslessMechanism, match="massless mechanism"):
         modal.solve_eigen(k.tocsr(), m.tocsr(), 4)
+
+
+def _spring_chain(path, eigrl: str = ""):
+    """Three grids moving in x on CELAS2 springs (grid 1 grounded), one CONM2 at grid 2: three
+    degrees of freedom, one carrying mass."""
+    deck = ["SOL 103", "CEND"] + (["METHOD = 1"] if eigrl else []) + ["BEGIN BULK", eigrl,
+            "GRID,1,,0.,0.,0.,,23456", "GRID,2,,1.,0.,0.,,23456", "GRID,3,,2.,0.,0.,,23456",
+            "CELAS2,1,50.,1,1", "CELAS2,2,100.,1,1,2,1", "CELAS2,3,20.,2,1,3,1",
+            "CELAS2,4,30.,3,1", "CONM2,9,2,,2.", "ENDDATA"]
+    path.write_text("\n".join(line for line in deck if line) + "\n")
+    return read_model(path)
+
+
+def test_a_model_has_as_many_modes_as_degrees_of_freedom_carrying_mass(tmp_path):
+    """Three DOFs, one with mass: one mode whatever is asked (by default, by argument, by the
+    deck's EIGRL ND), at the hand-condensed frequency (grid 2 on 100 to grid 1, itself on 50 to
+    ground, and on 20 to grid 3, itself on 30 to ground: k = 100*50/150 + 20*30/50, m = 2).
+    Before, a request between the DOFs with mass and all DOFs raised "only 1 ... carry mass; 3
+    modes were asked for" and one above all DOFs returned the DOFs with mass."""
+    expected = [np.sqrt((100.0 * 50.0 / 150.0 + 20.0 * 30.0 / 50.0) / 2.0) / (2 * np.pi)]
+    model = _spring_chain(tmp_path / "chain.bdf")
+    for nmodes in (None, 1, 3, 20):
+        ds = modal.compute_modes(model, nmodes)
+        np.testing.assert_allclose(ds.frequency.values, expected, rtol=1e-12)
+    ds = modal.compute_modes(_spring_chain(tmp_path / "eigrl.bdf", "EIGRL,1,,,2"))
+    np.testing.assert_allclose(ds.frequency.values, expected, rtol=1e-12)
+
+
+def test_a_model_without_mass_raises_naming_the_file_and_the_fix(tmp_path):
+    path = tmp_path / "nomass.bdf"
+    path.write_text("SOL 103\nCEND\nBEGIN BULK\nGRID,1,,0.,0.,0.,,23456\n"
+                    "GRID,2,,1.,0.,0.,,23456\nCELAS2,1,50.,1,1\nCELAS2,2,100.,1,1,2,1\nENDDATA\n")
+    with pytest.raises(modal.SolverError, match=r"nomass\.bdf: no degree of freedom carries "
+                       r"mass.*Fix: add mass"):
+        modal.compute_modes(read_model(path))
+
