@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import sys
 import warnings
 
@@ -68,6 +69,12 @@ def main(argv=None) -> int:
     except Interrupted as exc:
         print(f"interrupted in {exc.stage}; run the same command again to resume", file=sys.stderr)
         return 130
+    except BrokenPipeError:
+        # The reader of stdout went away (``pipeline modes deck.bdf | head``): stop quietly,
+        # with stdout pointed at devnull so that the interpreter's final flush cannot raise
+        # again (Python's signal module documentation, "Note on SIGPIPE").
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 1
     finally:
         warnings.showwarning = shown
         if program:

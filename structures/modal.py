@@ -514,8 +514,9 @@ def compute_modes(model: FEModel, nmodes: int | None = None, *, mass: str = "dec
     xarray.Dataset with ``frequency(mode)`` [Hz], ``shape(mode, dof)`` (basic frame),
     ``generalized_mass(mode)`` and the dof coordinates; the exact rigid-body modes
     (:func:`rigid_body_modes`, frequency 0.0) first, named by coordinate ``rigid_motion(mode)``
-    ("plunge", "pitch", ...; "" for elastic modes), with attrs ``rigid_modes`` (their number)
-    and ``rigid_residual`` (their largest ||K phi|| / || |K| |phi| ||, <= RIGID_TOL).
+    ("plunge", "pitch", ...; "" for elastic modes), with attrs ``rigid_modes`` (their number),
+    ``rigid_residual`` (their largest ||K phi|| / || |K| |phi| ||, <= RIGID_TOL) and
+    ``modes_requested`` (the number asked for, more than the modes when fewer DOFs carry mass).
     """
     if system is None:
         system = assemble(model, mass)
@@ -525,7 +526,8 @@ def compute_modes(model: FEModel, nmodes: int | None = None, *, mass: str = "dec
         raise SolverError(card_message("no degree of freedom carries mass: the model has no "
                                        "modes.", filename=model.filename,
                                        fix="add mass (CONM2, material density, NSM)."))
-    n = min(nmodes or model.eigrl_nd or DEFAULT_NMODES, carried)
+    requested = nmodes or model.eigrl_nd or DEFAULT_NMODES
+    n = min(requested, carried)
     lam, phi = solve_eigen(system.K, system.M, n, shift=shift, groups=system.a_dofs // 6,
                            filename=model.filename)
     dk = system.K.diagonal()
@@ -550,6 +552,7 @@ def compute_modes(model: FEModel, nmodes: int | None = None, *, mass: str = "dec
     ds = modes_dataset(freq, shapes, model.grids.ids, model.grids.xyz, source="our solver",
                        deck=model.filename, units=model.units,
                        extra_attrs={"mass_formulation": mass, "eigenvalue_shift": shift,
+                                    "modes_requested": requested,
                                     "rigid_modes": len(motions[:len(lam)]),
                                     "rigid_residual": residual})
     names = (motions + [""] * len(lam))[:len(lam)]
