@@ -49,12 +49,16 @@ def run(args) -> int:
     print(checks.format())
     print("\nmass properties")
     print(mass_table(mass_properties(model, m_basic=system.m_basic)))
-    print(f"\nlowest {args.nmodes} modes")
     try:
         modes = compute_modes(model, args.nmodes, system=system)
     except SolverError as exc:
+        print(f"\nlowest {args.nmodes} modes")
         print(f"mechanism: {exc}")
         return 1
+    count = modes.sizes["mode"]
+    print(f"\nlowest {count} modes" if count == args.nmodes else
+          f"\nall {count} of the model's modes ({args.nmodes} asked for; a model has as many as "
+          "its degrees of freedom that carry mass)")
     print("mechanisms: none (every zero-frequency mode is a rigid-body motion)")
     print(frequency_table(modes))
     return 0

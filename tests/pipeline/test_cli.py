@@ -17,6 +17,7 @@ from pipeline.cli import main
 from structures.common.errors import InputError
 from structures.modes import read_modes
 from structures.common.files import read_dataset
+from tests.structures.spring_decks import spring_chain
 
 DATA = Path(__file__).resolve().parents[1] / "data"
 BAH_CASE = Path(__file__).resolve().parents[2] / "data" / "bah_wing" / "case.toml"
@@ -35,27 +36,9 @@ def test_modes_command_prints_table_and_writes_contract(tmp_path, capsys):
     assert ds.attrs["source"] == "our solver"
 
 
-SPRING_CHAIN = """SOL 103
-CEND
-METHOD = 1
-BEGIN BULK
-EIGRL,1,,,5
-GRID,1,,0.,0.,0.,,23456
-GRID,2,,1.,0.,0.,,23456
-GRID,3,,2.,0.,0.,,23456
-CELAS2,1,50.,1,1
-CELAS2,2,100.,1,1,2,1
-CELAS2,3,20.,2,1,3,1
-CELAS2,4,30.,3,1
-CONM2,9,2,,2.
-ENDDATA
-"""
-
-
 def test_modes_command_says_when_the_model_has_fewer_modes_than_asked(tmp_path, capsys):
     """The deck's EIGRL asks for 5 modes; one of its 3 DOFs carries mass: one mode, and a note."""
-    deck = tmp_path / "chain.bdf"
-    deck.write_text(SPRING_CHAIN)
+    deck = spring_chain(tmp_path / "chain.bdf", 5)
     out = tmp_path / "modes.nc"
     assert main(["modes", str(deck), "--out", str(out)]) == 0
     assert "note: 5 modes were asked for; the model has 1, as many as its degrees of freedom " \
@@ -67,8 +50,7 @@ def test_modes_command_says_when_the_model_has_fewer_modes_than_asked(tmp_path, 
 def test_a_closed_stdout_ends_quietly(tmp_path):
     """``pipeline modes deck | head -1``: the reader closes the pipe before the tables are
     written; the command exits with 1 and no traceback."""
-    deck = tmp_path / "chain.bdf"
-    deck.write_text(SPRING_CHAIN)
+    deck = spring_chain(tmp_path / "chain.bdf", 5)
     proc = subprocess.Popen([sys.executable, "-c", "import sys; from pipeline.cli import main; sys.exit(main())",
                              "modes", str(deck)], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                             cwd=Path(__file__).resolve().parents[2])

@@ -5,6 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from pipeline.cli import main
+from tests.structures.spring_decks import CHAIN_FREQUENCY, spring_chain
 
 DATA = Path(__file__).resolve().parents[1] / "data"
 WING = DATA / "practitioner_wing" / "wing.bdf"
@@ -55,3 +56,12 @@ def test_check_lists_unsupported_cards(tmp_path, capsys):
     assert main(["check", str(deck)]) == 2
     out, err = capsys.readouterr()
     assert "UNSUPPORTED" in out and err.startswith("error: ") and "CHEXA (99)" in err
+
+
+def test_check_says_when_the_model_has_fewer_modes_than_asked(tmp_path, capsys):
+    """Three DOFs on springs, one with mass: its one mode, and why not the ten asked for."""
+    assert main(["check", str(spring_chain(tmp_path / "chain.bdf"))]) == 0
+    out = capsys.readouterr().out
+    assert "all 1 of the model's modes (10 asked for; a model has as many as its degrees of " \
+        "freedom that carry mass)" in out
+    assert f"{CHAIN_FREQUENCY:.6f}" in out

@@ -12,6 +12,7 @@ import scipy.sparse as sp
 from structures import modal
 from structures.bdf import read_model
 from structures.sparse_factor import PIVOT_RATIO, MasslessMechanism, factorize
+from tests.structures.spring_decks import CHAIN_FREQUENCY, spring_chain
 
 
 def _pencil(seed: int = 7):
@@ -116,30 +117,18 @@ def test_a_massless_mechanism_still_raises(n):
         modal.solve_eigen(k.tocsr(), m.tocsr(), 4)
 
 
-def _spring_chain(path, eigrl: str = ""):
-    """Three grids moving in x on CELAS2 springs (grid 1 grounded), one CONM2 at grid 2: three
-    degrees of freedom, one carrying mass."""
-    deck = ["SOL 103", "CEND"] + (["METHOD = 1"] if eigrl else []) + ["BEGIN BULK", eigrl,
-            "GRID,1,,0.,0.,0.,,23456", "GRID,2,,1.,0.,0.,,23456", "GRID,3,,2.,0.,0.,,23456",
-            "CELAS2,1,50.,1,1", "CELAS2,2,100.,1,1,2,1", "CELAS2,3,20.,2,1,3,1",
-            "CELAS2,4,30.,3,1", "CONM2,9,2,,2.", "ENDDATA"]
-    path.write_text("\n".join(line for line in deck if line) + "\n")
-    return read_model(path)
-
-
 def test_a_model_has_as_many_modes_as_degrees_of_freedom_carrying_mass(tmp_path):
     """Three DOFs, one with mass: one mode whatever is asked (by default, by argument, by the
-    deck's EIGRL ND), at the hand-condensed frequency (grid 2 on 100 to grid 1, itself on 50 to
-    ground, and on 20 to grid 3, itself on 30 to ground: k = 100*50/150 + 20*30/50, m = 2).
-    Before, a request between the DOFs with mass and all DOFs raised "only 1 ... carry mass; 3
-    modes were asked for" and one above all DOFs returned the DOFs with mass."""
-    expected = [np.sqrt((100.0 * 50.0 / 150.0 + 20.0 * 30.0 / 50.0) / 2.0) / (2 * np.pi)]
-    model = _spring_chain(tmp_path / "chain.bdf")
+    deck's EIGRL ND), at the hand-condensed frequency. Before, a request between the DOFs with
+    mass and all DOFs raised "only 1 ... carry mass; 3 modes were asked for" and one above all
+    DOFs returned the DOFs with mass."""
+    model = read_model(spring_chain(tmp_path / "chain.bdf"))
     for nmodes in (None, 1, 3, 20):
         ds = modal.compute_modes(model, nmodes)
-        np.testing.assert_allclose(ds.frequency.values, expected, rtol=1e-12)
-    ds = modal.compute_modes(_spring_chain(tmp_path / "eigrl.bdf", "EIGRL,1,,,2"))
-    np.testing.assert_allclose(ds.frequency.values, expected, rtol=1e-12)
+        np.testing.assert_allclose(ds.frequency.values, [CHAIN_FREQUENCY], rtol=1e-12)
+    ds = modal.compute_modes(read_model(spring_chain(tmp_path / "eigrl.bdf", 2)))
+    np.testing.assert_allclose(ds.frequency.values, [CHAIN_FREQUENCY], rtol=1e-12)
+    assert ds.attrs["modes_requested"] == 2
 
 
 def test_a_model_without_mass_raises_naming_the_file_and_the_fix(tmp_path):
