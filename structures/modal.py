@@ -520,8 +520,9 @@ def compute_modes(model: FEModel, nmodes: int | None = None, *, mass: str = "dec
     """
     if system is None:
         system = assemble(model, mass)
+    dm = system.M.diagonal()
     # A model has as many modes as degrees of freedom carrying mass (the rest condense out)
-    carried = int(np.count_nonzero(system.M.diagonal() > 0))
+    carried = int(np.count_nonzero(dm > 0))
     if carried == 0:
         raise SolverError(card_message("no degree of freedom carries mass: the model has no "
                                        "modes.", filename=model.filename,
@@ -531,7 +532,6 @@ def compute_modes(model: FEModel, nmodes: int | None = None, *, mass: str = "dec
     lam, phi = solve_eigen(system.K, system.M, n, shift=shift, groups=system.a_dofs // 6,
                            filename=model.filename)
     dk = system.K.diagonal()
-    dm = system.M.diagonal()
     ratio = dk[dm > 0] / dm[dm > 0]
     scale = float(np.median(ratio)) if ratio.size else 1.0
     _check_mechanisms(model, system, lam, phi, scale)

@@ -51,8 +51,9 @@ def test_a_closed_stdout_ends_quietly(tmp_path):
     """``pipeline modes deck | head -1``: the reader closes the pipe before the tables are
     written; the command exits with 1 and no traceback."""
     deck = spring_chain(tmp_path / "chain.bdf", 5)
-    proc = subprocess.Popen([sys.executable, "-c", "import sys; from pipeline.cli import main; sys.exit(main())",
-                             "modes", str(deck)], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+    program = "import sys; from pipeline.cli import main; sys.exit(main())"
+    proc = subprocess.Popen([sys.executable, "-c", program, "modes", str(deck)],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                             cwd=Path(__file__).resolve().parents[2])
     proc.stdout.close()
     err = proc.stderr.read().decode()

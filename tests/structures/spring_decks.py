@@ -11,13 +11,13 @@ import numpy as np
 CHAIN_FREQUENCY = float(np.sqrt((100.0 * 50.0 / 150.0 + 20.0 * 30.0 / 50.0) / 2.0) / (2 * np.pi))
 
 
-def spring_chain(path: Path, nd: int | None = None) -> Path:
-    """Write the chain (x motion only, CELAS2 springs, one CONM2 at grid 2) to ``path``, with an
-    EIGRL asking ``nd`` modes when given; returns ``path``."""
+def spring_chain(path: Path, nd: int | None = None, *, mass: bool = True) -> Path:
+    """Write the chain (x motion only, CELAS2 springs, one CONM2 at grid 2, left out when not
+    ``mass``) to ``path``, with an EIGRL asking ``nd`` modes when given; returns ``path``."""
     lines = ["SOL 103", "CEND"] + (["METHOD = 1"] if nd else []) + ["BEGIN BULK"]
     lines += [f"EIGRL,1,,,{nd}"] if nd else []
     lines += ["GRID,1,,0.,0.,0.,,23456", "GRID,2,,1.,0.,0.,,23456", "GRID,3,,2.,0.,0.,,23456",
               "CELAS2,1,50.,1,1", "CELAS2,2,100.,1,1,2,1", "CELAS2,3,20.,2,1,3,1",
-              "CELAS2,4,30.,3,1", "CONM2,9,2,,2.", "ENDDATA"]
+              "CELAS2,4,30.,3,1"] + (["CONM2,9,2,,2."] if mass else []) + ["ENDDATA"]
     path.write_text("\n".join(lines) + "\n")
     return path

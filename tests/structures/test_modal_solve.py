@@ -132,10 +132,7 @@ def test_a_model_has_as_many_modes_as_degrees_of_freedom_carrying_mass(tmp_path)
 
 
 def test_a_model_without_mass_raises_naming_the_file_and_the_fix(tmp_path):
-    path = tmp_path / "nomass.bdf"
-    path.write_text("SOL 103\nCEND\nBEGIN BULK\nGRID,1,,0.,0.,0.,,23456\n"
-                    "GRID,2,,1.,0.,0.,,23456\nCELAS2,1,50.,1,1\nCELAS2,2,100.,1,1,2,1\nENDDATA\n")
+    path = spring_chain(tmp_path / "nomass.bdf", mass=False)
     with pytest.raises(modal.SolverError, match=r"nomass\.bdf: no degree of freedom carries "
                        r"mass.*Fix: add mass"):
         modal.compute_modes(read_model(path))
-
