@@ -90,10 +90,10 @@ def close_groups(frequency, sigma: float) -> list:
     depends on modes a little way off: on the X-56 blind study's mass seed 5 the pass from the
     lowest mode up grouped the named model's modes at 20.046 and 20.584 Hz and left 20.756 Hz
     alone, so a veering pair of test modes 0.3 % apart was reported mode by mode (off-diagonal
-    0.79, the truth's own effect, its modes at 20.046, 20.564 and 20.731 Hz one group, 0.22);
-    closest neighbours first grouped 20.584 and 20.756 but, on the frame's joint seed 7, 15.652
-    with 15.946 Hz and not the 15.131 Hz mode that the same veering pair of test modes (14.83 and
-    15.33 Hz) is paired with.
+    0.79, the truth's own effect, its modes at 20.046, 20.564 and 20.731 Hz one group, 0.22; as
+    runs 0.12); closest neighbours first grouped 20.584 and 20.756 but, on the frame's joint seed
+    7, 15.652 with 15.946 Hz and not with the 15.131 Hz mode that the other of a veering pair of
+    test modes (14.83 and 15.33 Hz) is paired with (0.98; as runs 0.82, before 0.95).
 
     Parameters
     ----------
