@@ -28,6 +28,8 @@ position and line) and the mode: a dataset without its closing ``-1`` (a file cu
 record with fewer values than the dataset's header says, text or NaN / inf where a number belongs,
 and dataset numbers this reader does not know (e.g. a 58 where a 55 belongs). A node absent from one
 mode but present in others is 0 there (UFF note 9), with a warning naming the mode and the nodes.
+Every GVT Dataset, read or built from arrays, is checked by :func:`validate_gvt`, which also refuses
+one mode recorded twice under two numbers (the same frequency and collinear shapes).
 
 Measured mass properties (weight, CG, inertias) are not part of a UFF file: they come from the case
 file.
@@ -54,6 +56,11 @@ _NUMBER = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eEdD][-+]?\d+)?|[-+]?(?i:nan|
 #: Datasets read: node coordinates (15, 2411) and mode shapes (55); datasets skipped: header (151),
 #: units (164), trace lines and elements for display (82, 2412). Any other number is refused.
 _READ_DATASETS = (15, 2411, 55)
+#: Two modes whose frequencies agree to ``REPEAT_RTOL`` (a UFF E13.5 record keeps 5-6 significant
+#: digits) and whose shapes are collinear to ``REPEAT_MAC`` are one record given twice: two distinct
+#: modes, even a symmetric and an antisymmetric one seen alike by one-sided sensors, differ in
+#: frequency by more, and measurement noise keeps two records of different modes below that MAC.
+REPEAT_RTOL, REPEAT_MAC = 1e-6, 0.9999
 _SKIPPED_DATASETS = (151, 164, 82, 2412)
 #: UFF labels are I10 integers.
 _LABEL_LIMIT = 2 ** 31
@@ -123,7 +130,8 @@ def validate_gvt(ds: xr.Dataset) -> None:
 
     Checks: required variables and dims, integer grid ids and components 1..6, no duplicate
     mode numbers, no duplicate (grid, component), finite non-negative frequencies, finite shapes
-    and damping, and no mode with an all-zero shape.
+    and damping, no mode with an all-zero shape, and no mode recorded twice under two numbers
+    (:func:`repeated_records`).
     """
     where = f"GVT file {ds.attrs.get('source') or '(arrays)'}"
     for var, dims in (("frequency", ("mode",)), ("shape", ("mode", "dof")), ("damping", ("mode",))):
@@ -173,6 +181,35 @@ def validate_gvt(ds: xr.Dataset) -> None:
     if np.any(zero):
         raise InputError(f"{where}: modes {modes[zero].tolist()} have an all-zero shape. Fix: remove "
                          "them or re-export their shapes.")
+    first, second = repeated_records(freq, shape)
+    if first.size:
+        pairs = [(int(modes[i]), int(modes[j])) for i, j in zip(first, second)]
+        raise InputError(f"{where}: modes {pairs[:10]}{' ...' if len(pairs) > 10 else ''} are one "
+                         f"record given twice (the same frequency to {REPEAT_RTOL:g} and collinear "
+                         f"shapes, MAC >= {REPEAT_MAC}). Fix: keep one mode of each pair (average a "
+                         "mode measured in two runs into one record).")
+
+
+def repeated_records(frequency, shape) -> tuple[np.ndarray, np.ndarray]:
+    """Pairs of modes that are one record given twice: frequencies equal to ``REPEAT_RTOL`` and
+    MAC(phi_i, phi_j) = (phi_i . phi_j)^2 / (|phi_i|^2 |phi_j|^2) >= ``REPEAT_MAC``.
+
+    Parameters
+    ----------
+    frequency : (n_mode,) frequencies [Hz].
+    shape : (n_mode, n_dof) real shapes, none all zero.
+
+    Returns
+    -------
+    first, second : ndarray of int, shape (n_pair,)
+        Positions along ``mode`` of each pair, first < second.
+    """
+    f = np.asarray(frequency, float)
+    phi = np.asarray(shape, float)
+    square = np.einsum("md,md->m", phi, phi)
+    mac = (phi @ phi.T) ** 2 / np.outer(square, square)
+    same_f = np.isclose(f[:, None], f[None, :], rtol=REPEAT_RTOL, atol=0.0)
+    return np.nonzero(np.triu(same_f & (mac >= REPEAT_MAC), k=1))
 
 
 def check_dofs_in_model(gvt: xr.Dataset, model_grids) -> None:

@@ -120,6 +120,24 @@ def test_duplicate_mode_numbers_raise(tmp_path):
         read_uff(tmp_path / "dup.unv")
 
 
+def test_a_mode_recorded_twice_is_refused(tmp_path):
+    """The vendor file with mode 7's dataset appended again as mode 9 (a copy made in a
+    spreadsheet): refused naming the file and the pair. Two modes one-sided sensors see alike
+    (collinear shapes, frequencies apart) and two modes at one frequency with other shapes pass."""
+    text = VENDOR.read_bytes()
+    start = text.index(b"    55\r\nGVT modes   ")
+    block = text[start:text.index(b"    -1\r\n", start)].replace(b"2 4 1 7", b"2 4 1 9")
+    (tmp_path / "twice.unv").write_bytes(text + b"    -1\r\n" + block + b"    -1\r\n")
+    with pytest.raises(InputError, match=r"twice\.unv: modes \[\(7, 9\)\] are one record given twice"):
+        read_uff(tmp_path / "twice.unv")
+    with pytest.raises(InputError, match=r"modes \[\(3, 4\)\] are one record .*Fix: keep one"):
+        make_gvt_dataset([1.0, 2.0, 2.0, 2.0 * (1 + 1e-8)], [[1.0, 0.5], [0.3, 1.0], [0.2, 1.0],
+                                                            [-0.4, -2.0]], [10, 11], [3, 3])
+    alike = make_gvt_dataset([2.0, 2.02], [[0.3, 1.0], [0.3, 1.0]], [10, 11], [3, 3])
+    assert alike.sizes["mode"] == 2
+    assert make_gvt_dataset([2.0, 2.0], [[0.3, 1.0], [1.0, -0.3]], [10, 11], [3, 3]).sizes["mode"] == 2
+
+
 def test_unknown_nodes_are_named():
     ds = expected_vendor_dataset()
     with pytest.raises(InputError, match=r"nodes \[103, 104\] are not grids of the model"):
