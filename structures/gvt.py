@@ -20,7 +20,8 @@ never measured.
 
 Reading uses pyuff first. Vendor files that pyuff's fixed-width parser rejects (Fortran ``D``
 exponents, free-format columns, trailing blanks, CRLF) are read by a tolerant token-stream parser
-of the same record layout; ``attrs["reader"]`` says which one was used. UFF 55 stores values as
+of the same record layout (both in :mod:`structures.uff_records`); ``attrs["reader"]`` says which
+one was used. UFF 55 stores values as
 E13.5, so a UFF round trip keeps 5-6 significant digits; the netCDF form is exact.
 
 Both readers refuse a damaged file with an :class:`InputError` naming the file, the dataset (its
@@ -37,7 +38,6 @@ file.
 from __future__ import annotations
 
 import os
-import re
 import tempfile
 import warnings
 from pathlib import Path
@@ -48,22 +48,14 @@ import xarray as xr
 
 from structures.common.errors import InputError
 from structures.common.files import read_dataset, write_dataset
+from structures.uff_records import from_pyuff, parse_tolerant, realise, split_blocks
 
 _UFF_SUFFIXES = (".unv", ".uff", ".uf")
-# A real number as Fortran writes it, possibly run together with its neighbour ("1.0E+00-2.0E+00")
-# and possibly with a D exponent ("1.0D+00").
-_NUMBER = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eEdD][-+]?\d+)?|[-+]?(?i:nan|inf(?:inity)?)")
-#: Datasets read: node coordinates (15, 2411) and mode shapes (55); datasets skipped: header (151),
-#: units (164), trace lines and elements for display (82, 2412). Any other number is refused.
-_READ_DATASETS = (15, 2411, 55)
 #: Two modes whose frequencies agree to ``REPEAT_RTOL`` (a UFF E13.5 record keeps 5-6 significant
 #: digits) and whose shapes are collinear to ``REPEAT_MAC`` are one record given twice: two distinct
 #: modes, even a symmetric and an antisymmetric one seen alike by one-sided sensors, differ in
 #: frequency by more, and measurement noise keeps two records of different modes below that MAC.
 REPEAT_RTOL, REPEAT_MAC = 1e-6, 0.9999
-_SKIPPED_DATASETS = (151, 164, 82, 2412)
-#: UFF labels are I10 integers.
-_LABEL_LIMIT = 2 ** 31
 
 
 def make_gvt_dataset(frequency, shape, grid, component, *, mode=None, damping=None, name=None,
@@ -253,12 +245,12 @@ def read_uff(path: str | os.PathLike, *, drop_unmeasured: bool = True, units: st
     path = Path(path)
     if not path.is_file():
         raise InputError(f"GVT file {path}: no such file. Fix: check the path.")
-    blocks = _split_blocks(path)
+    blocks = split_blocks(path)
     n_modes = sum(1 for kind, _, _ in blocks if kind == 55)
     try:
         sets = pyuff.UFF(str(path)).read_sets()
         sets = [sets] if isinstance(sets, dict) else list(sets)
-        nodes, records = _from_pyuff(sets, path)
+        nodes, records = from_pyuff(sets, path)
         reader = "pyuff"
     except InputError:
         raise
@@ -266,186 +258,9 @@ def read_uff(path: str | os.PathLike, *, drop_unmeasured: bool = True, units: st
         records = []
     if len(records) != n_modes or not records:
         # pyuff failed or silently missed blocks (delimiters with trailing blanks, ...): tolerant reader
-        nodes, records = _parse_tolerant(path, blocks)
+        nodes, records = parse_tolerant(path, blocks)
         reader = "tolerant"
     return _assemble(path, nodes, records, drop_unmeasured=drop_unmeasured, reader=reader, units=units)
-
-
-def _from_pyuff(sets, path: Path) -> tuple[dict, list]:
-    """Nodes {id: (xyz, def_cs, disp_cs)} and mode records from pyuff dictionaries."""
-    nodes, records = {}, []
-    where = f"GVT file {path}"
-    for s in sets:
-        kind = s.get("type")
-        if kind in (15, 2411):
-            n = len(s["node_nums"])
-            def_cs = np.asarray(s.get("def_cs", np.zeros(n)))
-            disp_cs = np.asarray(s.get("disp_cs", np.zeros(n)))
-            for i, nid in enumerate(np.asarray(s["node_nums"])):
-                nodes[_as_int(nid, where)] = (np.array([s["x"][i], s["y"][i], s["z"][i]], float),
-                                              _as_int(def_cs[i], where), _as_int(disp_cs[i], where))
-        elif kind == 55:
-            ndv = int(s["n_data_per_node"])
-            node_nums = np.asarray(s["node_nums"])
-            vals = np.column_stack([np.asarray(s[f"r{j}"]) for j in range(1, ndv + 1)])
-            if vals.shape[0] != node_nums.shape[0]:
-                raise ValueError("pyuff returned inconsistent node and value counts")
-            if int(s["analysis_type"]) == 2:
-                eig = None
-                freq, mmass = float(s["freq"]), float(s.get("modal_m", 0.0))
-                zeta = float(s.get("modal_damp_vis", 0.0))
-            elif int(s["analysis_type"]) in (3, 7):
-                eig, freq, mmass, zeta = complex(s["eig"]), None, 0.0, None
-            else:
-                raise InputError(f"GVT file {path}, dataset 55 mode {s.get('mode_n')}: analysis type "
-                                 f"{s['analysis_type']} is not normal (2) or complex (3) modes. Fix: export "
-                                 "the test mode shapes.")
-            records.append(dict(mode=int(s["mode_n"]), freq=freq, eig=eig, modal_mass=mmass, zeta=zeta,
-                                name=str(s.get("id4", "")),
-                                nodes=np.array([_as_int(v, where) for v in node_nums], np.int64),
-                                values=vals, ndv=ndv))
-    return nodes, records
-
-
-def _as_int(value, where: str) -> int:
-    """An integer label (node, mode, count, coordinate system) of a UFF record."""
-    number = float(value)
-    if not np.isfinite(number) or round(number) != number or abs(number) >= _LABEL_LIMIT:
-        raise InputError(f"{where}: label {value} is not an integer label. Fix: node and mode "
-                         "labels and counts must be integers (UFF I10).")
-    return int(number)
-
-
-def _numbers(lines: list[str], where: str, first_line: int) -> list[float]:
-    """The numbers of numeric records; anything else on those lines raises naming the line."""
-    out = []
-    for n, line in enumerate(lines):
-        found = _NUMBER.findall(line)
-        junk = _NUMBER.sub(" ", line).replace(",", " ").strip()
-        if junk:
-            raise InputError(f"{where}, line {first_line + n}: {junk.split()[0]!r} is not a number "
-                             f"({line.strip()!r}). Fix: correct or re-export the record.")
-        out += [float(t.replace("D", "E").replace("d", "e")) for t in found]
-    return out
-
-
-def _split_blocks(path: Path) -> list[tuple[int | None, list[str], int]]:
-    """(dataset number, body lines, line number of the body's first line) of every dataset between
-    ``-1`` delimiter lines; the number is None for a binary dataset header (``2414b``), which only
-    pyuff reads. Raises for a dataset without its closing ``-1`` or with an unknown number."""
-    raw = path.read_bytes()
-    if not raw.strip():
-        raise InputError(f"GVT file {path}: the file is empty. Fix: export the test modes as "
-                         "universal datasets 15 and 55.")
-    lines = [ln.rstrip() for ln in raw.decode("latin-1").splitlines()]
-    blocks, i, n = [], 0, len(lines)
-    while i < n:
-        if lines[i].strip() != "-1":
-            i += 1
-            continue
-        j = i + 1
-        while j < n and lines[j].strip() != "-1":
-            j += 1
-        block = lines[i + 1:j]
-        if j == n and any(ln.strip() for ln in block):
-            raise InputError(f"GVT file {path}, dataset #{len(blocks) + 1} (line {i + 2}): no "
-                             "closing -1 line: the file is cut short. Fix: re-export or copy the "
-                             "whole file.")
-        i = j + 1
-        if not block or not block[0].split():
-            continue
-        head = block[0].split()[0]
-        where = f"GVT file {path}, dataset #{len(blocks) + 1} (line {i - len(block)})"
-        if re.fullmatch(r"\d+b", head):
-            blocks.append((None, block[1:], i - len(block) + 1))
-            continue
-        if not head.isdigit():
-            raise InputError(f"{where}: {head!r} is not a dataset number. Fix: each dataset starts "
-                             "with its number on the line after -1.")
-        kind = int(head)
-        if kind not in _READ_DATASETS + _SKIPPED_DATASETS:
-            raise InputError(f"{where}: dataset {kind} is not a dataset this reader knows; node "
-                             "coordinates are 15 or 2411, mode shapes 55 (skipped: "
-                             f"{', '.join(map(str, _SKIPPED_DATASETS))}). Fix: export the modes as "
-                             "datasets 15 and 55, or remove the other datasets.")
-        blocks.append((kind, block[1:], i - len(block) + 1))
-    return blocks
-
-
-def _parse_tolerant(path: Path, blocks) -> tuple[dict, list]:
-    """Token-stream parser of UFF 15/2411/55 tolerant of D exponents, CRLF, blanks, free format."""
-    nodes, records = {}, []
-    for number, (kind, body, line) in enumerate(blocks, start=1):
-        where = f"GVT file {path}, dataset #{number} ({kind}, line {line - 1})"
-        if kind is None:
-            raise InputError(f"GVT file {path}: a binary dataset that pyuff could not read. Fix: export "
-                             "ASCII universal files.")
-        if kind in (15, 2411):
-            vals = _numbers(body, where, line)
-            if len(vals) % 7:
-                raise InputError(f"{where}: {len(vals)} numbers, not 7 per node. "
-                                 "Fix: check the node records.")
-            for rec in np.reshape(vals, (-1, 7)):
-                nodes[_as_int(rec[0], where)] = (rec[4:7].astype(float), _as_int(rec[1], where),
-                                                 _as_int(rec[2], where))
-        elif kind == 55:
-            records.append(_parse_55(body, where, line))
-    return nodes, records
-
-
-def _parse_55(body: list[str], where: str, line: int) -> dict:
-    if len(body) < 6:
-        raise InputError(f"{where}: the dataset 55 is truncated. Fix: re-export the file.")
-    name = body[3].strip()
-    tok = _numbers(body[5:], where, line + 5)
-    if (len(tok) < 8 or len(tok) < 8 + _as_int(tok[6], where) + _as_int(tok[7], where)
-            or _as_int(tok[7], where) < 2):
-        raise InputError(f"{where}: the header records 6-8 of the dataset 55 ({name!r}) are "
-                         "incomplete. Fix: re-export the file.")
-    _model, analysis, data_ch, _spec, data_type, ndv = (_as_int(t, where) for t in tok[:6])
-    nint, nreal = _as_int(tok[6], where), _as_int(tok[7], where)
-    ints = [_as_int(t, where) for t in tok[8:8 + nint]]
-    reals = tok[8 + nint:8 + nint + nreal]
-    rest = np.asarray(tok[8 + nint + nreal:])
-    mode = ints[1] if len(ints) > 1 else None
-    where = f"{where}, mode {mode}"
-    if analysis not in (2, 3, 7) or mode is None:
-        raise InputError(f"{where}: analysis type {analysis} is not normal (2) or complex (3) modes. "
-                         "Fix: export the test mode shapes.")
-    if data_ch not in (2, 3) or ndv not in (3, 6):
-        raise InputError(f"{where}: data characteristic {data_ch} with {ndv} values per node is not a "
-                         "3 or 6 DOF vector. Fix: export displacement vectors (data characteristic 2 or 3).")
-    width = ndv * (2 if data_type == 5 else 1)
-    if rest.size % (width + 1):
-        raise InputError(f"{where}: {rest.size} numbers do not make whole node records of 1 node "
-                         f"label + {width} values (the header's data type {data_type}, {ndv} values "
-                         "per node): a node record is cut or has a value too many. Fix: correct the "
-                         "node/value records or re-export the file.")
-    rec = rest.reshape(-1, width + 1)
-    values = rec[:, 1:] if data_type != 5 else rec[:, 1::2] + 1j * rec[:, 2::2]
-    out = dict(mode=mode, name=name, nodes=np.array([_as_int(v, where) for v in rec[:, 0]], np.int64),
-               values=values, ndv=ndv, modal_mass=0.0, freq=None, eig=None, zeta=None)
-    if analysis == 2:
-        out.update(freq=reals[0], modal_mass=reals[1] if nreal > 1 else 0.0,
-                   zeta=reals[2] if nreal > 2 else 0.0)
-    else:
-        out.update(eig=complex(reals[0], reals[1]))
-    return out
-
-
-def _realise(record: dict) -> tuple[float, float, np.ndarray]:
-    """Frequency [Hz], zeta and a real shape from a real or complex UFF 55 record.
-
-    Complex modes (analysis type 3): lambda = sigma + i*omega_d, f = |lambda|/(2*pi),
-    zeta = -sigma/|lambda|; the shape is rotated by the phase that makes it most nearly real
-    (theta = arg(sum psi^2)/2) and its real part kept.
-    """
-    values = record["values"]
-    if record["eig"] is None:
-        return float(record["freq"]), float(record["zeta"]), np.real(values).astype(float)
-    lam = record["eig"]
-    theta = 0.5 * np.angle(np.sum(values.astype(complex) ** 2))
-    return abs(lam) / (2 * np.pi), -lam.real / abs(lam), np.real(values * np.exp(-1j * theta))
 
 
 def _assemble(path: Path, nodes: dict, records: list, *, drop_unmeasured: bool, reader: str,
@@ -482,7 +297,7 @@ def _assemble(path: Path, nodes: dict, records: list, *, drop_unmeasured: bool, 
                           f"{absent[:10].tolist()}{' ...' if absent.size > 10 else ''} "
                           f"({r['nodes'].size} of {all_nodes.size} nodes); taken as 0 (UFF note 9). "
                           "Fix: re-export the mode if the file was cut.", stacklevel=3)
-        freq[k], zeta[k], vals = _realise(r)
+        freq[k], zeta[k], vals = realise(r)
         # nodes absent from a record are 0 (UFF note 9)
         shape[k, np.searchsorted(all_nodes, r["nodes"])] = vals
     grid = np.repeat(all_nodes, ndv)
