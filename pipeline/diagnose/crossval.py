@@ -70,6 +70,7 @@ from pipeline.diagnose.calibrate import Calibration, Problem, calibrate
 from pipeline.diagnose.evidence import holdout_mask, with_training
 from pipeline.diagnose.fit_statistics import chi_square
 from pipeline.diagnose.gap import gap_metrics
+from pipeline.diagnose.predictive import held_out_evidence, held_out_modes
 from pipeline.diagnose.refit import continued, refit
 
 
@@ -91,11 +92,14 @@ class Split(NamedTuple):
 
 class Support(NamedTuple):
     """A named effect refitted on another split: ``gain`` is the split's score without it minus
-    with it (module docstring; > 0: the split supports it), ``values`` its refitted parameters."""
+    with it (module docstring; > 0: the split supports it), ``values`` its refitted parameters,
+    ``evidence`` the split's held-out modes for it against the split's model without it
+    (:func:`pipeline.diagnose.predictive.held_out_evidence` with the naming round's c)."""
 
     shift: int
     gain: float
     values: np.ndarray
+    evidence: float = float("nan")
 
 
 def rotated(problem: Problem, holdout: int, shift: int) -> Problem:
@@ -158,7 +162,9 @@ def extend(split: Split, candidate, values, c: float) -> tuple | None:
         return None
     gain = (_score(p, split.theta, split.evaluations, c) - _score(p, fit.theta, fit.evaluations, c)
             - len(candidate.parameters) * np.log(cal.n_data))
-    support = Support(split.shift, float(gain), np.asarray(fit.values, float))
+    none_modes, entries = held_out_modes(p, split.evaluations)
+    evidence = held_out_evidence(none_modes, held_out_modes(p, fit.evaluations)[0], entries, c)
+    support = Support(split.shift, float(gain), np.asarray(fit.values, float), evidence)
     if gain <= 0.0:
         return split, support
     return (split._replace(effects=split.effects + ((candidate, fit.values),), theta=fit.theta,
@@ -178,9 +184,9 @@ def stable(supports, holdout: int) -> bool:
 
 
 def support_records(candidate, supports) -> list:
-    """The round record's ``splits``: per other split its ``shift``, ``gain`` and refitted
-    ``parameters`` of ``candidate``."""
-    return [{"shift": s.shift, "gain": s.gain,
+    """The round record's ``splits``: per other split its ``shift``, ``gain``,
+    ``held_out_evidence`` and refitted ``parameters`` of ``candidate``."""
+    return [{"shift": s.shift, "gain": s.gain, "held_out_evidence": s.evidence,
              "parameters": dict(zip(candidate.parameters, map(float, s.values)))}
             for s in supports]
 

@@ -167,6 +167,9 @@ def test_hidden_mass_is_named_and_the_gap_shrinks(folder, capsys):
     # the same refits on the other two splits support the name (gain > 0) with the truth's mass
     splits = record["rounds"][0]["splits"]
     assert [s["shift"] for s in splits] == [1, 2] and all(s["gain"] > 0 for s in splits)
+    # and each split's held-out modes, which its refit did not see, back it over the model
+    # without it
+    assert all(s["held_out_evidence"] > 0 for s in splits)
     for s in splits:
         assert s["parameters"]["mass"] == pytest.approx(
             record["effect"]["parameters"]["mass"], rel=1e-3)

@@ -123,6 +123,11 @@ def test_extend_keeps_the_effect_where_the_split_wants_it(monkeypatch, after, c,
     that does not gain goes on as it was (module docstring), its refit still reported."""
     fit = SimpleNamespace(theta=np.ones(1), evaluations=np.array(after), values=np.array([0.5]))
     monkeypatch.setattr(crossval, "continued", lambda *args, **kwargs: fit)
+    # one held-out mode of one entry, its chi^2 the square of evaluation 0 (3^2 = 9 before,
+    # within chi^2_0.999(1) = 10.8, so kept)
+    monkeypatch.setattr(crossval, "held_out_modes",
+                        lambda problem, evaluations: (np.array([evaluations[0] ** 2]),
+                                                      np.array([1])))
     split = Split(1, _Rows(), SimpleNamespace(n_data=3, jacobian=None), {}, (), np.zeros(1),
                   np.array([3.0, 4.0, 0.0]))
     candidate = SimpleNamespace(parameters=("mass",))
@@ -132,6 +137,7 @@ def test_extend_keeps_the_effect_where_the_split_wants_it(monkeypatch, after, c,
     assert support.gain == pytest.approx(gain, rel=1e-12)
     assert bool(gain > 0) is kept
     assert support.shift == 1 and support.values.tolist() == [0.5]
+    assert support.evidence == pytest.approx((9.0 - after[0] ** 2) / c, rel=1e-12)
     if kept:
         assert out.effects == ((candidate, fit.values),) and out.theta.tolist() == [1.0]
     else:
