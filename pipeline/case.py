@@ -9,7 +9,9 @@ Example (``data/bah_wing/case.toml``)::
     name = "baseline"
     deck = "bah_plane.bdf"   # relative to the case file
     nmodes = 10
-    gvt = "gvt.unv"          # optional: the configuration's GVT (UFF 15/55 or netCDF)
+    gvt = "gvt.unv"          # optional: the configuration's GVT (UFF 15/55 or netCDF), or
+                             # its frequencies alone as a CSV table (pipeline diagnose only;
+                             # structures.gvt.read_frequency_table)
     measured_mass = { weight = 18950.0, x_cg = 0.10 }   # optional: measured mass properties, or
                              # a JSON file: measured_mass = "mass.json" (structures.massprops.
                              # read_measured_mass: {"weight", "cg", "inertia_cg"})

@@ -446,6 +446,26 @@ def check_case_masses(case: Case) -> None:
                             f"case {case.path}: configuration {config.name}, measured_mass")
 
 
+def check_case_gvts(case: Case) -> None:
+    """Before any computation: every configuration's GVT file reads and carries mode shapes,
+    which the correlation and tuning stages pair and fit the modes by
+    (:func:`structures.gvt.load_gvt`; a table of frequencies alone is the diagnosis's only).
+
+    Raises
+    ------
+    InputError
+        Naming the case, the configuration, the file and the fix.
+    """
+    from structures.gvt import load_gvt
+
+    for config in case.configurations:
+        if config.gvt is not None:
+            try:
+                load_gvt(config.gvt)
+            except InputError as exc:
+                raise InputError(f"case {case.path}, configuration {config.name}: {exc}") from None
+
+
 def check_flutter_requests(case: Case, flutter_ids=None) -> None:
     """Before any computation: every configuration's deck defines the FLUTTER cards (their FLFACT
     lists and SDAMP tables) that the case's ``[flutter]`` (or the ``flutter_ids`` override)

@@ -87,15 +87,18 @@ def run_case(case, out_dir, log=None, from_stage: str | None = None,
     ------
     InputError
         Before any stage runs: a flutter request the decks cannot meet, a measured CG outside
-        its deck (:func:`pipeline.chain.check_case_masses`) and, when the diagnosis
-        is among the stages, any data check of it
+        its deck (:func:`pipeline.chain.check_case_masses`), a GVT file that does not read or
+        has no shapes where the correlation runs (:func:`pipeline.chain.check_case_gvts`) and,
+        when the diagnosis is among the stages, any data check of it
         (:func:`pipeline.diagnose.inputs.check_case_data`).
     """
-    from pipeline.chain import check_case_masses, check_flutter_requests
+    from pipeline.chain import check_case_gvts, check_case_masses, check_flutter_requests
     from pipeline.diagnose.inputs import check_case_data
 
     check_flutter_requests(case)
     check_case_masses(case)
+    if not diagnose_only:
+        check_case_gvts(case)        # the correlation and tuning stages need the test's shapes
     out = check_output(out_dir, folder=True)
     if diagnose_only or (case.diagnose is not None and not baseline_only):
         check_case_data(case)        # every deck and GVT file read, and checked with the model

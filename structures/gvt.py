@@ -32,6 +32,10 @@ mode but present in others is 0 there (UFF note 9), with a warning naming the mo
 Every GVT Dataset, read or built from arrays, is checked by :func:`validate_gvt`, which also refuses
 one mode recorded twice under two numbers (the same frequency and collinear shapes).
 
+Test frequencies alone (a published GVT's table) are read from CSV by :func:`read_frequency_table`
+into the same layout without ``shape`` and ``dof``; only the diagnosis takes them
+(``shapes=False``), every other reader refuses them naming what it needs.
+
 Measured mass properties (weight, CG, inertias) are not part of a UFF file: they come from the case
 file.
 """
@@ -67,9 +71,10 @@ def make_gvt_dataset(frequency, shape, grid, component, *, mode=None, damping=No
     ----------
     frequency : array_like, shape (n_mode,)
         Measured natural frequencies [Hz].
-    shape : array_like, shape (n_mode, n_dof)
-        Measured mode shapes (real, any scaling).
-    grid, component : array_like of int, shape (n_dof,)
+    shape : array_like, shape (n_mode, n_dof), or None
+        Measured mode shapes (real, any scaling); None for frequencies alone (a published
+        frequency table: no ``shape``, no ``dof`` dim, ``grid`` and ``component`` None too).
+    grid, component : array_like of int, shape (n_dof,), or None
         The model grid id and component (1..6, basic frame) of every measured DOF.
     mode : array_like of int, shape (n_mode,), optional
         Test mode numbers; default 1..n_mode.
@@ -94,15 +99,19 @@ def make_gvt_dataset(frequency, shape, grid, component, *, mode=None, damping=No
     mode = np.arange(1, n_mode + 1) if mode is None else np.asarray(mode)
     data_vars = {
         "frequency": (("mode",), frequency, {"units": "Hz"}),
-        "shape": (("mode", "dof"), np.asarray(shape, dtype=float), {"units": units or "model units"}),
         "damping": (("mode",), np.zeros(n_mode) if damping is None else np.asarray(damping, float),
                     {"units": "1", "long_name": "modal viscous damping ratio zeta (g = 2*zeta)"}),
     }
+    if shape is not None:
+        data_vars["shape"] = (("mode", "dof"), np.asarray(shape, dtype=float),
+                              {"units": units or "model units"})
     if name is not None:
         data_vars["name"] = (("mode",), np.asarray([str(s) for s in name], dtype=object))
     if modal_mass is not None:
         data_vars["modal_mass"] = (("mode",), np.asarray(modal_mass, dtype=float))
-    coords = {"mode": mode, "grid": ("dof", np.asarray(grid)), "component": ("dof", np.asarray(component))}
+    coords = {"mode": mode}
+    if shape is not None:
+        coords.update({"grid": ("dof", np.asarray(grid)), "component": ("dof", np.asarray(component))})
     if xyz is not None:
         xyz = np.asarray(xyz, dtype=float)
         coords.update({"x": ("dof", xyz[:, 0]), "y": ("dof", xyz[:, 1]), "z": ("dof", xyz[:, 2])})
@@ -113,24 +122,42 @@ def make_gvt_dataset(frequency, shape, grid, component, *, mode=None, damping=No
                          "give frequency (n_mode,), shape (n_mode, n_dof), grid and component (n_dof,).")
     ds.attrs.update({"source": str(source), "reader": reader, "units": units,
                      "frame": "basic", "damping_convention": "zeta (fraction of critical); g = 2*zeta"})
-    validate_gvt(ds)
+    validate_gvt(ds, shapes=shape is not None)
+    if shape is None:
+        return ds.sortby("mode")
     return ds.sortby("mode").isel(dof=np.lexsort((ds["component"].values, ds["grid"].values)))
 
 
-def validate_gvt(ds: xr.Dataset) -> None:
+def validate_gvt(ds: xr.Dataset, *, shapes: bool = True) -> None:
     """Check a GVT Dataset and raise :class:`InputError` naming the offending mode or DOF.
 
     Checks: required variables and dims, integer grid ids and components 1..6, no duplicate
     mode numbers, no duplicate (grid, component), finite non-negative frequencies, finite shapes
     and damping, no mode with an all-zero shape, and no mode recorded twice under two numbers
     (:func:`repeated_records`).
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+    shapes : bool
+        True: the mode shapes are required (correlation, tuning); a frequency table is refused
+        naming what takes one. False: frequencies alone are accepted (``shape`` absent; the
+        diagnosis), and shapes, when present, are checked as above.
     """
     where = f"GVT file {ds.attrs.get('source') or '(arrays)'}"
-    for var, dims in (("frequency", ("mode",)), ("shape", ("mode", "dof")), ("damping", ("mode",))):
+    if shapes and "shape" not in ds and "frequency" in ds:
+        raise InputError(f"{where}: test frequencies without mode shapes: correlation and tuning "
+                         "pair and fit the modes by their shapes (MAC, SEREP). Fix: give the GVT "
+                         "with its shapes (UFF 55 or netCDF); `pipeline diagnose` takes "
+                         "frequencies alone.")
+    required = (("frequency", ("mode",)), ("damping", ("mode",)))
+    if shapes or "shape" in ds:
+        required += (("shape", ("mode", "dof")),)
+    for var, dims in required:
         if var not in ds or ds[var].dims != dims:
             raise InputError(f"{where}: variable {var}{dims} is missing. Fix: build it with "
                              "make_gvt_dataset or read it with load_gvt.")
-    for coord in ("mode", "grid", "component"):
+    for coord in ("mode", "grid", "component") if "shape" in ds else ("mode",):
         if coord not in ds.coords:
             raise InputError(f"{where}: coordinate {coord!r} is missing. Fix: name every DOF by "
                              "(grid, component).")
@@ -139,6 +166,27 @@ def validate_gvt(ds: xr.Dataset) -> None:
     if np.any(counts > 1):
         raise InputError(f"{where}: duplicate mode numbers {uniq[counts > 1].tolist()}. Fix: give "
                          "every test mode its own number.")
+    _validate_frequencies(ds, where)
+    if "shape" in ds:
+        _validate_shapes(ds, where)
+
+
+def _validate_frequencies(ds: xr.Dataset, where: str) -> None:
+    """Finite non-negative frequencies and finite damping (:func:`validate_gvt`)."""
+    modes = ds["mode"].values
+    freq = ds["frequency"].values
+    if not np.all(np.isfinite(freq)) or np.any(freq < 0):
+        bad_f = modes[~(np.isfinite(freq) & (freq >= 0))].tolist()
+        raise InputError(f"{where}: frequencies of modes {bad_f} "
+                         "are not finite and >= 0. Fix: correct the frequency records.")
+    if not np.all(np.isfinite(ds["damping"].values)):
+        raise InputError(f"{where}: damping of modes "
+                         f"{modes[~np.isfinite(ds['damping'].values)].tolist()} is not finite.")
+
+
+def _validate_shapes(ds: xr.Dataset, where: str) -> None:
+    """The DOFs and shapes of :func:`validate_gvt`."""
+    modes, freq = ds["mode"].values, ds["frequency"].values
     grid, comp = ds["grid"].values, ds["component"].values
     if not (np.issubdtype(grid.dtype, np.integer) and np.issubdtype(comp.dtype, np.integer)):
         raise InputError(f"{where}: grid and component must be integers. Fix: use the model's grid ids.")
@@ -153,14 +201,6 @@ def validate_gvt(ds: xr.Dataset) -> None:
         dup = [(int(k // 10), int(k % 10)) for k in uk[kc > 1]]
         raise InputError(f"{where}: duplicate measured DOFs (grid, component) {dup}. Fix: keep one "
                          "value per DOF (average repeated roving-sensor measurements first).")
-    freq = ds["frequency"].values
-    if not np.all(np.isfinite(freq)) or np.any(freq < 0):
-        bad_f = modes[~(np.isfinite(freq) & (freq >= 0))].tolist()
-        raise InputError(f"{where}: frequencies of modes {bad_f} "
-                         "are not finite and >= 0. Fix: correct the frequency records.")
-    if not np.all(np.isfinite(ds["damping"].values)):
-        raise InputError(f"{where}: damping of modes "
-                         f"{modes[~np.isfinite(ds['damping'].values)].tolist()} is not finite.")
     shape = ds["shape"].values
     finite = np.isfinite(shape)
     if not np.all(finite):
@@ -369,28 +409,120 @@ def write_uff(ds: xr.Dataset, path: str | os.PathLike, *, title: str = "GVT mode
 
 # ------------------------------------------------------------------------------------------ netCDF
 def write_gvt(ds: xr.Dataset, path: str | os.PathLike) -> Path:
-    """Write a GVT Dataset to netCDF4 atomically (the exact form of the same Dataset)."""
-    validate_gvt(ds)
+    """Write a GVT Dataset, with shapes or frequencies alone, to netCDF4 atomically (the exact
+    form of the same Dataset)."""
+    validate_gvt(ds, shapes=False)
     return write_dataset(ds, path)
 
 
-def read_gvt(path: str | os.PathLike) -> xr.Dataset:
-    """Read a GVT Dataset written by :func:`write_gvt` and validate it."""
+def read_gvt(path: str | os.PathLike, *, shapes: bool = True) -> xr.Dataset:
+    """Read a GVT Dataset written by :func:`write_gvt` and validate it (``shapes`` as
+    :func:`validate_gvt`)."""
     ds = read_dataset(path)
     if "name" in ds:
         ds["name"] = ds["name"].astype(object)
     ds.attrs["source"] = str(path)
-    validate_gvt(ds)
+    validate_gvt(ds, shapes=shapes)
     return ds
 
 
-def load_gvt(path: str | os.PathLike, **kwargs) -> xr.Dataset:
+#: Columns of a frequency table (:func:`read_frequency_table`); the first two are required.
+TABLE_COLUMNS = ("mode", "frequency", "damping", "name")
+
+
+def read_frequency_table(path: str | os.PathLike, *, shapes: bool = False) -> xr.Dataset:
+    """Read test frequencies without shapes, as a published GVT gives them, from a CSV table.
+
+    The first line that is neither blank nor a ``#`` comment names the columns, separated by
+    commas: ``mode`` (the test's mode number) and ``frequency`` [Hz] are required, ``damping``
+    (viscous damping ratio zeta, fraction of critical; blank or absent: 0) and ``name`` (e.g.
+    ``SW1B``) optional, in any order::
+
+        # X-56A GVT, published table
+        mode, frequency, damping, name
+        7, 5.42, 0.012, SW1B
+
+    Parameters
+    ----------
+    path : path-like
+    shapes : bool
+        True refuses the table (:func:`validate_gvt`: a step that needs mode shapes).
+
+    Returns
+    -------
+    xarray.Dataset
+        The GVT layout without ``shape`` and ``dof`` (:func:`make_gvt_dataset` with
+        ``shape=None``), modes sorted by number; attrs ``reader`` ``"table"``.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise InputError(f"GVT file {path}: no such file. Fix: check the path.")
+    try:
+        text = path.read_text(encoding="utf-8-sig")
+    except UnicodeDecodeError as exc:
+        raise InputError(f"GVT file {path}: not a text table ({exc.reason} at byte {exc.start}). "
+                         "Fix: save the table as CSV text.") from None
+    rows = [(n, [f.strip() for f in line.split(",")]) for n, line in
+            enumerate(text.splitlines(), start=1) if line.strip() and not line.lstrip().startswith("#")]
+    if not rows:
+        raise InputError(f"GVT file {path}: no header line. Fix: start the table with the "
+                         f"columns, e.g. 'mode, frequency, damping, name'.")
+    line, header = rows[0]
+    columns = [h.lower() for h in header]
+    unknown = [h for h in columns if h not in TABLE_COLUMNS]
+    if unknown or len(set(columns)) != len(columns) or not {"mode", "frequency"} <= set(columns):
+        raise InputError(f"GVT file {path}, line {line}: columns {header} must name 'mode' and "
+                         f"'frequency' [Hz] once each, and otherwise only {list(TABLE_COLUMNS[2:])}"
+                         f"{f' (unknown: {unknown})' if unknown else ''}. Fix: rename the header.")
+    if len(rows) == 1:
+        raise InputError(f"GVT file {path}: the table lists no mode. Fix: one line per test mode "
+                         "below the header.")
+    values = {c: [] for c in columns}
+    for line, fields in rows[1:]:
+        if len(fields) != len(columns):
+            raise InputError(f"GVT file {path}, line {line}: {len(fields)} fields for the "
+                             f"{len(columns)} columns {columns}. Fix: one value per column (a "
+                             "blank damping is 0).")
+        for column, field_ in zip(columns, fields):
+            values[column].append(_table_value(column, field_, f"GVT file {path}, line {line}"))
+    ds = make_gvt_dataset(values["frequency"], None, None, None, mode=values["mode"],
+                          damping=values.get("damping"), name=values.get("name"),
+                          source=str(path), reader="table")
+    validate_gvt(ds, shapes=shapes)
+    return ds
+
+
+def _table_value(column: str, text: str, where: str):
+    """One field of a frequency table: the mode an integer, frequency and damping numbers
+    (a blank damping 0), the name as written."""
+    if column == "name":
+        return text
+    if column == "damping" and not text:
+        return 0.0
+    try:
+        number = float(text)
+    except ValueError:
+        raise InputError(f"{where}: {column} {text!r} is not a number. Fix: correct the "
+                         "field.") from None
+    if column == "mode" and not (np.isfinite(number) and number == round(number)):
+        raise InputError(f"{where}: mode {text!r} is not an integer mode number. Fix: number the "
+                         "test modes 1, 2, ... or as the test report does.")
+    return int(number) if column == "mode" else number
+
+
+def load_gvt(path: str | os.PathLike, *, shapes: bool = True, **kwargs) -> xr.Dataset:
     """Read a GVT file by suffix: ``.unv``/``.uff``/``.uf`` with :func:`read_uff`, ``.nc`` with
-    :func:`read_gvt`."""
+    :func:`read_gvt`, ``.csv`` (frequencies alone) with :func:`read_frequency_table`.
+
+    ``shapes`` True (correlation, tuning) refuses a file without mode shapes, naming what
+    accepts one; False (the diagnosis) takes frequencies alone. ``kwargs`` go to
+    :func:`read_uff`."""
     suffix = Path(path).suffix.lower()
     if suffix in _UFF_SUFFIXES:
         return read_uff(path, **kwargs)
     if suffix == ".nc":
-        return read_gvt(path)
+        return read_gvt(path, shapes=shapes)
+    if suffix == ".csv":
+        return read_frequency_table(path, shapes=shapes)
     raise InputError(f"GVT file {path}: unknown suffix {suffix!r}. Fix: use one of "
-                     f"{list(_UFF_SUFFIXES) + ['.nc']}.")
+                     f"{list(_UFF_SUFFIXES) + ['.nc', '.csv']}.")

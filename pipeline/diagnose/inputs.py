@@ -142,7 +142,8 @@ def configurations_from_case(case) -> tuple:
     ------
     InputError
         A configuration without ``gvt`` (naming it and the fix); a deck or GVT file the readers
-        reject (structures.bdf.read_model, structures.gvt.load_gvt).
+        reject (structures.bdf.read_model, structures.gvt.load_gvt; a table of test frequencies
+        alone is accepted).
     """
     from pipeline.diagnose import ConfigurationData
     from structures.bdf import read_model
@@ -154,7 +155,8 @@ def configurations_from_case(case) -> tuple:
             raise InputError(f"case {case.path}, configuration {c.name}: no GVT file; diagnose "
                              "compares the model with the test. Fix: add gvt = \"gvt.unv\" to "
                              "the configuration.")
-        out.append(ConfigurationData(name=c.name, model=read_model(c.deck), gvt=load_gvt(c.gvt),
+        out.append(ConfigurationData(name=c.name, model=read_model(c.deck),
+                                     gvt=load_gvt(c.gvt, shapes=False),
                                      measured_mass=dict(c.measured_mass) or None,
                                      deck=Path(c.deck)))
     return tuple(out)

@@ -9,8 +9,8 @@ import pyuff
 import xarray as xr
 
 from structures.common.errors import InputError
-from structures.gvt import (check_dofs_in_model, load_gvt, make_gvt_dataset, read_gvt, read_uff, write_gvt,
-                            write_uff)
+from structures.gvt import (check_dofs_in_model, load_gvt, make_gvt_dataset, read_frequency_table, read_gvt,
+                            read_uff, write_gvt, write_uff)
 
 DATA = Path(__file__).resolve().parents[1] / "data" / "gvt"
 VENDOR = DATA / "vendor_modes.unv"
@@ -162,3 +162,61 @@ def test_other_bad_input():
         make_gvt_dataset([1.0, 2.0], [[1.0], [0.0]], [10], [3])
     with pytest.raises(InputError, match="no such file"):
         read_uff("/nonexistent/gvt.unv")
+
+
+# ------------------------------------------------------------------------- frequencies alone
+TABLE = """\ufeff# published GVT, frequencies alone
+Name, mode, frequency, damping
+
+AW1B, 8, 1.543, 0.009
+SW1B, 7, 1.067,
+"""
+
+
+def test_frequency_table_reads_as_typed_in(tmp_path):
+    """A CSV table with a BOM, a comment, a blank line, columns in another order, a blank
+    damping: the values typed in by hand, modes sorted, no shape or DOFs; the netCDF form keeps
+    it exactly; every reader that needs shapes refuses it naming what takes it."""
+    (tmp_path / "f.csv").write_text(TABLE, encoding="utf-8")
+    ds = read_frequency_table(tmp_path / "f.csv")
+    assert ds["mode"].values.tolist() == [7, 8]
+    np.testing.assert_array_equal(ds["frequency"].values, [1.067, 1.543])
+    np.testing.assert_array_equal(ds["damping"].values, [0.0, 0.009])
+    assert ds["name"].values.tolist() == ["SW1B", "AW1B"]
+    assert "shape" not in ds and "dof" not in ds.dims and ds.attrs["reader"] == "table"
+    _same(load_gvt(tmp_path / "f.csv", shapes=False), ds)
+    write_gvt(ds, tmp_path / "f.nc")
+    _same(read_gvt(tmp_path / "f.nc", shapes=False), ds)
+    for path in (tmp_path / "f.csv", tmp_path / "f.nc"):
+        with pytest.raises(InputError, match=r"f\.(csv|nc): test frequencies without mode shapes: "
+                                             r"correlation and tuning .*Fix: .*`pipeline diagnose` "
+                                             r"takes frequencies alone"):
+            load_gvt(path)
+
+
+@pytest.mark.parametrize("text, message", [
+    ("", r"no header line"),
+    ("# only a comment\n", r"no header line"),
+    ("mode, frequency\n", r"the table lists no mode"),
+    ("mode, freq\n7, 1.0\n", r"line 1: columns \['mode', 'freq'\] must name 'mode' and 'frequency'"
+                              r".*\(unknown: \['freq'\]\)"),
+    ("mode, frequency, mode\n7, 1.0, 7\n", r"line 1: columns .* once each"),
+    ("frequency, damping\n1.0, 0.01\n", r"line 1: columns .* must name 'mode'"),
+    ("mode, frequency\n7, 1.0\n8, 2.0, 0.01\n", r"line 3: 3 fields for the 2 columns"),
+    ("mode, frequency\n7, 1.0\n8, two\n", r"line 3: frequency 'two' is not a number"),
+    ("mode, frequency\n7.5, 1.0\n", r"line 2: mode '7.5' is not an integer mode number"),
+    ("mode, frequency\n7, 1.0\n7, 2.0\n", r"duplicate mode numbers \[7\]"),
+    ("mode, frequency\n7, -1.0\n", r"frequencies of modes \[7\] are not finite and >= 0"),
+    ("mode, frequency, damping\n7, 1.0, nan\n", r"damping of modes \[7\] is not finite")])
+def test_bad_frequency_table_is_refused_naming_the_line(tmp_path, text, message):
+    (tmp_path / "bad.csv").write_text(text)
+    with pytest.raises(InputError, match=r"GVT file .*bad\.csv.*" + message):
+        load_gvt(tmp_path / "bad.csv", shapes=False)
+
+
+def test_frequency_table_that_is_not_text_is_refused(tmp_path):
+    (tmp_path / "bin.csv").write_bytes(b"mode,frequency\n7,\xff\xfe1.0\n")
+    with pytest.raises(InputError, match=r"bin\.csv: not a text table .*Fix: save the table as CSV"):
+        load_gvt(tmp_path / "bin.csv", shapes=False)
+    with pytest.raises(InputError, match=r"unknown suffix '\.txt'.*'\.csv'"):
+        load_gvt(tmp_path / "f.txt")

@@ -120,3 +120,32 @@ def test_configurations_read_what_the_case_names(folder):
     assert sorted(data.model.grids.ids.tolist()) == [100, 200, 300, 400, 500, 600]
     (plain,) = configurations_from_case(read_case(case_file(folder)))
     assert plain.measured_mass is None
+
+
+def test_a_table_of_frequencies_alone_is_diagnosed_and_refused_by_the_run(folder):
+    """The chain's six test frequencies as a CSV table (gvt = "gvt.csv"): the diagnosis reads
+    them without shapes and its preflight pairs them by nearest frequency, saying what
+    frequencies alone cannot tell; pipeline run, whose correlation and tuning need shapes,
+    refuses the case before any stage, naming the file and the fix."""
+    from pipeline.diagnose import preflight
+    from pipeline.diagnose.inputs import check_case_data
+    from pipeline.run import run_case
+    from structures.gvt import load_gvt
+
+    test = load_gvt(folder / "gvt.unv")
+    rows = "".join(f"{m}, {f!r}\n" for m, f in zip(test["mode"].values, test["frequency"].values))
+    (folder / "gvt.csv").write_text("# the chain's GVT, frequencies alone\nmode, frequency\n" + rows)
+    case = read_case(case_file(folder, config='gvt = "gvt.csv"\n'))
+    (data,) = configurations_from_case(case)
+    assert "shape" not in data.gvt and "dof" not in data.gvt.dims
+    np.testing.assert_array_equal(data.gvt["frequency"].values, test["frequency"].values)
+    check_case_data(case)
+    (ref,), notes = preflight([data], settings_from_case(case))
+    assert not ref.has_shapes and ref.test_frequency.size == 6
+    assert any("frequency-only data (6 modes): paired by nearest frequency" in n for n in notes)
+    with pytest.raises(InputError) as err:
+        run_case(case, folder / "run")
+    for needle in (f"case {folder / 'case.toml'}, configuration base", "gvt.csv",
+                   "without mode shapes", "pipeline diagnose` takes frequencies alone"):
+        assert needle in str(err.value), (needle, str(err.value))
+    assert not (folder / "run").exists()
