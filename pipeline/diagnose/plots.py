@@ -115,13 +115,15 @@ def plot_gap(record: dict, velocity: str = "model units") -> Figure:
     Returns
     -------
     matplotlib.figure.Figure
-        One panel per group of :data:`GAP_PANELS`, one for the mass errors when stated and one for
-        the flutter speed when it was computed before and after.
+        One panel per group of :data:`GAP_PANELS` with a metric computed (test frequencies alone
+        have no shape metrics), one for the mass errors when stated and one for the flutter
+        speed when it was computed before and after.
     """
     before, after = record.get("gap_before") or {}, record.get("gap_after") or {}
     panels = [(title, unit, [(label, _value(before, k), _value(after, k)) for k, label in keys
                              if not np.isnan([_value(before, k), _value(after, k)]).all()])
               for title, unit, keys in GAP_PANELS]                  # a metric not computed: no bar
+    panels = [panel for panel in panels if panel[2]]     # none of a panel's (no shapes): no panel
     mass = sorted(set(before.get("mass") or {}) | set(after.get("mass") or {}))
     if mass:
         panels.append(("mass properties", "error %", [

@@ -107,3 +107,8 @@ def test_gap_without_mass_or_flutter_leaves_their_panels_out():
     plain = {w: {k: v for k, v in RECORD[w].items() if k != "frequency_rms_cross_validated"}
              for w in ("gap_before", "gap_after")}
     assert [p.get_height() for p in plot_gap(plain).axes[0].patches] == [4.1, 3.9, 0.8, 0.7]
+    # test frequencies alone: no shape metric, no empty "mode shapes" panel
+    bare = {w: {**RECORD[w], "max_cross_orthogonality_offdiag": None, "mac_min": None}
+            for w in ("gap_before", "gap_after")}
+    assert [ax.get_title() for ax in plot_gap(bare).axes] == ["frequency error",
+                                                              "mass properties", "flutter"]
