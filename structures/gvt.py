@@ -504,9 +504,11 @@ def _table_value(column: str, text: str, where: str):
     except ValueError:
         raise InputError(f"{where}: {column} {text!r} is not a number. Fix: correct the "
                          "field.") from None
-    if column == "mode" and not (np.isfinite(number) and number == round(number)):
-        raise InputError(f"{where}: mode {text!r} is not an integer mode number. Fix: number the "
-                         "test modes 1, 2, ... or as the test report does.")
+    if column == "mode" and not (np.isfinite(number) and number == round(number)
+                                 and 1 <= number < 2 ** 31):
+        raise InputError(f"{where}: mode {text!r} is not a mode number (an integer, 1 or more, as "
+                         "a UFF label). Fix: number the test modes 1, 2, ... or as the test "
+                         "report does.")
     return int(number) if column == "mode" else number
 
 

@@ -204,7 +204,9 @@ def test_frequency_table_reads_as_typed_in(tmp_path):
     ("frequency, damping\n1.0, 0.01\n", r"line 1: columns .* must name 'mode'"),
     ("mode, frequency\n7, 1.0\n8, 2.0, 0.01\n", r"line 3: 3 fields for the 2 columns"),
     ("mode, frequency\n7, 1.0\n8, two\n", r"line 3: frequency 'two' is not a number"),
-    ("mode, frequency\n7.5, 1.0\n", r"line 2: mode '7.5' is not an integer mode number"),
+    ("mode, frequency\n7.5, 1.0\n", r"line 2: mode '7.5' is not a mode number \(an integer"),
+    ("mode, frequency\n1e300, 1.0\n", r"line 2: mode '1e300' is not a mode number"),
+    ("mode, frequency\n-3, 1.0\n", r"line 2: mode '-3' is not a mode number"),
     ("mode, frequency\n7, 1.0\n7, 2.0\n", r"duplicate mode numbers \[7\]"),
     ("mode, frequency\n7, -1.0\n", r"frequencies of modes \[7\] are not finite and >= 0"),
     ("mode, frequency, damping\n7, 1.0, nan\n", r"damping of modes \[7\] is not finite")])
