@@ -21,8 +21,8 @@ never measured.
 Reading uses pyuff first. Vendor files that pyuff's fixed-width parser rejects (Fortran ``D``
 exponents, free-format columns, trailing blanks, CRLF) are read by a tolerant token-stream parser
 of the same record layout (both in :mod:`structures.uff_records`); ``attrs["reader"]`` says which
-one was used. UFF 55 stores values as
-E13.5, so a UFF round trip keeps 5-6 significant digits; the netCDF form is exact.
+one was used. UFF 55 stores values as E13.5, so a UFF round trip keeps 5-6 significant digits;
+the netCDF form is exact.
 
 Both readers refuse a damaged file with an :class:`InputError` naming the file, the dataset (its
 position and line) and the mode: a dataset without its closing ``-1`` (a file cut short), a node
