@@ -99,7 +99,7 @@ class Support(NamedTuple):
     shift: int
     gain: float
     values: np.ndarray
-    evidence: float = float("nan")
+    evidence: float
 
 
 def rotated(problem: Problem, holdout: int, shift: int) -> Problem:

@@ -89,7 +89,7 @@ def test_pooled_by_hand():
 
 
 def _supports(*gains):
-    return [Support(i + 1, g, np.zeros(1)) for i, g in enumerate(gains)]
+    return [Support(i + 1, g, np.zeros(1), 0.0) for i, g in enumerate(gains)]
 
 
 @pytest.mark.parametrize("holdout, gains, kept", [
