@@ -94,6 +94,10 @@ def make_gvt_dataset(frequency, shape, grid, component, *, mode=None, damping=No
     xarray.Dataset
         The validated GVT Dataset, DOFs sorted by (grid, component), modes by mode number.
     """
+    if shape is None and any(a is not None for a in (grid, component, xyz)):
+        raise InputError(f"GVT data from {source or 'arrays'}: measured DOFs (grid, component or "
+                         "xyz) without mode shapes. Fix: give shape (n_mode, n_dof) with them, or "
+                         "None for all four (frequencies alone).")
     frequency = np.asarray(frequency, dtype=float)
     n_mode = frequency.shape[0] if frequency.ndim == 1 else -1
     mode = np.arange(1, n_mode + 1) if mode is None else np.asarray(mode)

@@ -162,6 +162,10 @@ def test_other_bad_input():
         make_gvt_dataset([1.0, 2.0], [[1.0], [0.0]], [10], [3])
     with pytest.raises(InputError, match="no such file"):
         read_uff("/nonexistent/gvt.unv")
+    for dofs in ([10], [3], None), (None, None, [[0.0, 0.0, 0.0]]):
+        with pytest.raises(InputError, match=r"measured DOFs \(grid, component or xyz\) without "
+                                             r"mode shapes"):
+            make_gvt_dataset([1.0], None, dofs[0], dofs[1], xyz=dofs[2])
 
 
 # ------------------------------------------------------------------------- frequencies alone
