@@ -47,6 +47,7 @@ from pipeline.diagnose.weighing import mass_residual, mass_scales
 from structures.common.errors import InputError
 from structures.correlation import (mac, measured_dof_index, orthogonality, serep_coordinates,
                                     serep_pseudo_inverse)
+from structures.assembly import assemble
 from structures.massprops import MassProperties, mass_properties
 from structures.modal import compute_modes
 from structures.model import FEModel
@@ -351,9 +352,14 @@ class Evaluation:
 def evaluate(ref: Reference, model: FEModel, modes: xr.Dataset | None = None,
              paired=None) -> Evaluation:
     """Modes of ``model`` (computed unless given), pairing (``paired`` (n_test,) kept when
-    given) and residual entries against ``ref``."""
+    given) and residual entries against ``ref``.
+
+    ``model`` is the user's model, whose grid point singularities
+    :func:`pipeline.diagnose.preflight.preflight` warned of, or one with an effect added or its
+    parameters changed, whose file name is still the user's deck: no table is warned here.
+    """
     if modes is None:
-        modes = compute_modes(model, ref.nmodes)
+        modes = compute_modes(model, ref.nmodes, system=assemble(model, warn=False))
     props = mass_properties(model)
     return evaluate_modes(ref, modes["frequency"].values, modes["shape"].values[:, ref.sensor_index]
                           if ref.has_shapes else None, props, modes=modes, paired=paired)

@@ -1,15 +1,21 @@
 """Evidence kernels of diagnose against hand computations and synthetic data of known noise."""
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import pytest
 
-from pipeline.diagnose.evidence import (build_reference, holdout_mask, partner_mixing,
+from pipeline.diagnose.apply import apply_effect
+from pipeline.diagnose.effects import candidates, directional
+from pipeline.diagnose.evidence import (build_reference, evaluate, holdout_mask, partner_mixing,
                                         residual_basis, shape_noise, shape_residual, unit_rms)
+from structures.assembly import assemble
 from structures.bdf import read_model
 from structures.common.errors import InputError
 from structures.gvt import make_gvt_dataset
 from structures.modal import compute_modes
+from structures.singularity import SingularityWarning
 
 
 def test_holdout_split():
@@ -107,3 +113,20 @@ def test_self_orthogonality_of_mixed_modes_in_the_analysis_mass(tmp_path):
     assert facts["self_orthogonality"] == pytest.approx(np.sin(a), rel=1e-8)   # 0.29552
 
 
+
+
+def test_a_candidates_singularities_are_not_warned_under_the_users_deck(frame_reference):
+    """A candidate keeps the user's file name but not the user's stiffness: the frame's joint
+    RBE2 7201 as a CBUSH nearly free in two rotations has a singularity table (warned by a plain
+    assembly), which evaluating the candidate does not warn of (preflight warned of the deck's)."""
+    model, _, ref = frame_reference
+    joint = next(c for c in candidates(model, ("joint_flexibility",))
+                 if c.label == "RBE2 7201 (5001-5002)")
+    detailed, _ = directional(joint, [1.0, 0.0])
+    changed = apply_effect(model, detailed, [1.0, 1.0, 1.0, 1e-6, 1e3, 1e3])
+    with pytest.warns(SingularityWarning, match="frame.bdf: grid point singularities"):
+        assemble(changed)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", SingularityWarning)
+        result = evaluate(ref, changed)
+    assert np.all(np.isfinite(result.frequency))
