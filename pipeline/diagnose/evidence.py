@@ -44,10 +44,10 @@ import xarray as xr
 from pipeline.diagnose.pairing import INVISIBLE, pair, report_pairing, seen_shapes
 from pipeline.diagnose.scatter import scatter_effects, scatter_scales, whitening
 from pipeline.diagnose.weighing import mass_residual, mass_scales
+from structures.assembly import assemble
 from structures.common.errors import InputError
 from structures.correlation import (mac, measured_dof_index, orthogonality, serep_coordinates,
                                     serep_pseudo_inverse)
-from structures.assembly import assemble
 from structures.massprops import MassProperties, mass_properties
 from structures.modal import compute_modes
 from structures.model import FEModel

@@ -113,8 +113,6 @@ def test_self_orthogonality_of_mixed_modes_in_the_analysis_mass(tmp_path):
     assert facts["self_orthogonality"] == pytest.approx(np.sin(a), rel=1e-8)   # 0.29552
 
 
-
-
 def test_a_candidates_singularities_are_not_warned_under_the_users_deck(frame_reference):
     """A candidate keeps the user's file name but not the user's stiffness: the frame's joint
     RBE2 7201 as a CBUSH nearly free in two rotations has a singularity table (warned by a plain
