@@ -261,7 +261,8 @@ def _grids_and_masks(model: FEModel) -> tuple:
 def _lowest_elastic_frequency(model: FEModel) -> float:
     from structures.assembly import assemble
     from structures.modal import compute_modes
-    ds = compute_modes(model, 8, system=assemble(model, warn=False))   # preflight warned
+    # a frequency scale only: the deck's singularity table is preflight's to report
+    ds = compute_modes(model, 8, system=assemble(model, warn=False))
     f = ds["frequency"].values[elastic_index(ds)]
     elastic = f[f > 0]
     if not elastic.size:
